@@ -1,0 +1,30 @@
+//! `antennad`, the antenna host daemon: polls the segments on the I2C bus and decodes their
+//! samples with `antenna-protocol`.
+//!
+//! The bus is any embedded-hal 1.0 [`embedded_hal::i2c::I2c`]. With no hardware configured
+//! the daemon runs on [`SimBus`], a virtual bus whose segments run `firmware-segment`'s own
+//! logic (oversampling, debouncing and the I2C target state machine), so the whole path from
+//! sensor to sample is the one the robot uses.
+//!
+//! # Example
+//!
+//! ```
+//! use antenna_protocol::Calibration;
+//! use host_daemon::{Poller, SimBus, SimSegment};
+//!
+//! let bus = SimBus::new(vec![SimSegment::new(0x21, Calibration::default())]);
+//! let mut poller = Poller::new(bus, &[0x21]);
+//! poller.bus_mut().segment_mut(0).map(|s| s.set_angle_rad(0.5));
+//! poller.bus_mut().sample_all();
+//! let readings = poller.poll_all();
+//! let word = readings[0].result.as_ref().expect("the segment answers");
+//! assert!((Calibration::default().angle_rad(word.angle_counts()) - 0.5).abs() < 0.002);
+//! ```
+
+mod poll;
+mod sim_bus;
+mod sim_motion;
+
+pub use poll::{PollError, Poller, SegmentHealth, SegmentReading};
+pub use sim_bus::{SimBus, SimBusError, SimSegment};
+pub use sim_motion::{RigState, ScriptedSweep};

@@ -1,0 +1,278 @@
+//! A virtual I2C bus whose segments run the firmware's own logic.
+
+use antenna_protocol::{Calibration, SampleWord, StatusFlags, TouchBits};
+use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
+use firmware_segment::{BusEvent, Debouncer, TargetMachine, adc_fault, oversample};
+
+/// An error on the simulated bus, as a real bus would report it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum SimBusError {
+    /// No segment answers at the address.
+    #[error("no segment acknowledged address {0:#04x}")]
+    AddressNack(u8),
+    /// The segment did not acknowledge a data byte (an over-long or refused write).
+    #[error("segment {0:#04x} did not acknowledge a data byte")]
+    DataNack(u8),
+}
+
+impl embedded_hal::i2c::Error for SimBusError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            SimBusError::AddressNack(_) => ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address),
+            SimBusError::DataNack(_) => ErrorKind::NoAcknowledge(NoAcknowledgeSource::Data),
+        }
+    }
+}
+
+/// One simulated segment: a physical joint angle and touch switches, sampled by the
+/// firmware's oversampling and debouncing and served by its I2C target state machine.
+#[derive(Debug, Clone)]
+pub struct SimSegment {
+    machine: TargetMachine,
+    debouncer: Debouncer,
+    calibration: Calibration,
+    angle_rad: f64,
+    touch_raw: u8,
+}
+
+impl SimSegment {
+    /// A segment already assigned to `address`, whose magnet reads `calibration`.
+    pub fn new(address: u8, calibration: Calibration) -> Self {
+        Self {
+            machine: TargetMachine::new(address, true),
+            debouncer: Debouncer::new(),
+            calibration,
+            angle_rad: 0.0,
+            touch_raw: 0,
+        }
+    }
+
+    /// Sets the joint angle the Hall sensor sees.
+    pub fn set_angle_rad(&mut self, angle_rad: f64) {
+        self.angle_rad = angle_rad;
+    }
+
+    /// Sets the raw state of the four touch switches (bit 0 most proximal).
+    pub fn set_touch(&mut self, touch: TouchBits) {
+        self.touch_raw = touch.bits();
+    }
+
+    /// The address the segment answers at.
+    pub fn address(&self) -> u8 {
+        self.machine.address()
+    }
+
+    /// One sampling period of the firmware's main loop: 16 conversions that oversample to
+    /// the angle's count, the touch port read and debounced, and the sample published.
+    pub fn sample(&mut self) {
+        let counts = self.calibration.counts_for_angle(self.angle_rad);
+        let conversions = conversions_for_counts(counts);
+        let touch = self.debouncer.step(self.touch_raw);
+        let word = SampleWord::pack_truncate(oversample(&conversions), touch.bits());
+        let status = StatusFlags::default()
+            .with(StatusFlags::ADC_FAULT, adc_fault(&conversions))
+            .with(StatusFlags::TOUCH_STUCK, self.debouncer.touch_stuck());
+        self.machine.publish(word, status);
+    }
+
+    fn step(&mut self, event: BusEvent) -> firmware_segment::StepResult {
+        self.machine.step(event)
+    }
+}
+
+/// Sixteen 10-bit conversions whose oversampled value, `(sum) >> 2`, is `counts` (clamped to
+/// 4092, the largest count 16 ten-bit conversions can make).
+fn conversions_for_counts(counts: u16) -> [u16; 16] {
+    let sum = (u32::from(counts.min(4092)) << 2) + 2;
+    let base = sum / 16;
+    let extra = (sum % 16) as usize;
+    let mut conversions = [base as u16; 16];
+    for conversion in conversions.iter_mut().take(extra) {
+        *conversion += 1;
+    }
+    conversions
+}
+
+/// A virtual I2C bus of [`SimSegment`]s, implementing embedded-hal's [`I2c`] as a controller
+/// sees it: every transaction is turned into the bus events the segments' state machines
+/// receive (address, data bytes, repeated start, stop).
+#[derive(Debug, Clone, Default)]
+pub struct SimBus {
+    segments: Vec<SimSegment>,
+}
+
+impl SimBus {
+    /// A bus with these segments on it.
+    pub fn new(segments: Vec<SimSegment>) -> Self {
+        Self { segments }
+    }
+
+    /// The segments, in the order given.
+    pub fn segments(&self) -> &[SimSegment] {
+        &self.segments
+    }
+
+    /// Segment `index` for changing its physical state, or `None` past the end.
+    pub fn segment_mut(&mut self, index: usize) -> Option<&mut SimSegment> {
+        self.segments.get_mut(index)
+    }
+
+    /// One sampling period on every segment.
+    pub fn sample_all(&mut self) {
+        self.segments.iter_mut().for_each(SimSegment::sample);
+    }
+}
+
+impl ErrorType for SimBus {
+    type Error = SimBusError;
+}
+
+impl I2c for SimBus {
+    fn transaction(
+        &mut self,
+        address: u8,
+        operations: &mut [Operation<'_>],
+    ) -> Result<(), Self::Error> {
+        let segment = self
+            .segments
+            .iter_mut()
+            .find(|segment| segment.address() == address)
+            .ok_or(SimBusError::AddressNack(address))?;
+        let mut index = 0;
+        while index < operations.len() {
+            // Adjacent operations of one kind are one transfer (no repeated start between).
+            let is_write = matches!(operations[index], Operation::Write(_));
+            let mut end = index;
+            while end < operations.len() && matches!(operations[end], Operation::Write(_)) == is_write
+            {
+                end += 1;
+            }
+            if is_write {
+                let mut ack = segment.step(BusEvent::StartWrite).ack_next;
+                for operation in &operations[index..end] {
+                    if let Operation::Write(bytes) = operation {
+                        for &byte in bytes.iter() {
+                            if !ack {
+                                segment.step(BusEvent::DataNacked(byte));
+                                segment.step(BusEvent::Stop);
+                                return Err(SimBusError::DataNack(address));
+                            }
+                            ack = segment.step(BusEvent::DataAcked(byte)).ack_next;
+                        }
+                    }
+                }
+                // A stop, or the repeated start before the next transfer: the same event.
+                segment.step(BusEvent::Stop);
+            } else {
+                let mut first = true;
+                for operation in &mut operations[index..end] {
+                    if let Operation::Read(buffer) = operation {
+                        for byte in buffer.iter_mut() {
+                            let event = if first {
+                                BusEvent::StartRead
+                            } else {
+                                BusEvent::ByteAcked
+                            };
+                            first = false;
+                            *byte = segment.step(event).tx;
+                        }
+                    }
+                }
+                if first {
+                    // A zero-length read still addresses the segment.
+                    segment.step(BusEvent::StartRead);
+                }
+                segment.step(BusEvent::ReadDone);
+            }
+            index = end;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use antenna_protocol::{AddressAssignment, Direction, Register};
+
+    fn bus() -> SimBus {
+        SimBus::new(vec![
+            SimSegment::new(0x21, Calibration::new(2048, Direction::CounterClockwise)),
+            SimSegment::new(0x22, Calibration::new(100, Direction::Clockwise)),
+        ])
+    }
+
+    #[test]
+    fn conversions_oversample_to_the_requested_count() {
+        for counts in 0..=4092u16 {
+            assert_eq!(oversample(&conversions_for_counts(counts)), counts);
+        }
+        assert_eq!(oversample(&conversions_for_counts(4095)), 4092);
+    }
+
+    #[test]
+    fn a_pec_read_returns_the_published_word() {
+        let mut bus = bus();
+        bus.segment_mut(0).unwrap().set_angle_rad(-0.3);
+        bus.segment_mut(1).unwrap().set_angle_rad(0.7);
+        bus.sample_all();
+        for (address, calibration, angle) in [
+            (0x21, Calibration::new(2048, Direction::CounterClockwise), -0.3),
+            (0x22, Calibration::new(100, Direction::Clockwise), 0.7),
+        ] {
+            let mut bytes = [0u8; 3];
+            bus.read(address, &mut bytes).unwrap();
+            let word = SampleWord::from_read_with_pec(address, bytes).unwrap();
+            assert_eq!(word.angle_counts(), calibration.counts_for_angle(angle));
+        }
+    }
+
+    #[test]
+    fn touch_is_debounced_over_three_samples() {
+        let mut bus = bus();
+        bus.segment_mut(0)
+            .unwrap()
+            .set_touch(TouchBits::from_bits(0b1000).unwrap());
+        let mut seen = Vec::new();
+        for _ in 0..3 {
+            bus.sample_all();
+            let mut bytes = [0u8; 2];
+            bus.read(0x21, &mut bytes).unwrap();
+            seen.push(SampleWord::from_be_bytes(bytes).touch().bits());
+        }
+        assert_eq!(seen, vec![0, 0, 0b1000]);
+    }
+
+    #[test]
+    fn missing_address_is_a_nack_and_register_reads_work() {
+        let mut bus = bus();
+        assert_eq!(
+            bus.read(0x30, &mut [0u8; 2]),
+            Err(SimBusError::AddressNack(0x30))
+        );
+        bus.sample_all();
+        bus.sample_all();
+        let mut counter = [0u8; 2];
+        bus.write_read(0x21, &[Register::Counter.number()], &mut counter)
+            .unwrap();
+        assert_eq!(counter[0], 2);
+        // Over-long write to a read-only register: the extra byte is refused.
+        assert_eq!(
+            bus.write(0x21, &[Register::Counter.number(), 0x55]),
+            Err(SimBusError::DataNack(0x21))
+        );
+    }
+
+    #[test]
+    fn address_assignment_moves_the_segment() {
+        let mut bus = bus();
+        let message = AddressAssignment::new(0x40).unwrap().to_bytes();
+        bus.write(0x21, &message).unwrap();
+        assert_eq!(bus.segments()[0].address(), 0x40);
+        assert!(bus.read(0x40, &mut [0u8; 2]).is_ok());
+        assert_eq!(
+            bus.read(0x21, &mut [0u8; 2]),
+            Err(SimBusError::AddressNack(0x21))
+        );
+    }
+}
