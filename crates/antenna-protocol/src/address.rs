@@ -90,7 +90,10 @@ mod tests {
     fn message_round_trips() {
         let message = AddressAssignment::new(0x21).unwrap();
         assert_eq!(message.to_bytes(), [0x10, 0x21, 0xDE]);
-        assert_eq!(AddressAssignment::from_bytes(&message.to_bytes()), Ok(message));
+        assert_eq!(
+            AddressAssignment::from_bytes(&message.to_bytes()),
+            Ok(message)
+        );
         assert_eq!(
             AddressAssignment::from_bytes(&[0x10, 0x21]),
             Err(ProtocolError::BadLength {

@@ -73,7 +73,11 @@ impl Calibration {
         let turn = f64::from(ANGLE_COUNTS_PER_TURN);
         // rem_euclid keeps the value in [0, 4096); NaN maps to the zero count.
         let wrapped = libm_round(signed).rem_euclid_f64(turn);
-        let counts = if wrapped.is_finite() { wrapped as u16 } else { 0 };
+        let counts = if wrapped.is_finite() {
+            wrapped as u16
+        } else {
+            0
+        };
         (counts.wrapping_add(self.zero_counts)) & MAX_ANGLE_COUNT
     }
 }

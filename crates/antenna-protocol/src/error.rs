@@ -24,7 +24,9 @@ pub enum ProtocolError {
     #[error("address {0:#04x} is outside the assignable range 0x08..=0x77")]
     AddressOutOfRange(u8),
     /// An address-assignment message whose second byte is not the complement of the first.
-    #[error("address assignment {address:#04x} with complement {complement:#04x}: expected {expected:#04x}")]
+    #[error(
+        "address assignment {address:#04x} with complement {complement:#04x}: expected {expected:#04x}"
+    )]
     BadComplement {
         /// The requested address.
         address: u8,

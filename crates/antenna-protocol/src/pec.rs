@@ -70,7 +70,11 @@ mod tests {
     fn every_byte_pair_matches_the_long_division() {
         for a in 0..=255u8 {
             for b in 0..=255u8 {
-                assert_eq!(compute(&[a, b]), reference(&[a, b]), "bytes {a:#04x} {b:#04x}");
+                assert_eq!(
+                    compute(&[a, b]),
+                    reference(&[a, b]),
+                    "bytes {a:#04x} {b:#04x}"
+                );
             }
         }
     }

@@ -156,7 +156,10 @@ mod tests {
         let word = SampleWord::new(1234, TouchBits::from_bits(5).unwrap()).unwrap();
         let [hi, lo] = word.to_be_bytes();
         let good = pec::word_read_pec(0x30, [hi, lo]);
-        assert_eq!(SampleWord::from_read_with_pec(0x30, [hi, lo, good]), Ok(word));
+        assert_eq!(
+            SampleWord::from_read_with_pec(0x30, [hi, lo, good]),
+            Ok(word)
+        );
         for bit in 0..8 {
             let bad = good ^ (1 << bit);
             assert!(matches!(
