@@ -115,11 +115,12 @@ impl<I: I2c> Poller<I> {
 
 fn read_word<I: I2c>(bus: &mut I, address: u8) -> Result<SampleWord, PollError> {
     let mut bytes = [0u8; 3];
-    bus.read(address, &mut bytes).map_err(|error| match error.kind() {
-        ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address)
-        | ErrorKind::NoAcknowledge(NoAcknowledgeSource::Unknown) => PollError::Nack { address },
-        kind => PollError::Bus { address, kind },
-    })?;
+    bus.read(address, &mut bytes)
+        .map_err(|error| match error.kind() {
+            ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address)
+            | ErrorKind::NoAcknowledge(NoAcknowledgeSource::Unknown) => PollError::Nack { address },
+            kind => PollError::Bus { address, kind },
+        })?;
     SampleWord::from_read_with_pec(address, bytes)
         .map_err(|source| PollError::Corrupted { address, source })
 }
@@ -138,9 +139,8 @@ mod tests {
         let expectations = [
             Transaction::read(0x21, good.to_vec()),
             Transaction::read(0x22, corrupt.to_vec()),
-            Transaction::read(0x23, vec![0, 0, 0]).with_error(ErrorKind::NoAcknowledge(
-                NoAcknowledgeSource::Address,
-            )),
+            Transaction::read(0x23, vec![0, 0, 0])
+                .with_error(ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address)),
         ];
         let mut poller = Poller::new(Mock::new(&expectations), &[0x21, 0x22, 0x23]);
         let readings = poller.poll_all();
@@ -151,7 +151,10 @@ mod tests {
         ));
         assert_eq!(readings[2].result, Err(PollError::Nack { address: 0x23 }));
         let health = poller.health();
-        assert_eq!((health[0].ok, health[1].pec_errors, health[2].nacks), (1, 1, 1));
+        assert_eq!(
+            (health[0].ok, health[1].pec_errors, health[2].nacks),
+            (1, 1, 1)
+        );
         assert!(health[0].all_ok() && !health[1].all_ok());
         poller.destroy().done();
     }

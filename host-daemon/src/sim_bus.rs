@@ -83,7 +83,7 @@ impl SimSegment {
 /// Sixteen 10-bit conversions whose oversampled value, `(sum) >> 2`, is `counts` (clamped to
 /// 4092, the largest count 16 ten-bit conversions can make).
 fn conversions_for_counts(counts: u16) -> [u16; 16] {
-    let sum = (u32::from(counts.min(4092)) << 2) + 2;
+    let sum = u32::from(counts.min(4092)) << 2;
     let base = sum / 16;
     let extra = (sum % 16) as usize;
     let mut conversions = [base as u16; 16];
@@ -143,7 +143,8 @@ impl I2c for SimBus {
             // Adjacent operations of one kind are one transfer (no repeated start between).
             let is_write = matches!(operations[index], Operation::Write(_));
             let mut end = index;
-            while end < operations.len() && matches!(operations[end], Operation::Write(_)) == is_write
+            while end < operations.len()
+                && matches!(operations[end], Operation::Write(_)) == is_write
             {
                 end += 1;
             }
@@ -217,7 +218,11 @@ mod tests {
         bus.segment_mut(1).unwrap().set_angle_rad(0.7);
         bus.sample_all();
         for (address, calibration, angle) in [
-            (0x21, Calibration::new(2048, Direction::CounterClockwise), -0.3),
+            (
+                0x21,
+                Calibration::new(2048, Direction::CounterClockwise),
+                -0.3,
+            ),
             (0x22, Calibration::new(100, Direction::Clockwise), 0.7),
         ] {
             let mut bytes = [0u8; 3];

@@ -2,8 +2,8 @@
 //! rig: nine segments running the firmware's own logic on a virtual I2C bus, polled on
 //! absolute deadlines, decoded and shown as they arrive.
 
-use anyhow::{Result, bail};
 use antenna_protocol::{Calibration, Direction};
+use anyhow::{Result, bail};
 use clap::Parser;
 use host_daemon::{Poller, ScriptedSweep, SimBus, SimSegment};
 use std::time::{Duration, Instant};
@@ -38,7 +38,9 @@ fn parse_address(text: &str) -> Result<u8, String> {
     if antenna_protocol::is_assignable_address(value) {
         Ok(value)
     } else {
-        Err(format!("{value:#04x} is outside the assignable range 0x08..=0x77"))
+        Err(format!(
+            "{value:#04x} is outside the assignable range 0x08..=0x77"
+        ))
     }
 }
 
@@ -51,7 +53,9 @@ fn main() -> Result<()> {
         bail!("--poll-hz must be in (0, 10000], got {}", args.poll_hz);
     }
     let last = usize::from(args.first_address) + args.segments - 1;
-    let last = u8::try_from(last).ok().filter(|&a| antenna_protocol::is_assignable_address(a));
+    let last = u8::try_from(last)
+        .ok()
+        .filter(|&a| antenna_protocol::is_assignable_address(a));
     let Some(_) = last else {
         bail!(
             "{} segments from address {:#04x} run past 0x77",
@@ -98,7 +102,10 @@ fn main() -> Result<()> {
         }
     );
     println!("  (scripted wall sweep: the stage runs out and back, the tip bends and touches)");
-    println!("{:>7} {:>8}  joint angles, deg (base to tip)   touch", "t_s", "stage_mm");
+    println!(
+        "{:>7} {:>8}  joint angles, deg (base to tip)   touch",
+        "t_s", "stage_mm"
+    );
 
     let period = Duration::from_secs_f64(1.0 / args.poll_hz);
     let print_every = ((args.poll_hz / args.print_hz.max(0.01)).round() as u64).max(1);
@@ -112,7 +119,12 @@ fn main() -> Result<()> {
         if deadline > now {
             std::thread::sleep(deadline - now);
         }
-        late_us.push(Instant::now().saturating_duration_since(deadline).as_secs_f64() * 1e6);
+        late_us.push(
+            Instant::now()
+                .saturating_duration_since(deadline)
+                .as_secs_f64()
+                * 1e6,
+        );
         let t_s = tick as f64 * period.as_secs_f64();
         if args.duration_s > 0.0 && t_s > args.duration_s {
             break;
@@ -129,7 +141,7 @@ fn main() -> Result<()> {
         bus.sample_all();
         let readings = poller.poll_all();
 
-        if tick % print_every == 0 {
+        if tick.is_multiple_of(print_every) {
             let mut angles = String::new();
             let mut touches = String::new();
             for (reading, calibration) in readings.iter().zip(&calibrations) {
