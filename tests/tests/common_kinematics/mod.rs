@@ -32,6 +32,11 @@ impl Case {
         self.length_scale() * self.theta_dot.iter().map(|v| v.abs()).sum::<f64>().max(1.0)
     }
 
+    /// A bound on every angular velocity: the sum of |theta_dot| (at least 1).
+    pub fn angular_velocity_scale(&self) -> f64 {
+        self.theta_dot.iter().map(|v| v.abs()).sum::<f64>().max(1.0)
+    }
+
     /// A bound on every frame angle: the sum of |theta|.
     pub fn angle_scale(&self) -> f64 {
         self.theta.iter().map(|v| v.abs()).sum::<f64>().max(1.0)
@@ -123,6 +128,46 @@ where
     Ok(())
 }
 
+/// [`assert_close`] for stacked planar quantities, rows `(x, y, angle)` repeated: the linear
+/// rows are compared at `tol * linear_scale`, the angular rows at `tol * angular_scale`.
+/// Position rows scale with the chain's length and angle rows with the size of the frame
+/// angles; one scale for both is wrong in units (regression seed in
+/// `kinematics_finite_differences.proptest-regressions`).
+pub fn assert_close_planar<R1, C1, S1, R2, C2, S2>(
+    what: &str,
+    a: &Matrix<f64, R1, C1, S1>,
+    b: &Matrix<f64, R2, C2, S2>,
+    tol: f64,
+    linear_scale: f64,
+    angular_scale: f64,
+) -> Result<(), TestCaseError>
+where
+    R1: nalgebra::Dim,
+    C1: nalgebra::Dim,
+    S1: RawStorage<f64, R1, C1>,
+    R2: nalgebra::Dim,
+    C2: nalgebra::Dim,
+    S2: RawStorage<f64, R2, C2>,
+{
+    prop_assert_eq!(a.shape(), b.shape(), "{}: shapes differ", what);
+    for r in 0..a.nrows() {
+        let (kind, scale) = if r % 3 == 2 {
+            ("angular", angular_scale)
+        } else {
+            ("linear", linear_scale)
+        };
+        for c in 0..a.ncols() {
+            let d = (a[(r, c)] - b[(r, c)]).abs();
+            prop_assert!(
+                d <= tol * scale,
+                "{what}: {kind} row {r}, column {c}: diff {d:e} > {tol:e} * scale {scale:e} (relative {:e})",
+                d / scale
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Scalar version of [`assert_close`].
 pub fn assert_close_f(
     what: &str,
@@ -141,18 +186,25 @@ pub fn assert_close_f(
 
 /// Central differences of a vector function `f: R^m -> R^k` at `x`, step `h`: a `k x m`
 /// matrix.
+///
+/// The quotient divides by the step actually taken, `(x + h) - (x - h)` as rounded, not by
+/// `2 h`, which removes the step's own rounding from the quotient. What remains is the
+/// rounding of `f` itself, `eps |f| / h`: see [`assert_close_planar`] for why the angular
+/// rows need their own scale.
 pub fn central_jacobian(x: &[f64], h: f64, f: impl Fn(&[f64]) -> Vec<f64>) -> DMatrix<f64> {
     let k = f(x).len();
     let mut j = DMatrix::zeros(k, x.len());
     let mut xp = x.to_vec();
     for c in 0..x.len() {
-        xp[c] = x[c] + h;
+        let (plus, minus) = (x[c] + h, x[c] - h);
+        xp[c] = plus;
         let fp = f(&xp);
-        xp[c] = x[c] - h;
+        xp[c] = minus;
         let fm = f(&xp);
         xp[c] = x[c];
+        let step = plus - minus;
         for r in 0..k {
-            j[(r, c)] = (fp[r] - fm[r]) / (2.0 * h);
+            j[(r, c)] = (fp[r] - fm[r]) / step;
         }
     }
     j
