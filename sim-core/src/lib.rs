@@ -30,8 +30,17 @@
 //! - [`joint_limits`]: the limit map `theta = g(q)`, its inverse and derivatives.
 //! - [`hair`]: hair parameters and hair tip kinematics.
 //! - [`energy`]: spring energy and tip load with gradient and Hessian, in `theta` and `q`.
+//! - [`tip_force`](mod@tip_force): the tip force at a posture (least squares `J^T F = -tau`,
+//!   and the free-body system with stop torques, base reaction and servo torque), and
+//!   [`castigliano`]: the deflection `K^-1 J^T (F, M)` of a small tip load (seed 3.2.2).
 //! - [`active_frames`] and [`matrix_forms`]: the seed's bookkeeping (`alpha_sb`, `A_sb`, `A`)
 //!   and matrix formulas, `O(n^2)` or worse: the reference the fast paths are tested against.
+//! - [`profile`]: joint stiffness profiles normalized to `[k_min, k_max]` (model.md 5).
+//! - [`nitinol`]: the wire law `k = C r^4 + k_cable` and the nearest available wire per joint.
+//! - [`identify`]: joint stiffness from a free-oscillation recording (model.md 9, seed 6.2).
+//! - [`elastica`]: the reference solver for the clamped inextensible beam under a tip load.
+//! - [`beam`]: chains that stand for a beam (the first-order equal-links and the second-order
+//!   Hencky layouts) and Richardson extrapolation over the number of links.
 //!
 //! Every function checks its arguments against the chain and returns a typed error
 //! ([`KinematicsError`], [`ChainError`]) rather than panicking. Functions that produce one
@@ -76,35 +85,70 @@
 //! ```
 
 pub mod active_frames;
+pub mod beam;
+pub mod castigliano;
 pub mod chain;
+pub mod elastica;
 pub mod energy;
+pub mod equilibrium;
 pub mod error;
 pub mod frame;
 pub mod hair;
+pub mod identify;
 pub mod jacobian;
 pub mod joint_limits;
 pub mod matrix_forms;
+pub mod nitinol;
 pub mod positions;
+pub mod profile;
+pub mod tip_force;
 pub mod velocity;
 
 pub use active_frames::{
     active_frames_matrix, active_frames_matrix_from_vector, active_frames_vector,
     all_frames_active_matrix, all_frames_matrix, all_frames_matrix_from_extremes,
 };
+pub use beam::{
+    Beam, BeamError, BeamLayout, BeamTip, RichardsonOptions, RichardsonTip, richardson_tip,
+    solve_beam_chain,
+};
+pub use castigliano::castigliano_deflection_rad;
 pub use chain::{Chain, ChainBuilder, JointLimit};
+pub use elastica::{
+    BendingStiffness, ElasticaError, ElasticaOptions, ElasticaProblem, ElasticaSolution,
+    PerpendicularLoadClosedForm, ShapePoint, perpendicular_load_closed_form,
+    solve as solve_elastica,
+};
 pub use energy::{Potential, joint_torques_nm, strain_energy_j};
+pub use equilibrium::{
+    Equilibrium, EquilibriumError, EquilibriumProblem, InitialGuess, LimitSide, MinimaSearch,
+    SolveOptions, all_minima, solve_equilibrium,
+};
 pub use error::{ChainError, ChainField, KinematicsError};
 pub use frame::Frame;
 pub use hair::{
     Hair, HairDirection, HairPose, HairSide, HairVelocity, hair_pose, hair_poses,
     hair_tip_jacobian, hair_velocities,
 };
+pub use identify::{
+    DampingSource, FrequencySource, Identification, IdentifyError, IdentifyOptions,
+    identify_stiffness, wire_constant,
+};
 pub use jacobian::{
     JacobianKind, all_jacobians, all_jacobians_into, body_jacobian, hybrid_jacobian, jacobian,
     jacobian_into, spatial_jacobian, tip_jacobian, tip_jacobian_into,
 };
 pub use joint_limits::{d2theta_dq2, dtheta_dq, q_from_theta, theta_from_q};
+pub use nitinol::{
+    Design, JointWire, NitinolError, RangeFlag, WireDiameter, WireModel, available_wires,
+    design as design_wires, wire_stiffness_n_m_per_rad,
+};
 pub use positions::{FramePoses, Pose2, frame_pose, frame_poses, frame_poses_into, tip_pose};
+pub use profile::{ProfileError, StiffnessProfile, joint_positions};
+pub use tip_force::{
+    FreeBodyForces, TIP_FORCE_RANK_TOLERANCE, TipForce, TipForceError, joints_on_limit,
+    tip_force_free_body, tip_force_least_squares, tip_wrench_least_squares,
+};
 pub use velocity::{
     FrameVelocities, Twist2, frame_velocities, frame_velocities_into, frame_velocity,
 };

@@ -1,0 +1,72 @@
+//! Helpers shared by the `antenna` command's integration tests: run the binary, find the
+//! examples, write scratch files.
+#![allow(dead_code, clippy::unwrap_used)]
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+/// The `antenna` binary under test.
+pub fn antenna() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_antenna"))
+}
+
+/// Runs `antenna args...`.
+pub fn run(args: &[&str]) -> Output {
+    antenna().args(args).output().unwrap()
+}
+
+/// Runs `antenna args...` with `stdin` on its standard input.
+pub fn run_with_stdin(args: &[&str], stdin: &str) -> Output {
+    let mut child = antenna()
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8(o.stdout.clone()).unwrap()
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8(o.stderr.clone()).unwrap()
+}
+
+/// The repository's `examples/` directory.
+pub fn examples_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+/// Every `examples/*.toml`, sorted.
+pub fn example_scenes() -> Vec<PathBuf> {
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(examples_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    scenes.sort();
+    scenes
+}
+
+pub fn example(name: &str) -> String {
+    examples_dir().join(name).display().to_string()
+}
+
+/// Writes `text` to a scratch file named `name` (unique per test binary) and returns its path.
+pub fn scratch(name: &str, text: &str) -> String {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("antenna-cli-tests");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path.display().to_string()
+}
