@@ -21,10 +21,28 @@
 //! assert!((Calibration::default().angle_rad(word.angle_counts()) - 0.5).abs() < 0.002);
 //! ```
 
+pub mod acquisition;
+pub mod clock;
+pub mod config;
+pub mod emulator;
+mod fake_servo;
+mod fake_stage;
+pub mod maestro;
+pub mod net;
 mod poll;
+pub mod record;
+pub mod servo;
 mod sim_bus;
-mod sim_motion;
+pub mod sim_rig;
+pub mod stage;
+pub mod vxm;
 
-pub use poll::{PollError, Poller, SegmentHealth, SegmentReading};
-pub use sim_bus::{SimBus, SimBusError, SimSegment};
-pub use sim_motion::{RigState, ScriptedSweep};
+pub use fake_servo::{FakeServo, FakeServoError};
+pub use fake_stage::{FakeStage, FakeStageError};
+pub use maestro::{Maestro, MaestroConfig, MaestroError};
+pub use net::{ControlCommand, ControlHandler, ControlToken, StreamMessage, StreamServer};
+pub use poll::{CounterCheck, PollError, Poller, SegmentHealth, SegmentReading};
+pub use servo::{PulseCalibration, Servo};
+pub use sim_bus::{SegmentFault, SimBus, SimBusError, SimSegment};
+pub use stage::{LimitedStage, Stage, StageError, StageGeometry};
+pub use vxm::{Vxm, VxmError};

@@ -42,13 +42,28 @@ pub struct SegmentHealth {
     pub pec_errors: u64,
     /// Other bus errors.
     pub bus_errors: u64,
+    /// Counter checks ([`Poller::check_counters`]) that found the sample counter where the
+    /// previous check left it: the segment answers but publishes no new samples.
+    pub stale: u64,
 }
 
 impl SegmentHealth {
-    /// Whether the last poll was good is not kept here; this says whether every poll was.
+    /// Whether the last poll was good is not kept here; this says whether every poll and
+    /// every counter check was.
     pub fn all_ok(&self) -> bool {
-        self.nacks == 0 && self.pec_errors == 0 && self.bus_errors == 0
+        self.nacks == 0 && self.pec_errors == 0 && self.bus_errors == 0 && self.stale == 0
     }
+}
+
+/// What a counter check ([`Poller::check_counters`]) found for one segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CounterCheck {
+    /// The counter has moved since the last check (or this is the first check).
+    Moving,
+    /// The counter has not moved since the last check.
+    Stale,
+    /// The counter could not be read (NACK or bus error); nothing is concluded.
+    Unread,
 }
 
 /// One segment's result in one poll.
@@ -66,6 +81,7 @@ pub struct Poller<I> {
     bus: I,
     addresses: Vec<u8>,
     health: Vec<SegmentHealth>,
+    counters: Vec<Option<u8>>,
 }
 
 impl<I: I2c> Poller<I> {
@@ -76,7 +92,41 @@ impl<I: I2c> Poller<I> {
             bus,
             addresses: addresses.to_vec(),
             health: vec![SegmentHealth::default(); addresses.len()],
+            counters: vec![None; addresses.len()],
         }
+    }
+
+    /// The addresses polled, base to tip.
+    pub fn addresses(&self) -> &[u8] {
+        &self.addresses
+    }
+
+    /// Reads every segment's sample counter (register 0x03) and compares it with the previous
+    /// check: a counter that has not moved marks the segment stale (counted in its health).
+    /// Call it less often than the segments sample, so a healthy counter always moves.
+    pub fn check_counters(&mut self) -> Vec<CounterCheck> {
+        let mut checks = Vec::with_capacity(self.addresses.len());
+        for (index, &address) in self.addresses.iter().enumerate() {
+            let mut counter = [0u8; 1];
+            let check = match self.bus.write_read(
+                address,
+                &[antenna_protocol::Register::Counter.number()],
+                &mut counter,
+            ) {
+                Err(_) => CounterCheck::Unread,
+                Ok(()) => {
+                    let previous = self.counters[index].replace(counter[0]);
+                    if previous == Some(counter[0]) {
+                        self.health[index].stale += 1;
+                        CounterCheck::Stale
+                    } else {
+                        CounterCheck::Moving
+                    }
+                }
+            };
+            checks.push(check);
+        }
+        checks
     }
 
     /// Reads every segment once: word and PEC in one 3-byte read each. A failing segment is

@@ -24,6 +24,22 @@ impl embedded_hal::i2c::Error for SimBusError {
     }
 }
 
+/// A fault injected into one simulated segment, for testing how the host copes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SegmentFault {
+    /// The segment behaves.
+    #[default]
+    None,
+    /// The segment does not acknowledge its address (a NACK storm while it lasts).
+    Nack,
+    /// Reads come back with the last byte (the PEC of a 3-byte read) bit-flipped, as a
+    /// corrupted transfer would.
+    CorruptPec,
+    /// The segment's main loop has stopped: its I2C target still answers with the last word,
+    /// but no new sample is published, so its sample counter stops moving.
+    StuckCounter,
+}
+
 /// One simulated segment: a physical joint angle and touch switches, sampled by the
 /// firmware's oversampling and debouncing and served by its I2C target state machine.
 #[derive(Debug, Clone)]
@@ -33,6 +49,7 @@ pub struct SimSegment {
     calibration: Calibration,
     angle_rad: f64,
     touch_raw: u8,
+    fault: SegmentFault,
 }
 
 impl SimSegment {
@@ -44,7 +61,18 @@ impl SimSegment {
             calibration,
             angle_rad: 0.0,
             touch_raw: 0,
+            fault: SegmentFault::None,
         }
+    }
+
+    /// Injects `fault` (or clears it with [`SegmentFault::None`]).
+    pub fn set_fault(&mut self, fault: SegmentFault) {
+        self.fault = fault;
+    }
+
+    /// The fault in force.
+    pub fn fault(&self) -> SegmentFault {
+        self.fault
     }
 
     /// Sets the joint angle the Hall sensor sees.
@@ -65,6 +93,9 @@ impl SimSegment {
     /// One sampling period of the firmware's main loop: 16 conversions that oversample to
     /// the angle's count, the touch port read and debounced, and the sample published.
     pub fn sample(&mut self) {
+        if self.fault == SegmentFault::StuckCounter {
+            return;
+        }
         let counts = self.calibration.counts_for_angle(self.angle_rad);
         let conversions = conversions_for_counts(counts);
         let touch = self.debouncer.step(self.touch_raw);
@@ -136,8 +167,9 @@ impl I2c for SimBus {
         let segment = self
             .segments
             .iter_mut()
-            .find(|segment| segment.address() == address)
+            .find(|segment| segment.address() == address && segment.fault != SegmentFault::Nack)
             .ok_or(SimBusError::AddressNack(address))?;
+        let corrupt = segment.fault == SegmentFault::CorruptPec;
         let mut index = 0;
         while index < operations.len() {
             // Adjacent operations of one kind are one transfer (no repeated start between).
@@ -176,6 +208,9 @@ impl I2c for SimBus {
                             };
                             first = false;
                             *byte = segment.step(event).tx;
+                        }
+                        if corrupt && let Some(last) = buffer.last_mut() {
+                            *last ^= 0x5a;
                         }
                     }
                 }
@@ -266,6 +301,38 @@ mod tests {
             bus.write(0x21, &[Register::Counter.number(), 0x55]),
             Err(SimBusError::DataNack(0x21))
         );
+    }
+
+    #[test]
+    fn injected_faults_nack_corrupt_and_freeze_the_counter() {
+        let mut bus = bus();
+        bus.sample_all();
+        bus.segment_mut(0).unwrap().set_fault(SegmentFault::Nack);
+        assert_eq!(
+            bus.read(0x21, &mut [0u8; 3]),
+            Err(SimBusError::AddressNack(0x21))
+        );
+        bus.segment_mut(0)
+            .unwrap()
+            .set_fault(SegmentFault::CorruptPec);
+        let mut bytes = [0u8; 3];
+        bus.read(0x21, &mut bytes).unwrap();
+        assert!(SampleWord::from_read_with_pec(0x21, bytes).is_err());
+        bus.segment_mut(0)
+            .unwrap()
+            .set_fault(SegmentFault::StuckCounter);
+        let counter = |bus: &mut SimBus| {
+            let mut c = [0u8; 1];
+            bus.write_read(0x21, &[Register::Counter.number()], &mut c)
+                .unwrap();
+            c[0]
+        };
+        let before = counter(&mut bus);
+        bus.sample_all();
+        assert_eq!(counter(&mut bus), before);
+        bus.segment_mut(0).unwrap().set_fault(SegmentFault::None);
+        bus.sample_all();
+        assert_eq!(counter(&mut bus), before.wrapping_add(1));
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //!    deflection against the elastica (the Bisshopp-Drucker closed form) and time per solve,
 //!    for chains of n = 8..4096 flexible joints in both layouts of `sim_core::beam` and for
 //!    Richardson extrapolation over 2, 3 and 4 Hencky chains.
-//! 2. The seed's robot with its tip pinned (9 flexible joints of 40 mm, fast-exponential
+//! 2. The seed's robot with its tip pinned (9 links of 40 mm: 8 flexible joints; fast-exponential
 //!    stiffness 0.004..0.082 N m/rad, base angle 30 deg): time per solve from a straight
 //!    start and warm-started from the previous solution while the pin moves in 0.5 mm steps.
 //!
@@ -222,15 +222,16 @@ fn measure_cantilever() -> BoxResult<(Vec<Point>, Vec<ElasticaRun>)> {
     Ok((points, elastica))
 }
 
-/// The seed's robot: 9 flexible joints of 40 mm, fast-exponential stiffness, base at 30 deg.
+/// The seed's robot as scene-format.md counts it: 9 links of 40 mm (the base link and 8
+/// flexible joints), fast-exponential stiffness, base at 30 deg.
 fn seed_chain() -> BoxResult<Chain> {
-    let lengths = vec![0.04; 10];
+    let lengths = vec![0.04; 9];
     let k = StiffnessProfile::FastExponential.stiffness_n_m_per_rad(
         &lengths,
         SEED_K_MIN_N_M_PER_RAD,
         SEED_K_MAX_N_M_PER_RAD,
     )?;
-    Ok(Chain::builder(9)
+    Ok(Chain::builder(8)
         .link_lengths_m(lengths)
         .base_angle_rad(30f64.to_radians())
         .stiffnesses_nm_per_rad(k)
@@ -522,7 +523,7 @@ fn section(
     } = pinned;
     writeln!(
         s,
-        "\n**Pinned tip, 9 links.** The seed's robot: 9 flexible joints of 40 mm on a 40 mm base link at 30 deg, fast-exponential stiffness {SEED_K_MIN_N_M_PER_RAD}..{SEED_K_MAX_N_M_PER_RAD} N m/rad (`profile.rs`), joint limits +-90 deg, no load; the tip pinned at ({}, {}) m and moved in {steps} steps of 0.5 mm to ({:.3}, {}) m. The sweep starts from a C at the first pin and then from each previous answer; the cold starts solve every pin point afresh. Default solver options (KKT tolerance 1e-10). Time: median over the pin points of each point's median time per solve.\n",
+        "\n**Pinned tip, 9 links.** The seed's robot: 9 links of 40 mm (a base link at 30 deg and 8 flexible joints, as scene-format.md counts `links`), fast-exponential stiffness {SEED_K_MIN_N_M_PER_RAD}..{SEED_K_MAX_N_M_PER_RAD} N m/rad (`profile.rs`), joint limits +-90 deg, no load; the tip pinned at ({}, {}) m and moved in {steps} steps of 0.5 mm to ({:.3}, {}) m. The sweep starts from a C at the first pin and then from each previous answer; the cold starts solve every pin point afresh. Default solver options (KKT tolerance 1e-10). Time: median over the pin points of each point's median time per solve.\n",
         first[0], first[1], last[0], last[1]
     )?;
     writeln!(

@@ -7,6 +7,7 @@
 
 pub mod design;
 pub mod error;
+pub mod export;
 pub mod identify;
 pub mod recording;
 pub mod scene;

@@ -36,6 +36,7 @@ enum Command {
     Solve(SolveArgs),
     Design(DesignArgs),
     Identify(IdentifyArgs),
+    Export(ExportArgs),
 }
 
 /// Find the static equilibrium of a scene file.
@@ -146,6 +147,27 @@ struct IdentifyArgs {
     json: bool,
 }
 
+/// Export a trial recorded by antennad (MCAP) to a MAT-file (v5, scipy.io.loadmat reads it)
+/// and/or a CSV file.
+///
+/// A trial cut short by a crash exports up to its last flush (with a warning on stderr).
+/// Variables and columns: see the `antenna_cli::export` docs. Exit status: 0 written; 2 bad
+/// input (a message naming the file).
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:
+  antenna export data/trial-001.mcap --mat trial-001.mat
+  antenna export data/trial-001.mcap --csv trial-001.csv")]
+struct ExportArgs {
+    /// The trial file (MCAP, written by antennad).
+    trial: PathBuf,
+    /// Write a MAT-file here.
+    #[arg(long, required_unless_present = "csv")]
+    mat: Option<PathBuf>,
+    /// Write a CSV file here.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum FrequencyArg {
     /// Least-squares damped-sinusoid fit seeded by the spectrum peak.
@@ -184,6 +206,7 @@ fn main() -> ExitCode {
         Command::Solve(args) => run_solve(&args),
         Command::Design(args) => run_design(&args),
         Command::Identify(args) => run_identify(&args),
+        Command::Export(args) => run_export(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -429,6 +452,29 @@ fn run_identify(args: &IdentifyArgs) -> Result<(), Failure> {
         print!("{}", identify_summary(&report));
         Ok(())
     }
+}
+
+fn run_export(args: &ExportArgs) -> Result<(), Failure> {
+    let path = &args.trial;
+    let trial = host_daemon::record::TrialReader::read(path)
+        .map_err(|e| anyhow!("cannot export the trial: {e}"))?;
+    if let Some(why) = &trial.truncated {
+        eprintln!(
+            "warning: {}: the trial file ends early (a crash?); exporting {} polls up to its last flush ({why})",
+            path.display(),
+            trial.segments.len()
+        );
+    }
+    if let Some(out) = &args.mat {
+        antenna_cli::export::write_mat(&trial, out)
+            .with_context(|| format!("{}: exporting to {}", path.display(), out.display()))?;
+    }
+    if let Some(out) = &args.csv {
+        let text = antenna_cli::export::trial_to_csv(&trial)
+            .with_context(|| format!("{}: exporting to {}", path.display(), out.display()))?;
+        std::fs::write(out, text).with_context(|| format!("{}: cannot write", out.display()))?;
+    }
+    Ok(())
 }
 
 fn bail_input<T>(message: String) -> Result<T, Failure> {

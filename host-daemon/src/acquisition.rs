@@ -1,0 +1,410 @@
+//! Acquisition: the polling thread and the motion thread, on one [`TrialClock`], feeding one
+//! bounded channel of [`AcquisitionEvent`]s.
+//!
+//! - **Polling** ([`spawn_poller`]): a dedicated thread wakes on absolute deadlines
+//!   (`start + k * period`, [`Schedule`]), reads every segment through the [`Poller`]
+//!   (PEC-checked 3-byte reads), stamps the poll with the time since the trial started and
+//!   sends it. Every `counter_check_every` polls it also reads each segment's sample counter:
+//!   a counter that has not moved marks the segment stale ([`PollRecord::stale_mask`]). A
+//!   NACK, a PEC error or a stale counter is recorded in the segment's health and the poll
+//!   goes on.
+//! - **Motion** ([`spawn_motion`]): the trial's script (base angle, then the stage moves with
+//!   their pauses) on a [`Rig`], with the stage position and the base angle sampled at their
+//!   own rates under the same clock and sent into the same stream.
+//! - **The stream** ([`EventSender`]): a bounded channel written with `try_send`. A full
+//!   consumer queue never delays polling: the event is dropped and counted
+//!   ([`EventSender::dropped`]); size the queue so that never happens (the main loop
+//!   forwards events to the recorder and the TCP server, which have their own queues).
+
+use crate::clock::{Schedule, TrialClock};
+use crate::config::TrialConfig;
+use crate::poll::{CounterCheck, Poller, SegmentHealth, SegmentReading};
+use embedded_hal::i2c::I2c;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// One poll of every segment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PollRecord {
+    /// The poll's number since the trial started (gaps are skipped deadlines).
+    pub seq: u64,
+    /// When the poll started, nanoseconds since the trial started.
+    pub t_ns: u64,
+    /// When it was due, nanoseconds since the trial started.
+    pub deadline_ns: u64,
+    /// Each segment's word or why there is none, base to tip.
+    pub readings: Vec<SegmentReading>,
+    /// Bit `k` set: segment `k`'s sample counter did not move at its last check (its word is
+    /// old news even if it reads well).
+    pub stale_mask: u64,
+}
+
+impl PollRecord {
+    /// Whether segment `index` was found stale at its last counter check.
+    pub fn is_stale(&self, index: usize) -> bool {
+        index < 64 && self.stale_mask & (1 << index) != 0
+    }
+}
+
+/// A health change of one segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HealthChange {
+    /// Its counter stopped moving.
+    Stale,
+    /// Its counter moves again.
+    Recovered,
+}
+
+/// What the acquisition threads send.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AcquisitionEvent {
+    /// A poll of every segment.
+    Poll(PollRecord),
+    /// The stage position.
+    Stage {
+        /// Nanoseconds since the trial started.
+        t_ns: u64,
+        /// Millimetres from home.
+        position_mm: f64,
+    },
+    /// The base (servo) angle.
+    Base {
+        /// Nanoseconds since the trial started.
+        t_ns: u64,
+        /// Radians.
+        angle_rad: f64,
+    },
+    /// A segment's counter stopped or started moving.
+    Health {
+        /// Nanoseconds since the trial started.
+        t_ns: u64,
+        /// The segment.
+        address: u8,
+        /// What changed.
+        change: HealthChange,
+    },
+    /// Something the trial did or refused (a move started, a move beyond the soft limits).
+    Note {
+        /// Nanoseconds since the trial started.
+        t_ns: u64,
+        /// What happened.
+        text: String,
+    },
+}
+
+/// The sending end of the event stream: never blocks; counts what a full queue refused.
+#[derive(Debug, Clone)]
+pub struct EventSender {
+    sender: SyncSender<AcquisitionEvent>,
+    dropped: Arc<AtomicU64>,
+}
+
+impl EventSender {
+    /// Sends `event` if there is room; otherwise drops and counts it.
+    pub fn send(&self, event: AcquisitionEvent) {
+        if let Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) =
+            self.sender.try_send(event)
+        {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// Events dropped so far (queue full or the receiver gone), over every clone.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(Ordering::Relaxed)
+    }
+}
+
+/// A bounded event stream of `capacity` events.
+pub fn event_channel(capacity: usize) -> (EventSender, Receiver<AcquisitionEvent>) {
+    let (sender, receiver) = sync_channel(capacity.max(1));
+    (
+        EventSender {
+            sender,
+            dropped: Arc::new(AtomicU64::new(0)),
+        },
+        receiver,
+    )
+}
+
+/// How the polling thread runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PollSettings {
+    /// Poll period.
+    pub period: Duration,
+    /// Read the sample counters every this many polls (at least 1).
+    pub counter_check_every: u32,
+    /// Busy-wait this long before each deadline (zero: sleep only).
+    pub spin: Duration,
+}
+
+/// What the polling thread hands back when it stops.
+#[derive(Debug)]
+pub struct PollReport<I> {
+    /// The bus.
+    pub bus: I,
+    /// Health per segment.
+    pub health: Vec<SegmentHealth>,
+    /// Polls made.
+    pub polls: u64,
+    /// Deadlines skipped because the thread was a whole period late.
+    pub skipped: u64,
+    /// The latest wake-up, after its deadline.
+    pub max_lateness: Duration,
+}
+
+/// Starts the polling thread: polls `poller` every `settings.period` until `stop` is set.
+/// `before_poll(bus, t)` runs at each deadline before the reads (the simulated rig uses it to
+/// let its segments sample; give `|_, _| {}` for hardware, whose segments sample on their
+/// own).
+pub fn spawn_poller<I, H>(
+    mut poller: Poller<I>,
+    clock: TrialClock,
+    settings: PollSettings,
+    mut before_poll: H,
+    events: EventSender,
+    stop: Arc<AtomicBool>,
+) -> std::io::Result<JoinHandle<PollReport<I>>>
+where
+    I: I2c + Send + 'static,
+    H: FnMut(&mut I, Duration) + Send + 'static,
+{
+    std::thread::Builder::new()
+        .name("antennad-poll".to_owned())
+        .spawn(move || {
+            let mut schedule = Schedule::new(clock, settings.period).with_spin(settings.spin);
+            let check_every = u64::from(settings.counter_check_every.max(1));
+            let addresses = poller.addresses().to_vec();
+            let mut stale_mask = 0u64;
+            let mut skipped = 0;
+            let mut max_lateness = Duration::ZERO;
+            while !stop.load(Ordering::Relaxed) {
+                let tick = schedule.wait_next();
+                skipped += tick.skipped;
+                max_lateness = max_lateness.max(tick.lateness());
+                before_poll(poller.bus_mut(), tick.woke);
+                let readings = poller.poll_all();
+                if tick.index % check_every == check_every - 1 {
+                    let t_ns = clock.elapsed_ns();
+                    for (k, check) in poller.check_counters().into_iter().enumerate() {
+                        let bit = if k < 64 { 1u64 << k } else { 0 };
+                        let was = stale_mask & bit != 0;
+                        let change = match check {
+                            CounterCheck::Stale if !was => Some(HealthChange::Stale),
+                            CounterCheck::Moving if was => Some(HealthChange::Recovered),
+                            _ => None,
+                        };
+                        match check {
+                            CounterCheck::Stale => stale_mask |= bit,
+                            CounterCheck::Moving => stale_mask &= !bit,
+                            CounterCheck::Unread => {}
+                        }
+                        if let Some(change) = change {
+                            events.send(AcquisitionEvent::Health {
+                                t_ns,
+                                address: addresses[k],
+                                change,
+                            });
+                        }
+                    }
+                }
+                events.send(AcquisitionEvent::Poll(PollRecord {
+                    seq: tick.index,
+                    t_ns: nanos(tick.woke),
+                    deadline_ns: nanos(tick.deadline),
+                    readings,
+                    stale_mask,
+                }));
+            }
+            PollReport {
+                health: poller.health().to_vec(),
+                polls: schedule.ticks(),
+                skipped,
+                max_lateness,
+                bus: poller.destroy(),
+            }
+        })
+}
+
+fn nanos(d: Duration) -> u64 {
+    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
+}
+
+/// The moving parts of a rig as the motion thread drives them: the stage (through its soft
+/// limits) and the base servo. `now` is the time since the trial started (a simulated rig
+/// advances its models to it; hardware ignores it).
+pub trait Rig: Send {
+    /// Starts a relative stage move; refuses (without moving) one beyond the soft limits.
+    fn start_move_mm(
+        &mut self,
+        distance_mm: f64,
+        speed_mm_per_s: f64,
+        now: Duration,
+    ) -> anyhow::Result<()>;
+    /// Whether the stage is still moving.
+    fn stage_moving(&mut self, now: Duration) -> anyhow::Result<bool>;
+    /// The stage position, millimetres from home.
+    fn stage_mm(&mut self, now: Duration) -> anyhow::Result<f64>;
+    /// Sets the base angle, radians.
+    fn set_base_angle_rad(&mut self, angle_rad: f64, now: Duration) -> anyhow::Result<()>;
+    /// The base angle, radians.
+    fn base_angle_rad(&mut self, now: Duration) -> anyhow::Result<f64>;
+    /// Stops the stage at once.
+    fn stop(&mut self, now: Duration) -> anyhow::Result<()>;
+}
+
+/// Sampling rates of the motion thread.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MotionSettings {
+    /// Stage position sampling period.
+    pub stage_period: Duration,
+    /// Base angle sampling period.
+    pub base_period: Duration,
+}
+
+/// What the motion thread hands back.
+#[derive(Debug)]
+pub struct MotionReport<R> {
+    /// The rig.
+    pub rig: R,
+    /// Moves started.
+    pub moves_started: usize,
+    /// Moves refused (beyond the soft limits, or the stage failed).
+    pub moves_refused: usize,
+    /// Whether every move had finished (or been refused) when the thread stopped.
+    pub script_done: bool,
+}
+
+enum Step {
+    Idle,
+    Moving,
+    Pausing(Duration),
+}
+
+/// Starts the motion thread: sets the trial's base angle, runs its moves one after another
+/// and samples the stage and the base at their own periods, until `stop` is set. When the
+/// script is done it sets `script_done` (the caller decides whether the trial ends then).
+pub fn spawn_motion<R: Rig + 'static>(
+    mut rig: R,
+    trial: TrialConfig,
+    clock: TrialClock,
+    settings: MotionSettings,
+    events: EventSender,
+    stop: Arc<AtomicBool>,
+    script_done: Arc<AtomicBool>,
+) -> std::io::Result<JoinHandle<MotionReport<R>>> {
+    std::thread::Builder::new()
+        .name("antennad-motion".to_owned())
+        .spawn(move || {
+            let note = |t: Duration, text: String| {
+                events.send(AcquisitionEvent::Note {
+                    t_ns: nanos(t),
+                    text,
+                });
+            };
+            let mut stage = Schedule::new(clock, settings.stage_period);
+            let mut base = Schedule::new(clock, settings.base_period);
+            let now = clock.elapsed();
+            if let Err(e) = rig.set_base_angle_rad(trial.base_angle_deg.to_radians(), now) {
+                note(now, format!("base angle refused: {e:#}"));
+            }
+            let mut moves = trial.moves.iter().copied().enumerate();
+            let mut step = Step::Idle;
+            let mut last_started = None;
+            let mut started = 0;
+            let mut refused = 0;
+            let mut done = false;
+            while !stop.load(Ordering::Relaxed) {
+                // Wake at whichever sampling deadline comes first.
+                let stage_next = stage.next_deadline() <= base.next_deadline();
+                let tick = if stage_next {
+                    stage.wait_next()
+                } else {
+                    base.wait_next()
+                };
+                let now = tick.woke;
+                if stage_next {
+                    match rig.stage_mm(now) {
+                        Ok(position_mm) => events.send(AcquisitionEvent::Stage {
+                            t_ns: nanos(now),
+                            position_mm,
+                        }),
+                        Err(e) => note(now, format!("stage position unavailable: {e:#}")),
+                    }
+                } else {
+                    match rig.base_angle_rad(now) {
+                        Ok(angle_rad) => events.send(AcquisitionEvent::Base {
+                            t_ns: nanos(now),
+                            angle_rad,
+                        }),
+                        Err(e) => note(now, format!("base angle unavailable: {e:#}")),
+                    }
+                }
+                step = match step {
+                    Step::Moving => match rig.stage_moving(now) {
+                        Ok(true) => Step::Moving,
+                        Ok(false) => {
+                            let pause = last_started
+                                .and_then(|j: usize| trial.moves.get(j))
+                                .map_or(0.0, |m| m.pause_s);
+                            Step::Pausing(now + Duration::from_secs_f64(pause))
+                        }
+                        Err(e) => {
+                            note(now, format!("stage failed: {e:#}"));
+                            Step::Moving
+                        }
+                    },
+                    Step::Pausing(until) if now < until => Step::Pausing(until),
+                    Step::Pausing(_) | Step::Idle => match moves.next() {
+                        Some((j, m)) => {
+                            match rig.start_move_mm(m.distance_mm, m.speed_mm_per_s, now) {
+                                Ok(()) => {
+                                    last_started = Some(j);
+                                    started += 1;
+                                    note(
+                                        now,
+                                        format!(
+                                            "move {}: {:+.1} mm at {} mm/s",
+                                            j + 1,
+                                            m.distance_mm,
+                                            m.speed_mm_per_s
+                                        ),
+                                    );
+                                    Step::Moving
+                                }
+                                Err(e) => {
+                                    refused += 1;
+                                    note(now, format!("move {} refused: {e:#}", j + 1));
+                                    Step::Idle
+                                }
+                            }
+                        }
+                        None => {
+                            if !done {
+                                done = true;
+                                script_done.store(true, Ordering::Relaxed);
+                            }
+                            Step::Idle
+                        }
+                    },
+                };
+            }
+            let now = clock.elapsed();
+            if let Err(e) = rig.stop(now) {
+                note(now, format!("stage stop failed: {e:#}"));
+            }
+            MotionReport {
+                rig,
+                moves_started: started,
+                moves_refused: refused,
+                script_done: done,
+            }
+        })
+}
+
+/// A value shared between a writer thread and the polling thread (the simulated rig's
+/// physical state): a mutex held only to copy.
+pub type Shared<T> = Arc<Mutex<T>>;

@@ -1,0 +1,42 @@
+//! Test helper (not part of the daemon): records the synthetic trial of
+//! `host_daemon::record` to the MCAP file given as the only argument, forever, at about
+//! 1 kHz of wall time with the recorder's own 100 ms flushes, and prints `flushed N` (N
+//! segment polls that are durable) after every flush. `tests/record_kill.rs` kills it with
+//! SIGKILL and reads the file back.
+
+use std::io::Write as _;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use host_daemon::record::{
+    TrialRecorder, synthetic_metadata, synthetic_segments, synthetic_servo, synthetic_stage,
+};
+
+fn main() -> anyhow::Result<()> {
+    let path = std::env::args_os()
+        .nth(1)
+        .context("usage: record-until-killed FILE.mcap")?;
+    let mut recorder = TrialRecorder::create(&path, &synthetic_metadata("killed"))?;
+    let stdout = std::io::stdout();
+    let mut last_flushed = 0;
+    for i in 0u64.. {
+        recorder.record_segments(&synthetic_segments(i, 9))?;
+        if i % 10 == 0 {
+            recorder.record_stage(&synthetic_stage(i / 10))?;
+        }
+        if i % 20 == 0 {
+            recorder.record_servo(&synthetic_servo(i / 20))?;
+        }
+        let flushed = recorder.flushed().segments;
+        if flushed != last_flushed {
+            last_flushed = flushed;
+            let mut out = stdout.lock();
+            writeln!(out, "flushed {flushed}")?;
+            out.flush()?;
+        }
+        if i % 4 == 0 {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,793 @@
+//! The daemon's configuration, read from TOML (examples with every key commented in
+//! `host-daemon/config/`: `sim.toml`, the simulated rig, and `robot.toml`, the hardware).
+//!
+//! Every table and key is optional except where a list entry needs its fields (a segment's
+//! address, a move's distance); what is left out takes the built-in default, which is the
+//! simulated rig ([`Config::default`]). Unknown keys are errors. Every error names the key
+//! and, where it is known, the line and column:
+//!
+//! ```
+//! use host_daemon::config::Config;
+//!
+//! let error = Config::from_toml_str("[bus]\npoll_hz = -5\n", "rig.toml").unwrap_err();
+//! assert_eq!(error.key, "bus.poll_hz");
+//! assert_eq!((error.line, error.column), (Some(2), Some(1)));
+//! assert!(error.to_string().starts_with("rig.toml:2:1: `bus.poll_hz`"));
+//! ```
+
+use antenna_protocol::{Calibration, Direction};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A configuration error: the file, the key (dotted path) and, where known, its line and
+/// column (1-based).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigError {
+    /// The file name given to the parser.
+    pub path: String,
+    /// The key, as a dotted path (`stage.max_mm`, `bus.segments[2].address`).
+    pub key: String,
+    /// Line of the key, 1-based, if known.
+    pub line: Option<usize>,
+    /// Column of the key, 1-based, if known.
+    pub column: Option<usize>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.path)?;
+        if let (Some(line), Some(column)) = (self.line, self.column) {
+            write!(f, ":{line}:{column}")?;
+        }
+        write!(f, ": `{}`: {}", self.key, self.message)
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+/// The whole configuration.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Config {
+    /// Where trial recordings go (`<data_dir>/<trial>.mcap`).
+    pub data_dir: PathBuf,
+    /// The I2C bus and its segments.
+    pub bus: BusConfig,
+    /// The linear stage.
+    pub stage: StageConfig,
+    /// The base servo.
+    pub servo: ServoConfig,
+    /// The TCP endpoint.
+    pub server: ServerConfig,
+    /// The trials, run by name (the first by default).
+    pub trials: Vec<TrialConfig>,
+    /// The simulated rig (used when the bus is `sim`).
+    pub sim: SimConfig,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            data_dir: PathBuf::from("data"),
+            bus: BusConfig::default(),
+            stage: StageConfig::default(),
+            servo: ServoConfig::default(),
+            server: ServerConfig::default(),
+            trials: vec![TrialConfig::default()],
+            sim: SimConfig::default(),
+        }
+    }
+}
+
+/// The I2C bus.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BusConfig {
+    /// `sim` for the simulated rig, or a Linux I2C device such as `/dev/i2c-1`.
+    pub device: String,
+    /// Poll rate, hertz (every segment read once per period).
+    pub poll_hz: f64,
+    /// Read every segment's sample counter every this many polls (a counter that has not
+    /// moved since the last check marks the segment stale).
+    pub counter_check_every: u32,
+    /// Busy-wait this many microseconds before each poll deadline instead of sleeping
+    /// (0: sleep only). Cuts wake-up lateness to about a microsecond at the cost of CPU.
+    pub spin_us: u64,
+    /// The segments, base to tip.
+    pub segments: Vec<SegmentConfig>,
+}
+
+impl Default for BusConfig {
+    fn default() -> Self {
+        Self {
+            device: "sim".to_owned(),
+            poll_hz: 1000.0,
+            counter_check_every: 50,
+            spin_us: 0,
+            // Each magnet is press-fit at its own angle: every segment has its own zero.
+            segments: (0..9u8)
+                .map(|k| SegmentConfig {
+                    address: 0x20 + k,
+                    zero_counts: 1500 + 97 * u16::from(k),
+                    direction: if k % 2 == 0 {
+                        DirectionName::Ccw
+                    } else {
+                        DirectionName::Cw
+                    },
+                })
+                .collect(),
+        }
+    }
+}
+
+impl BusConfig {
+    /// Whether the bus is the simulated one.
+    pub fn is_sim(&self) -> bool {
+        self.device == "sim"
+    }
+
+    /// The segment addresses, base to tip.
+    pub fn addresses(&self) -> Vec<u8> {
+        self.segments.iter().map(|s| s.address).collect()
+    }
+
+    /// The segment calibrations, base to tip.
+    pub fn calibrations(&self) -> Vec<Calibration> {
+        self.segments
+            .iter()
+            .map(SegmentConfig::calibration)
+            .collect()
+    }
+}
+
+/// Which way the magnet turns for a positive joint angle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DirectionName {
+    /// Counter-clockwise.
+    Ccw,
+    /// Clockwise.
+    Cw,
+}
+
+/// One segment on the bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentConfig {
+    /// Its 7-bit address (0x08..=0x77).
+    pub address: u8,
+    /// The count the Hall sensor reads at joint angle zero (0..=4095).
+    pub zero_counts: u16,
+    /// `ccw` or `cw`.
+    pub direction: DirectionName,
+}
+
+impl SegmentConfig {
+    /// The calibration the counts are converted with.
+    pub fn calibration(&self) -> Calibration {
+        let direction = match self.direction {
+            DirectionName::Ccw => Direction::CounterClockwise,
+            DirectionName::Cw => Direction::Clockwise,
+        };
+        Calibration::new(self.zero_counts, direction)
+    }
+}
+
+/// The linear stage (a Velmex VXM, or simulated).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StageConfig {
+    /// `sim`, or the VXM's serial port such as `/dev/ttyUSB0`.
+    pub port: String,
+    /// Serial baud rate (the VXM's default is 9600).
+    pub baud: u32,
+    /// How long to wait for a reply from the VXM, milliseconds.
+    pub reply_timeout_ms: u64,
+    /// Motor steps per millimetre of travel.
+    pub steps_per_mm: f64,
+    /// Lower soft limit, millimetres from home.
+    pub min_mm: f64,
+    /// Upper soft limit, millimetres from home.
+    pub max_mm: f64,
+    /// Fastest move allowed, millimetres per second.
+    pub max_speed_mm_per_s: f64,
+    /// How often the position is sampled, hertz.
+    pub sample_hz: f64,
+}
+
+impl Default for StageConfig {
+    fn default() -> Self {
+        Self {
+            port: "sim".to_owned(),
+            baud: 9600,
+            reply_timeout_ms: 2000,
+            steps_per_mm: 80.0,
+            min_mm: 0.0,
+            max_mm: 300.0,
+            max_speed_mm_per_s: 50.0,
+            sample_hz: 50.0,
+        }
+    }
+}
+
+/// The base servo (a Pololu Maestro channel, or simulated).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ServoConfig {
+    /// `sim`, or the Maestro's command port such as `/dev/ttyACM0`.
+    pub port: String,
+    /// The Maestro channel the servo is on.
+    pub channel: u8,
+    /// Pulse-to-angle calibration, first point: angle, degrees...
+    pub angle_a_deg: f64,
+    /// ...and its pulse width, microseconds.
+    pub pulse_a_us: f64,
+    /// Second point: angle, degrees...
+    pub angle_b_deg: f64,
+    /// ...and its pulse width, microseconds.
+    pub pulse_b_us: f64,
+    /// How often the angle is sampled, hertz.
+    pub sample_hz: f64,
+}
+
+impl Default for ServoConfig {
+    fn default() -> Self {
+        Self {
+            port: "sim".to_owned(),
+            channel: 0,
+            angle_a_deg: -45.0,
+            pulse_a_us: 1000.0,
+            angle_b_deg: 45.0,
+            pulse_b_us: 2000.0,
+            sample_hz: 50.0,
+        }
+    }
+}
+
+/// The TCP endpoint.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ServerConfig {
+    /// Address and port to listen on; loopback unless you mean otherwise.
+    pub listen: String,
+    /// The token control commands must carry; without one, control commands are refused.
+    pub token: Option<String>,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        Self {
+            listen: "127.0.0.1:7878".to_owned(),
+            token: None,
+        }
+    }
+}
+
+/// One trial.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrialConfig {
+    /// Its name, also the recording's file name.
+    pub name: String,
+    /// Base (servo) angle for the trial, degrees.
+    pub base_angle_deg: f64,
+    /// Trial length, seconds; the moves that have not finished by then are stopped.
+    pub duration_s: f64,
+    /// Stage moves, one after another.
+    pub moves: Vec<MoveConfig>,
+    /// Free text kept with the recording (wall, hair layout, operator...).
+    pub metadata: BTreeMap<String, String>,
+}
+
+impl Default for TrialConfig {
+    fn default() -> Self {
+        Self {
+            name: "wall-sweep".to_owned(),
+            base_angle_deg: 0.0,
+            duration_s: 12.0,
+            moves: vec![
+                MoveConfig {
+                    distance_mm: 150.0,
+                    speed_mm_per_s: 30.0,
+                    pause_s: 0.5,
+                },
+                MoveConfig {
+                    distance_mm: -150.0,
+                    speed_mm_per_s: 30.0,
+                    pause_s: 0.0,
+                },
+            ],
+            metadata: BTreeMap::from([
+                ("wall".to_owned(), "simulated flat wall".to_owned()),
+                ("hairs".to_owned(), "none".to_owned()),
+            ]),
+        }
+    }
+}
+
+/// One relative stage move.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MoveConfig {
+    /// Distance, millimetres (negative moves back).
+    pub distance_mm: f64,
+    /// Speed, millimetres per second.
+    pub speed_mm_per_s: f64,
+    /// Pause after the move, seconds.
+    #[serde(default)]
+    pub pause_s: f64,
+}
+
+/// The simulated rig.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimConfig {
+    /// The wall.
+    pub wall: WallConfig,
+    /// The simulated antenna.
+    pub antenna: AntennaConfig,
+}
+
+/// A flat wall: a line `distance_m` from the stage's track (at the track's origin), tilted
+/// `angle_deg` toward the track as the stage moves forward.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WallConfig {
+    /// Distance from the base track at the track's origin, metres.
+    pub distance_m: f64,
+    /// Angle between the wall and the track, degrees (positive: the wall comes closer as the
+    /// stage moves forward).
+    pub angle_deg: f64,
+    /// Penalty stiffness of the wall, newtons per metre of penetration.
+    pub stiffness_n_per_m: f64,
+}
+
+impl Default for WallConfig {
+    fn default() -> Self {
+        Self {
+            distance_m: 0.42,
+            angle_deg: 30.0,
+            stiffness_n_per_m: 200.0,
+        }
+    }
+}
+
+/// The simulated antenna: one link per segment after the base link.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AntennaConfig {
+    /// Flexible links; must equal the number of segments on the bus.
+    pub links: usize,
+    /// Length of every link (the base link too), metres.
+    pub link_length_m: f64,
+    /// Stiffness profile name (`constant`, `linear`, `slow-exponential`, `fast-exponential`,
+    /// `logarithmic`, `slow-reciprocal`, `fast-reciprocal`, `cockroach`).
+    pub stiffness_profile: String,
+    /// Smallest joint stiffness, N m/rad.
+    pub k_min_n_m_per_rad: f64,
+    /// Largest joint stiffness, N m/rad.
+    pub k_max_n_m_per_rad: f64,
+    /// Mounting angle of the base link from the track, degrees (the servo adds to it).
+    pub base_angle_deg: f64,
+}
+
+impl Default for AntennaConfig {
+    fn default() -> Self {
+        Self {
+            links: 9,
+            link_length_m: 0.04,
+            stiffness_profile: "linear".to_owned(),
+            k_min_n_m_per_rad: 0.01,
+            k_max_n_m_per_rad: 0.05,
+            base_angle_deg: 30.0,
+        }
+    }
+}
+
+impl AntennaConfig {
+    /// The named stiffness profile, or `None` if the name is unknown.
+    pub fn profile(&self) -> Option<sim_core::StiffnessProfile> {
+        sim_core::StiffnessProfile::NAMED
+            .into_iter()
+            .find(|p| p.name() == self.stiffness_profile)
+    }
+}
+
+impl Config {
+    /// Reads and checks the file at `path`.
+    pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+            path: name.clone(),
+            key: "(file)".to_owned(),
+            line: None,
+            column: None,
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::from_toml_str(&text, &name)
+    }
+
+    /// Parses and checks `text`, naming it `path` in errors.
+    pub fn from_toml_str(text: &str, path: &str) -> Result<Self, ConfigError> {
+        let config: Config = toml::from_str(text).map_err(|e| toml_error(text, path, &e))?;
+        config.validate().map_err(|(key, message)| {
+            let (line, column) = locate_key(text, &key).unzip();
+            ConfigError {
+                path: path.to_owned(),
+                key,
+                line,
+                column,
+                message,
+            }
+        })?;
+        Ok(config)
+    }
+
+    /// The trial called `name`, or the first one.
+    pub fn trial(&self, name: Option<&str>) -> Option<&TrialConfig> {
+        match name {
+            Some(name) => self.trials.iter().find(|t| t.name == name),
+            None => self.trials.first(),
+        }
+    }
+
+    /// The stage's scale and soft limits.
+    pub fn stage_geometry(&self) -> Result<crate::StageGeometry, crate::stage::GeometryError> {
+        crate::StageGeometry::new(
+            self.stage.steps_per_mm,
+            self.stage.min_mm,
+            self.stage.max_mm,
+        )
+    }
+
+    /// The servo's pulse calibration.
+    pub fn pulse_calibration(
+        &self,
+    ) -> Result<crate::PulseCalibration, crate::servo::CalibrationError> {
+        crate::PulseCalibration::new(
+            self.servo.angle_a_deg.to_radians(),
+            self.servo.pulse_a_us,
+            self.servo.angle_b_deg.to_radians(),
+            self.servo.pulse_b_us,
+        )
+    }
+
+    /// Checks the values serde cannot: the failing key (dotted) and why.
+    fn validate(&self) -> Result<(), (String, String)> {
+        let fail = |key: &str, message: String| Err((key.to_owned(), message));
+        let rate = |v: f64| v.is_finite() && v > 0.0 && v <= 10_000.0;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let bus = &self.bus;
+        if !(bus.is_sim() || bus.device.starts_with("/dev/")) {
+            return fail(
+                "bus.device",
+                format!(
+                    "must be \"sim\" or a device such as /dev/i2c-1, got {:?}",
+                    bus.device
+                ),
+            );
+        }
+        if !rate(bus.poll_hz) {
+            return fail(
+                "bus.poll_hz",
+                format!("must be in (0, 10000], got {}", bus.poll_hz),
+            );
+        }
+        if bus.counter_check_every == 0 {
+            return fail("bus.counter_check_every", "must be at least 1".to_owned());
+        }
+        if bus.spin_us * 1000 >= (1e9 / bus.poll_hz) as u64 {
+            return fail(
+                "bus.spin_us",
+                "must be shorter than the poll period".to_owned(),
+            );
+        }
+        if bus.segments.is_empty() {
+            return fail("bus.segments", "needs at least one segment".to_owned());
+        }
+        for (i, segment) in bus.segments.iter().enumerate() {
+            if !antenna_protocol::is_assignable_address(segment.address) {
+                return fail(
+                    &format!("bus.segments[{i}].address"),
+                    format!("{:#04x} is outside 0x08..=0x77", segment.address),
+                );
+            }
+            if bus.segments[..i]
+                .iter()
+                .any(|s| s.address == segment.address)
+            {
+                return fail(
+                    &format!("bus.segments[{i}].address"),
+                    format!("{:#04x} is used twice", segment.address),
+                );
+            }
+            if segment.zero_counts > 4095 {
+                return fail(
+                    &format!("bus.segments[{i}].zero_counts"),
+                    format!("must be 0..=4095, got {}", segment.zero_counts),
+                );
+            }
+        }
+        if let Err(e) = self.stage_geometry() {
+            let key = match e {
+                crate::stage::GeometryError::StepsPerMm(_) => "stage.steps_per_mm",
+                crate::stage::GeometryError::Limits { .. } => "stage.max_mm",
+            };
+            return fail(key, e.to_string());
+        }
+        if !positive(self.stage.max_speed_mm_per_s) {
+            return fail("stage.max_speed_mm_per_s", "must be positive".to_owned());
+        }
+        if !rate(self.stage.sample_hz) {
+            return fail("stage.sample_hz", "must be in (0, 10000]".to_owned());
+        }
+        if let Err(e) = self.pulse_calibration() {
+            return fail("servo.pulse_b_us", e.to_string());
+        }
+        if !rate(self.servo.sample_hz) {
+            return fail("servo.sample_hz", "must be in (0, 10000]".to_owned());
+        }
+        if self.server.listen.parse::<std::net::SocketAddr>().is_err() {
+            return fail(
+                "server.listen",
+                format!("not an address:port, got {:?}", self.server.listen),
+            );
+        }
+        for (i, trial) in self.trials.iter().enumerate() {
+            let ok_name = !trial.name.is_empty()
+                && trial
+                    .name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+            if !ok_name {
+                return fail(
+                    &format!("trials[{i}].name"),
+                    format!(
+                        "must be letters, digits, '-', '_', '.', got {:?}",
+                        trial.name
+                    ),
+                );
+            }
+            if !(trial.duration_s.is_finite() && trial.duration_s >= 0.0) {
+                return fail(
+                    &format!("trials[{i}].duration_s"),
+                    "must be finite and >= 0 (0: until the moves end)".to_owned(),
+                );
+            }
+            if !trial.base_angle_deg.is_finite() {
+                return fail(
+                    &format!("trials[{i}].base_angle_deg"),
+                    "must be finite".to_owned(),
+                );
+            }
+            for (j, m) in trial.moves.iter().enumerate() {
+                if !m.distance_mm.is_finite() {
+                    return fail(
+                        &format!("trials[{i}].moves[{j}].distance_mm"),
+                        "must be finite".to_owned(),
+                    );
+                }
+                if !(positive(m.speed_mm_per_s)
+                    && m.speed_mm_per_s <= self.stage.max_speed_mm_per_s)
+                {
+                    return fail(
+                        &format!("trials[{i}].moves[{j}].speed_mm_per_s"),
+                        format!(
+                            "must be in (0, stage.max_speed_mm_per_s = {}], got {}",
+                            self.stage.max_speed_mm_per_s, m.speed_mm_per_s
+                        ),
+                    );
+                }
+                if !(m.pause_s.is_finite() && m.pause_s >= 0.0) {
+                    return fail(
+                        &format!("trials[{i}].moves[{j}].pause_s"),
+                        "must be finite and >= 0".to_owned(),
+                    );
+                }
+            }
+        }
+        let wall = &self.sim.wall;
+        if !positive(wall.distance_m) {
+            return fail("sim.wall.distance_m", "must be positive".to_owned());
+        }
+        if !(wall.angle_deg.is_finite() && wall.angle_deg.abs() < 80.0) {
+            return fail(
+                "sim.wall.angle_deg",
+                "must be within (-80, 80) degrees".to_owned(),
+            );
+        }
+        if !positive(wall.stiffness_n_per_m) {
+            return fail("sim.wall.stiffness_n_per_m", "must be positive".to_owned());
+        }
+        let antenna = &self.sim.antenna;
+        if bus.is_sim() && antenna.links != bus.segments.len() {
+            return fail(
+                "sim.antenna.links",
+                format!(
+                    "must equal the number of segments on the bus ({}), got {}",
+                    bus.segments.len(),
+                    antenna.links
+                ),
+            );
+        }
+        if !positive(antenna.link_length_m) {
+            return fail("sim.antenna.link_length_m", "must be positive".to_owned());
+        }
+        if antenna.profile().is_none() {
+            let names: Vec<&str> = sim_core::StiffnessProfile::NAMED
+                .iter()
+                .map(|p| p.name())
+                .collect();
+            return fail(
+                "sim.antenna.stiffness_profile",
+                format!(
+                    "unknown profile {:?}; one of {}",
+                    antenna.stiffness_profile,
+                    names.join(", ")
+                ),
+            );
+        }
+        if !(positive(antenna.k_min_n_m_per_rad) && antenna.k_min_n_m_per_rad.is_finite()) {
+            return fail(
+                "sim.antenna.k_min_n_m_per_rad",
+                "must be positive".to_owned(),
+            );
+        }
+        if !(antenna.k_max_n_m_per_rad.is_finite()
+            && antenna.k_max_n_m_per_rad >= antenna.k_min_n_m_per_rad)
+        {
+            return fail(
+                "sim.antenna.k_max_n_m_per_rad",
+                "must be finite and >= k_min_n_m_per_rad".to_owned(),
+            );
+        }
+        if !antenna.base_angle_deg.is_finite() {
+            return fail("sim.antenna.base_angle_deg", "must be finite".to_owned());
+        }
+        Ok(())
+    }
+}
+
+/// Line and column (1-based) of byte `offset` in `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[line_start..].chars().count() + 1)
+}
+
+/// The dotted table path in force at byte `offset` (`stage`, `bus.segments`; the header
+/// itself when `offset` is on one), or empty.
+fn table_at(text: &str, offset: usize) -> String {
+    let offset = offset.min(text.len());
+    let line_end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
+    text[..line_end]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('['))
+        .map(|l| l.trim_matches(|c| c == '[' || c == ']').trim().to_owned())
+        .unwrap_or_default()
+}
+
+/// The key of the `key = value` line holding byte `offset`.
+fn key_at(text: &str, offset: usize) -> Option<String> {
+    let offset = offset.min(text.len());
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
+    let (key, _) = text[line_start..line_end].split_once('=')?;
+    let key = key.trim().trim_matches('"');
+    let plain = !key.is_empty()
+        && key
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+    plain.then(|| key.to_owned())
+}
+
+fn dotted(table: &str, key: &str) -> String {
+    if table.is_empty() {
+        key.to_owned()
+    } else {
+        format!("{table}.{key}")
+    }
+}
+
+/// A TOML or serde error as a [`ConfigError`] naming the key, line and column.
+fn toml_error(text: &str, path: &str, e: &toml::de::Error) -> ConfigError {
+    let offset = e.span().map_or(0, |s| s.start);
+    let (line, column) = line_column(text, offset);
+    let message = e.message().trim().to_owned();
+    let table = table_at(text, offset);
+    let key = if let Some(rest) = message.strip_prefix("unknown field `") {
+        dotted(&table, rest.split('`').next().unwrap_or_default())
+    } else if let Some(rest) = message.strip_prefix("missing field `") {
+        dotted(&table, rest.split('`').next().unwrap_or_default())
+    } else {
+        match key_at(text, offset) {
+            Some(key) => dotted(&table, &key),
+            None if table.is_empty() => "(top level)".to_owned(),
+            None => table,
+        }
+    };
+    ConfigError {
+        path: path.to_owned(),
+        key,
+        line: Some(line),
+        column: Some(column),
+        message,
+    }
+}
+
+/// Where the dotted `key` (list indices dropped: `trials[0].moves[1].speed_mm_per_s` looks
+/// for `speed_mm_per_s` after the first `[[trials]]`-style header, counting entries) is
+/// written in `text`: line and column of the key, or of its table when the key is absent.
+fn locate_key(text: &str, key: &str) -> Option<(usize, usize)> {
+    let parts: Vec<&str> = key.split('.').collect();
+    let (leaf, tables) = parts.split_last()?;
+    let leaf_name = leaf.split('[').next().unwrap_or(leaf);
+    let table: Vec<&str> = tables
+        .iter()
+        .map(|t| t.split('[').next().unwrap_or(t))
+        .collect();
+    let table = table.join(".");
+    let index: usize = tables
+        .first()
+        .and_then(|t| t.split_once('['))
+        .and_then(|(_, i)| i.trim_end_matches(']').parse().ok())
+        .unwrap_or(0);
+    let mut offset = 0;
+    let mut in_table = table.is_empty();
+    let mut seen = 0usize;
+    let mut table_pos = None;
+    for line in text.split_inclusive('\n') {
+        let trimmed = line.trim();
+        if trimmed.starts_with('[') {
+            let name = trimmed.trim_matches(|c| c == '[' || c == ']').trim();
+            let top = table.split('.').next().unwrap_or_default();
+            in_table = name == table || name == top;
+            if name == top && trimmed.starts_with("[[") {
+                in_table = seen == index;
+                seen += 1;
+            }
+            if in_table && table_pos.is_none() {
+                table_pos = Some(offset + line.len() - line.trim_start().len());
+            }
+        } else if in_table {
+            let found = key_at(text, offset + line.find('=').unwrap_or(0))
+                .is_some_and(|k| k == leaf_name || k.ends_with(&format!(".{leaf_name}")))
+                || line.contains(&format!("{leaf_name} ="))
+                || line.contains(&format!("{leaf_name}="));
+            if found && !trimmed.starts_with('#') {
+                let column = line.find(leaf_name).unwrap_or(0);
+                return Some(line_column(text, offset + column));
+            }
+        }
+        offset += line.len();
+    }
+    table_pos.map(|p| line_column(text, p))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_is_valid_and_simulated() {
+        let config = Config::from_toml_str("", "empty.toml").unwrap();
+        assert_eq!(config, Config::default());
+        assert!(config.bus.is_sim());
+        assert_eq!(config.bus.segments.len(), 9);
+    }
+
+    #[test]
+    fn key_lines_are_located() {
+        let text = "[stage]\nmin_mm = 0\n  max_mm = -1\n";
+        assert_eq!(locate_key(text, "stage.max_mm"), Some((3, 3)));
+        assert_eq!(line_column("ab\ncd", 4), (2, 2));
+    }
+}

@@ -1,0 +1,156 @@
+//! What the server sends: one [`StreamMessage`] per line.
+
+use serde::{Deserialize, Serialize};
+
+/// The protocol version sent in [`StreamMessage::Hello`]; bumped on incompatible changes.
+pub const PROTOCOL_VERSION: u32 = 1;
+
+/// One line from the server to a client; the `type` field names the variant.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum StreamMessage {
+    /// The first line on every connection.
+    Hello {
+        /// [`PROTOCOL_VERSION`].
+        protocol_version: u32,
+        /// The daemon's name and version, e.g. `"antennad 0.1.0"`.
+        daemon: String,
+        /// How many segments each [`StreamMessage::Samples`] describes.
+        segment_count: usize,
+        /// Their 7-bit I2C addresses, base to tip.
+        segment_addresses: Vec<u8>,
+    },
+    /// One poll of every segment, with the stage and base at that instant.
+    Samples {
+        /// Poll number, +1 per poll; a client sees gaps only after a [`StreamMessage::Lagged`].
+        seq: u64,
+        /// Monotonic time of the poll in nanoseconds since the daemon started.
+        t_ns: u64,
+        /// One entry per segment, in [`StreamMessage::Hello`]'s order.
+        segments: Vec<SegmentSample>,
+        /// Stage carriage position in metres, if a stage is present.
+        stage_position_m: Option<f64>,
+        /// Base servo angle in degrees, if a servo is present.
+        base_angle_deg: Option<f64>,
+    },
+    /// The daemon's state, sent at a low rate and on every change.
+    Status {
+        /// Monotonic time in nanoseconds since the daemon started.
+        t_ns: u64,
+        /// The trial being recorded, if any.
+        trial: Option<String>,
+        /// Health counters per segment.
+        segments: Vec<SegmentStatus>,
+        /// Free text, e.g. `"stage moving"`.
+        note: Option<String>,
+    },
+    /// Sent before the next message when messages were dropped for this (slow) client.
+    Lagged {
+        /// How many messages were dropped since the last one this client received.
+        dropped: u64,
+    },
+    /// The answer to one control request, sent only to the client that made it.
+    Reply(ControlReply),
+}
+
+/// One segment in one poll. A failed read has `error` set and no angle or contact.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SegmentSample {
+    /// 7-bit I2C address.
+    pub address: u8,
+    /// Joint angle in radians (calibrated).
+    pub angle_rad: Option<f64>,
+    /// Contact switch closed.
+    pub contact: Option<bool>,
+    /// The segment's own sample counter (stale if it stops advancing).
+    pub counter: Option<u32>,
+    /// Why the read failed, e.g. `"nack"` or `"pec"`.
+    pub error: Option<String>,
+}
+
+/// Health counters of one segment since the daemon started.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SegmentStatus {
+    /// 7-bit I2C address.
+    pub address: u8,
+    /// Good reads.
+    pub ok: u64,
+    /// Reads the segment did not acknowledge.
+    pub nack: u64,
+    /// Reads with a wrong PEC byte.
+    pub pec_error: u64,
+    /// Reads whose sample counter had not advanced.
+    pub stale: u64,
+}
+
+/// The reply to a control request.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ControlReply {
+    /// The request's `id`, or `null` if the request had none or could not be parsed.
+    pub id: Option<u64>,
+    /// Whether the command was carried out.
+    pub ok: bool,
+    /// What happened (on success) or why not (on failure), for humans.
+    pub message: String,
+    /// On failure, the machine-readable reason.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub error: Option<ErrorCode>,
+}
+
+/// Why a request failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorCode {
+    /// The line was not UTF-8 JSON, or not a JSON object.
+    BadJson,
+    /// The line exceeded [`crate::net::MAX_LINE_BYTES`]; the connection is then closed.
+    LineTooLong,
+    /// `cmd` was missing or not one of the known commands.
+    UnknownCommand,
+    /// The command's fields were missing, misspelt or out of range.
+    BadRequest,
+    /// `token` was missing or wrong; nothing was done.
+    BadToken,
+    /// The daemon refused or failed to carry out a valid command.
+    Rejected,
+    /// The server already has its maximum number of clients; the connection is then closed.
+    TooManyClients,
+}
+
+impl ControlReply {
+    /// A success reply.
+    pub fn ok(id: Option<u64>, message: impl Into<String>) -> Self {
+        Self {
+            id,
+            ok: true,
+            message: message.into(),
+            error: None,
+        }
+    }
+
+    /// A failure reply.
+    pub fn error(id: Option<u64>, code: ErrorCode, message: impl Into<String>) -> Self {
+        Self {
+            id,
+            ok: false,
+            message: message.into(),
+            error: Some(code),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reply_round_trips_with_type_tag() {
+        let m = StreamMessage::Reply(ControlReply::error(Some(3), ErrorCode::BadToken, "no"));
+        let text = serde_json::to_string(&m).unwrap();
+        assert_eq!(
+            text,
+            r#"{"type":"reply","id":3,"ok":false,"message":"no","error":"bad_token"}"#
+        );
+        assert_eq!(serde_json::from_str::<StreamMessage>(&text).unwrap(), m);
+    }
+}

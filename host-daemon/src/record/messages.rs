@@ -1,0 +1,124 @@
+//! The messages of a trial recording, one struct per MCAP channel. They are serialized as JSON
+//! (`serde_json`) and described in the file by the JSON schemas of [`super::schema`].
+
+use std::collections::BTreeMap;
+
+use antenna_protocol::Calibration;
+use serde::{Deserialize, Serialize};
+
+use crate::{PollError, SegmentReading};
+
+/// One segment's part of one poll (`/antenna/segments`).
+///
+/// When the poll failed (`ok` false) the sample fields are `None` (JSON `null`) and the flag
+/// says why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SegmentSample {
+    /// The segment's 7-bit I2C address.
+    pub address: u8,
+    /// The raw angle, 0..=4095 counts per turn; `None` when the poll failed.
+    pub angle_counts: Option<u16>,
+    /// The joint angle from the segment's calibration, rad; `None` when the poll failed.
+    pub angle_rad: Option<f64>,
+    /// The touch bits (bit i: hair i touched), 0..=15; `None` when the poll failed.
+    pub touch: Option<u8>,
+    /// The poll returned a valid, PEC-checked sample.
+    pub ok: bool,
+    /// The segment did not acknowledge its address.
+    pub nack: bool,
+    /// The read came back with a wrong PEC (the sample was dropped, not recorded).
+    pub pec_error: bool,
+    /// Another bus error.
+    pub bus_error: bool,
+    /// The sample is valid but its sequence did not advance since the last poll (a stuck
+    /// segment), as judged by the acquisition.
+    pub stale: bool,
+}
+
+impl SegmentSample {
+    /// The sample of one poll reading, its angle from `calibration`; `stale` as the
+    /// acquisition judged it.
+    pub fn from_reading(reading: &SegmentReading, calibration: Calibration, stale: bool) -> Self {
+        let mut sample = Self {
+            address: reading.address,
+            angle_counts: None,
+            angle_rad: None,
+            touch: None,
+            ok: false,
+            nack: false,
+            pec_error: false,
+            bus_error: false,
+            stale,
+        };
+        match &reading.result {
+            Ok(word) => {
+                sample.ok = true;
+                sample.angle_counts = Some(word.angle_counts());
+                sample.angle_rad = Some(calibration.angle_rad(word.angle_counts()));
+                sample.touch = Some(word.touch().bits());
+            }
+            Err(PollError::Nack { .. }) => sample.nack = true,
+            Err(PollError::Corrupted { .. }) => sample.pec_error = true,
+            Err(PollError::Bus { .. }) => sample.bus_error = true,
+        }
+        sample
+    }
+}
+
+/// One poll of every segment (`/antenna/segments`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SegmentsMessage {
+    /// Monotonic time since the trial started, s.
+    pub t_s: f64,
+    /// The segments in polling order (base first).
+    pub segments: Vec<SegmentSample>,
+}
+
+/// The linear stage's position (`/antenna/stage`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct StageMessage {
+    /// Monotonic time since the trial started, s (the same clock as the segments).
+    pub t_s: f64,
+    /// Stage position, m.
+    pub position_m: f64,
+}
+
+/// The base servo's angle (`/antenna/servo`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ServoMessage {
+    /// Monotonic time since the trial started, s (the same clock as the segments).
+    pub t_s: f64,
+    /// Base angle, rad.
+    pub base_angle_rad: f64,
+}
+
+/// What the trial was (`/trial/metadata`, written once, first; also an MCAP Metadata record
+/// named `trial`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct TrialMetadata {
+    /// The trial's name.
+    pub trial: String,
+    /// Wall-clock start, seconds since the Unix epoch (UTC).
+    pub started_unix_s: f64,
+    /// The daemon configuration in force, as free text (TOML).
+    pub config: String,
+    /// Free-text notes such as `wall` and `hairs`, sorted by key.
+    pub notes: BTreeMap<String, String>,
+}
+
+impl TrialMetadata {
+    /// The metadata as MCAP Metadata key/value strings.
+    pub fn to_key_values(&self) -> BTreeMap<String, String> {
+        let mut map = BTreeMap::new();
+        map.insert("trial".to_string(), self.trial.clone());
+        map.insert(
+            "started_unix_s".to_string(),
+            format!("{}", self.started_unix_s),
+        );
+        map.insert("config".to_string(), self.config.clone());
+        for (k, v) in &self.notes {
+            map.insert(format!("notes.{k}"), v.clone());
+        }
+        map
+    }
+}

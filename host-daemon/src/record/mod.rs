@@ -1,0 +1,57 @@
+//! Trial recording: every trial to one MCAP file.
+//!
+//! MCAP (the format rosbag2 moved to) is append-only and carries its schemas: the file opens
+//! in Foxglove and PlotJuggler. Channels, all with JSON messages described by JSON schemas:
+//!
+//! | topic | message | rate |
+//! |---|---|---|
+//! | `/trial/metadata` | [`TrialMetadata`] (also an MCAP Metadata record `trial`) | once, first |
+//! | `/antenna/segments` | [`SegmentsMessage`]: `t_s` and per segment address, angle counts, `angle_rad`, touch bits, ok/nack/pec/bus/stale flags | every poll |
+//! | `/antenna/stage` | [`StageMessage`]: `t_s`, `position_m` | the stage's rate |
+//! | `/antenna/servo` | [`ServoMessage`]: `t_s`, `base_angle_rad` | the servo's rate |
+//!
+//! `t_s` is monotonic time since the trial started, on one clock for all topics; each
+//! message's MCAP log time is the same instant in nanoseconds.
+//!
+//! # Crash safety
+//!
+//! [`TrialRecorder`] closes its chunk and flushes the file at least every 100 ms of trial
+//! time ([`FLUSH_INTERVAL_S`]). A chunk becomes readable only once it is closed, so a process
+//! killed with `kill -9` leaves a file whose chunks up to the last flush are complete and
+//! whose tail is a partial record with no footer. [`TrialReader`] reads such a file linearly
+//! and returns every message up to the last flush (chunk CRCs checked) and says where it
+//! stopped ([`Trial::truncated`]).
+//!
+//! # Example
+//!
+//! ```
+//! use host_daemon::record::{TrialReader, TrialRecorder, synthetic_metadata, synthetic_segments};
+//!
+//! let path = std::env::temp_dir().join(format!("doc-record-{}.mcap", std::process::id()));
+//! let mut recorder = TrialRecorder::create(&path, &synthetic_metadata("doc"))?;
+//! for i in 0..250 {
+//!     recorder.record_segments(&synthetic_segments(i, 3))?;
+//! }
+//! recorder.finish()?;
+//! let trial = TrialReader::read(&path)?;
+//! assert_eq!(trial.segments.len(), 250);
+//! assert!(trial.truncated.is_none());
+//! # std::fs::remove_file(&path).ok();
+//! # Ok::<(), host_daemon::record::RecordError>(())
+//! ```
+
+mod error;
+mod messages;
+mod reader;
+pub mod schema;
+mod synthetic;
+mod writer;
+
+pub use error::RecordError;
+pub use messages::{SegmentSample, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
+pub use reader::{Trial, TrialReader};
+pub use synthetic::{
+    SYNTHETIC_POLL_PERIOD_S, synthetic_metadata, synthetic_segments, synthetic_servo,
+    synthetic_stage,
+};
+pub use writer::{FLUSH_INTERVAL_S, RecordCounts, TrialRecorder};

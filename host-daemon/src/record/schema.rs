@@ -1,0 +1,99 @@
+//! Topic names and the JSON schemas embedded in every trial file (schema encoding
+//! `jsonschema`, message encoding `json`: what Foxglove and PlotJuggler read).
+
+use serde_json::{Value, json};
+
+/// Topic of [`super::SegmentsMessage`].
+pub const SEGMENTS_TOPIC: &str = "/antenna/segments";
+/// Topic of [`super::StageMessage`].
+pub const STAGE_TOPIC: &str = "/antenna/stage";
+/// Topic of [`super::ServoMessage`].
+pub const SERVO_TOPIC: &str = "/antenna/servo";
+/// Topic of [`super::TrialMetadata`].
+pub const METADATA_TOPIC: &str = "/trial/metadata";
+
+/// Schema encoding of every channel.
+pub const SCHEMA_ENCODING: &str = "jsonschema";
+/// Message encoding of every channel.
+pub const MESSAGE_ENCODING: &str = "json";
+
+fn nullable(kind: &str, description: &str) -> Value {
+    json!({ "type": [kind, "null"], "description": description })
+}
+
+/// The schema of `/antenna/segments` (name `antenna.Segments`).
+pub fn segments_schema() -> Value {
+    json!({
+        "title": "antenna.Segments",
+        "description": "One poll of every segment",
+        "type": "object",
+        "properties": {
+            "t_s": { "type": "number", "description": "monotonic time since trial start, s" },
+            "segments": {
+                "type": "array",
+                "items": {
+                    "type": "object",
+                    "properties": {
+                        "address": { "type": "integer", "description": "7-bit I2C address" },
+                        "angle_counts": nullable("integer", "raw angle, counts of 4096 per turn"),
+                        "angle_rad": nullable("number", "joint angle, rad"),
+                        "touch": nullable("integer", "touch bits, bit i = hair i"),
+                        "ok": { "type": "boolean" },
+                        "nack": { "type": "boolean" },
+                        "pec_error": { "type": "boolean" },
+                        "bus_error": { "type": "boolean" },
+                        "stale": { "type": "boolean" }
+                    },
+                    "required": ["address", "angle_counts", "angle_rad", "touch", "ok", "nack",
+                                 "pec_error", "bus_error", "stale"]
+                }
+            }
+        },
+        "required": ["t_s", "segments"]
+    })
+}
+
+/// The schema of `/antenna/stage` (name `antenna.Stage`).
+pub fn stage_schema() -> Value {
+    json!({
+        "title": "antenna.Stage",
+        "type": "object",
+        "properties": {
+            "t_s": { "type": "number", "description": "monotonic time since trial start, s" },
+            "position_m": { "type": "number", "description": "stage position, m" }
+        },
+        "required": ["t_s", "position_m"]
+    })
+}
+
+/// The schema of `/antenna/servo` (name `antenna.Servo`).
+pub fn servo_schema() -> Value {
+    json!({
+        "title": "antenna.Servo",
+        "type": "object",
+        "properties": {
+            "t_s": { "type": "number", "description": "monotonic time since trial start, s" },
+            "base_angle_rad": { "type": "number", "description": "base angle, rad" }
+        },
+        "required": ["t_s", "base_angle_rad"]
+    })
+}
+
+/// The schema of `/trial/metadata` (name `antenna.TrialMetadata`).
+pub fn metadata_schema() -> Value {
+    json!({
+        "title": "antenna.TrialMetadata",
+        "type": "object",
+        "properties": {
+            "trial": { "type": "string" },
+            "started_unix_s": { "type": "number", "description": "wall-clock start, Unix s" },
+            "config": { "type": "string", "description": "the configuration, TOML text" },
+            "notes": {
+                "type": "object",
+                "additionalProperties": { "type": "string" },
+                "description": "free-text notes such as wall and hairs"
+            }
+        },
+        "required": ["trial", "started_unix_s", "config", "notes"]
+    })
+}

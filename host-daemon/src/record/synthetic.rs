@@ -1,0 +1,73 @@
+//! Deterministic synthetic trial data, for tests, the `record-until-killed` test helper and
+//! demos: sample `i` is a pure function of `i`, so a reader can check every sample it gets.
+
+use std::collections::BTreeMap;
+
+use antenna_protocol::Calibration;
+
+use super::messages::{SegmentSample, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
+
+/// The poll period of the synthetic trial, s (1 kHz).
+pub const SYNTHETIC_POLL_PERIOD_S: f64 = 0.001;
+
+/// The `i`-th synthetic poll of `segments` segments (addresses 0x21 upwards): angles sweep,
+/// touch bits cycle, and every 97th sample of segment 2 is a NACK, every 101st of segment 1
+/// a PEC error, every 89th of segment 0 stale.
+pub fn synthetic_segments(i: u64, segments: usize) -> SegmentsMessage {
+    let calibration = Calibration::default();
+    let samples = (0..segments)
+        .map(|k| {
+            let address = 0x21 + k as u8;
+            let nack = k == 2 && i % 97 == 5;
+            let pec_error = k == 1 && i % 101 == 7;
+            let ok = !(nack || pec_error);
+            let counts = ((i * 7 + k as u64 * 311) % 4096) as u16;
+            SegmentSample {
+                address,
+                angle_counts: ok.then_some(counts),
+                angle_rad: ok.then(|| calibration.angle_rad(counts)),
+                touch: ok.then_some(((i / 50 + k as u64) % 16) as u8),
+                ok,
+                nack,
+                pec_error,
+                bus_error: false,
+                stale: ok && k == 0 && i % 89 == 3,
+            }
+        })
+        .collect();
+    SegmentsMessage {
+        t_s: i as f64 * SYNTHETIC_POLL_PERIOD_S,
+        segments: samples,
+    }
+}
+
+/// The `i`-th synthetic stage position (every 10th poll, 100 Hz): 2 mm/s.
+pub fn synthetic_stage(i: u64) -> StageMessage {
+    let t_s = i as f64 * 10.0 * SYNTHETIC_POLL_PERIOD_S;
+    StageMessage {
+        t_s,
+        position_m: 0.002 * t_s,
+    }
+}
+
+/// The `i`-th synthetic base angle (every 20th poll, 50 Hz).
+pub fn synthetic_servo(i: u64) -> ServoMessage {
+    let t_s = i as f64 * 20.0 * SYNTHETIC_POLL_PERIOD_S;
+    ServoMessage {
+        t_s,
+        base_angle_rad: 0.1 * (t_s * 0.5).sin(),
+    }
+}
+
+/// Metadata of a synthetic trial named `name`.
+pub fn synthetic_metadata(name: &str) -> TrialMetadata {
+    let mut notes = BTreeMap::new();
+    notes.insert("wall".to_string(), "flat, 0.12 m from the base".to_string());
+    notes.insert("hairs".to_string(), "4 per segment, 1.5 mm".to_string());
+    TrialMetadata {
+        trial: name.to_string(),
+        started_unix_s: 1_795_000_000.25,
+        config: "[bus]\nkind = \"sim\"\n# synthetic\n".to_string(),
+        notes,
+    }
+}

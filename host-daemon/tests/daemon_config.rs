@@ -1,0 +1,68 @@
+//! Configuration errors name the key, line and column; the example files parse.
+#![allow(clippy::unwrap_used)]
+
+use host_daemon::config::Config;
+use std::path::Path;
+
+fn error(text: &str) -> host_daemon::config::ConfigError {
+    Config::from_toml_str(text, "test.toml").unwrap_err()
+}
+
+#[test]
+fn an_unknown_key_is_named_with_its_line_and_column() {
+    let e = error("[stage]\nsteps_per_mm = 80.0\n  max_mn = 3.0\n");
+    assert_eq!(e.key, "stage.max_mn");
+    assert_eq!((e.line, e.column), (Some(3), Some(3)));
+    assert!(e.message.contains("unknown field"), "{e}");
+    assert!(
+        e.to_string().starts_with("test.toml:3:3: `stage.max_mn`"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_value_of_the_wrong_type_names_its_key() {
+    let e = error("data_dir = \"d\"\n\n[bus]\npoll_hz = \"fast\"\n");
+    assert_eq!(e.key, "bus.poll_hz");
+    assert_eq!(e.line, Some(4));
+}
+
+#[test]
+fn a_segment_without_its_calibration_names_the_missing_key() {
+    let e = error("[[bus.segments]]\naddress = 0x20\ndirection = \"cw\"\n");
+    assert_eq!(e.key, "bus.segments.zero_counts");
+    assert!(e.message.contains("missing field"), "{e}");
+    assert!(e.line.is_some());
+}
+
+#[test]
+fn out_of_range_values_name_their_key_and_line() {
+    let e = error("[stage]\nmin_mm = 10.0\nmax_mm = 5.0\n");
+    assert_eq!((e.key.as_str(), e.line), ("stage.max_mm", Some(3)));
+    let e = error("[sim.wall]\ndistance_m = 0.3\nangle_deg = 95.0\n");
+    assert_eq!((e.key.as_str(), e.line), ("sim.wall.angle_deg", Some(3)));
+    let e = error(
+        "[[trials]]\nname = \"a\"\n[[trials.moves]]\ndistance_mm = 10.0\n\
+         speed_mm_per_s = 500.0\n",
+    );
+    assert_eq!(e.key, "trials[0].moves[0].speed_mm_per_s");
+    assert_eq!(e.line, Some(5));
+    let e = error("[sim.antenna]\nstiffness_profile = \"rubber\"\n");
+    assert_eq!(
+        (e.key.as_str(), e.line),
+        ("sim.antenna.stiffness_profile", Some(2))
+    );
+    assert!(e.message.contains("cockroach"), "{e}");
+}
+
+#[test]
+fn the_example_files_parse_and_sim_toml_is_the_default() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
+    let sim = Config::from_file(&dir.join("sim.toml")).unwrap();
+    assert_eq!(sim, Config::default());
+    let robot = Config::from_file(&dir.join("robot.toml")).unwrap();
+    assert_eq!(robot.bus.device, "/dev/i2c-1");
+    assert_eq!(robot.stage.port, "/dev/ttyUSB0");
+    assert_eq!(robot.servo.port, "/dev/ttyACM0");
+    assert!(robot.server.token.is_some());
+}

@@ -1,0 +1,137 @@
+//! Short simulated trials end to end: the stage carries the antenna to the wall and the
+//! segments' angles and touch bits change; a move beyond the soft limits is refused.
+#![allow(clippy::unwrap_used)]
+
+use host_daemon::acquisition::AcquisitionEvent;
+use host_daemon::config::{Config, MoveConfig};
+use host_daemon::sim_rig::{TrialOptions, run_sim_trial};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+fn run(config: &Config) -> (host_daemon::sim_rig::TrialSummary, Vec<AcquisitionEvent>) {
+    let mut events = Vec::new();
+    let options = TrialOptions {
+        duration: Some(Duration::ZERO), // until the moves are done
+        ..TrialOptions::default()
+    };
+    let summary = run_sim_trial(
+        config,
+        &config.trials[0],
+        options,
+        Arc::new(AtomicBool::new(false)),
+        |e| events.push(e.clone()),
+    )
+    .unwrap();
+    (summary, events)
+}
+
+#[test]
+fn the_stage_carries_the_antenna_to_the_wall_and_the_segments_feel_it() {
+    let mut config = Config::default();
+    config.bus.poll_hz = 500.0;
+    config.trials[0].moves = vec![MoveConfig {
+        distance_mm: 100.0,
+        speed_mm_per_s: 50.0,
+        pause_s: 0.2,
+    }];
+    let calibrations = config.bus.calibrations();
+    let (summary, events) = run(&config);
+    assert_eq!((summary.moves_started, summary.moves_refused), (1, 0));
+    assert_eq!(summary.dropped, 0);
+    assert!(
+        summary.health.iter().all(|h| h.all_ok()),
+        "{:?}",
+        summary.health
+    );
+
+    let stage: Vec<f64> = events
+        .iter()
+        .filter_map(|e| match e {
+            AcquisitionEvent::Stage { position_mm, .. } => Some(*position_mm),
+            _ => None,
+        })
+        .collect();
+    assert!(
+        stage.windows(2).all(|w| w[1] >= w[0]),
+        "the stage only moves forward"
+    );
+    assert_eq!(stage.last().copied(), Some(100.0));
+    // Two seconds at 50 mm/s, sampled at 50 Hz: positions in between were seen.
+    assert!(stage.iter().filter(|&&mm| mm > 0.0 && mm < 100.0).count() > 20);
+
+    let polls: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            AcquisitionEvent::Poll(p) => Some(p),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(polls.len() as u64, summary.polls);
+    let angles = |p: &host_daemon::acquisition::PollRecord| -> Vec<f64> {
+        p.readings
+            .iter()
+            .zip(&calibrations)
+            .map(|(r, c)| c.angle_rad(r.result.unwrap().angle_counts()))
+            .collect()
+    };
+    let first = angles(polls[0]);
+    let last = angles(polls[polls.len() - 1]);
+    // Straight at the start (within a count), bent against the wall at the end, every joint
+    // the same way, and the tip segment's touch switches closed.
+    assert!(first.iter().all(|a| a.abs() < 0.002), "{first:?}");
+    assert!(last.iter().all(|&a| a < -0.01), "{last:?}");
+    let tip = polls[polls.len() - 1].readings[8].result.unwrap();
+    assert!(tip.touch().any());
+    assert!(!polls[0].readings[8].result.unwrap().touch().any());
+    // Time stamps share one clock: the stage samples fall between the polls.
+    let last_stage_t = events
+        .iter()
+        .filter_map(|e| match e {
+            AcquisitionEvent::Stage { t_ns, .. } => Some(*t_ns),
+            _ => None,
+        })
+        .max()
+        .unwrap();
+    assert!(last_stage_t <= polls[polls.len() - 1].t_ns + 50_000_000);
+}
+
+#[test]
+fn a_move_beyond_the_soft_limits_is_refused_and_the_trial_goes_on() {
+    let mut config = Config::default();
+    config.bus.poll_hz = 200.0;
+    config.stage.max_mm = 50.0;
+    config.trials[0].moves = vec![
+        MoveConfig {
+            distance_mm: 80.0,
+            speed_mm_per_s: 50.0,
+            pause_s: 0.0,
+        },
+        MoveConfig {
+            distance_mm: 20.0,
+            speed_mm_per_s: 50.0,
+            pause_s: 0.0,
+        },
+    ];
+    let (summary, events) = run(&config);
+    assert_eq!((summary.moves_started, summary.moves_refused), (1, 1));
+    let notes: Vec<&str> = events
+        .iter()
+        .filter_map(|e| match e {
+            AcquisitionEvent::Note { text, .. } => Some(text.as_str()),
+            _ => None,
+        })
+        .collect();
+    assert!(
+        notes[0].contains("move 1 refused") && notes[0].contains("soft limits"),
+        "{notes:?}"
+    );
+    let stage_max = events
+        .iter()
+        .filter_map(|e| match e {
+            AcquisitionEvent::Stage { position_mm, .. } => Some(*position_mm),
+            _ => None,
+        })
+        .fold(f64::MIN, f64::max);
+    assert_eq!(stage_max, 20.0);
+}

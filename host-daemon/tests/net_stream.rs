@@ -1,0 +1,221 @@
+//! The stream side: every client gets every message in order; slow clients are lagged (drops
+//! counted exactly), stalled ones disconnected, and neither delays `publish` or other clients.
+#![allow(clippy::unwrap_used)]
+
+mod net_support;
+
+use std::net::TcpStream;
+use std::sync::Arc;
+use std::sync::mpsc;
+use std::thread;
+use std::time::{Duration, Instant};
+
+use host_daemon::net::{
+    ControlToken, PROTOCOL_VERSION, RecordingHandler, ServerOptions, StreamMessage, StreamServer,
+};
+use net_support::{Client, TOKEN, follow_exactly, samples, wait_for_clients};
+
+fn server(options: ServerOptions) -> StreamServer {
+    StreamServer::bind_with(
+        "127.0.0.1:0",
+        ControlToken::new(TOKEN).unwrap(),
+        Arc::new(RecordingHandler::new()),
+        options,
+    )
+    .unwrap()
+}
+
+/// Publishes `seq, seq+1, ...` every 5 ms until `done` says the readers are finished.
+fn publish_tail_until(server: &StreamServer, mut seq: u64, done: impl Fn() -> bool) {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !done() {
+        assert!(Instant::now() < deadline, "readers never reached the tail");
+        server.publish(&samples(seq));
+        seq += 1;
+        thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn hello_then_every_message_in_order_for_several_clients() {
+    let server = server(ServerOptions {
+        queue_capacity: 10_000,
+        segment_addresses: vec![0x21, 0x22, 0x23],
+        ..ServerOptions::default()
+    });
+    let mut clients: Vec<Client> = (0..4)
+        .map(|_| Client::connect(server.local_addr()))
+        .collect();
+    wait_for_clients(&server, 4);
+    for client in &mut clients {
+        match client.next_message() {
+            StreamMessage::Hello {
+                protocol_version,
+                segment_count,
+                segment_addresses,
+                ..
+            } => {
+                assert_eq!(protocol_version, PROTOCOL_VERSION);
+                assert_eq!(segment_count, 3);
+                assert_eq!(segment_addresses, vec![0x21, 0x22, 0x23]);
+            }
+            other => panic!("expected hello, got {other:?}"),
+        }
+    }
+    const N: u64 = 2000;
+    for seq in 0..N {
+        assert_eq!(server.publish(&samples(seq)), 4);
+    }
+    for client in &mut clients {
+        for seq in 0..N {
+            assert_eq!(client.next_message(), samples(seq));
+        }
+    }
+    server.shutdown();
+}
+
+#[test]
+fn stalled_client_never_delays_publish_and_is_disconnected() {
+    let server = server(ServerOptions {
+        queue_capacity: 256,
+        write_timeout: Duration::from_secs(2),
+        ..ServerOptions::default()
+    });
+    // Connects and never reads: its socket buffers fill, then its writer times out.
+    let stalled = TcpStream::connect(server.local_addr()).unwrap();
+    let mut healthy = Client::connect(server.local_addr());
+    wait_for_clients(&server, 2);
+
+    const N: u64 = 100_000;
+    let reader = thread::spawn(move || {
+        let counts = follow_exactly(&mut healthy, N);
+        (healthy, counts)
+    });
+    let mut slowest = Duration::ZERO;
+    for seq in 0..N {
+        let start = Instant::now();
+        server.publish(&samples(seq));
+        slowest = slowest.max(start.elapsed());
+    }
+    assert!(
+        slowest < Duration::from_millis(50),
+        "a publish took {slowest:?}"
+    );
+    publish_tail_until(&server, N, || reader.is_finished());
+    let (mut healthy, (received, dropped)) = reader.join().unwrap();
+    assert!(received > 0);
+    assert!(
+        received + dropped > N,
+        "the healthy client saw every message or its drop count"
+    );
+
+    // As the daemon keeps publishing, the stalled client (its queue full for longer than the
+    // write timeout) is disconnected, and the server keeps serving.
+    publish_tail_until(&server, 2 * N, || server.client_count() == 1);
+    // It was the stalled one: its stream ends (after what its buffers held) ...
+    Client::from_stream(stalled).expect_closed();
+    // ... while the healthy one still gets what is published.
+    server.publish(&samples(3 * N));
+    let mut seen_last = false;
+    for _ in 0..1_000_000 {
+        if let StreamMessage::Samples { seq, .. } = healthy.next_message()
+            && seq == 3 * N
+        {
+            seen_last = true;
+            break;
+        }
+    }
+    assert!(seen_last);
+    server.shutdown();
+}
+
+#[test]
+fn slow_client_gets_exact_lag_counts_and_stays_connected() {
+    let server = server(ServerOptions {
+        queue_capacity: 8,
+        write_timeout: Duration::from_secs(60),
+        ..ServerOptions::default()
+    });
+    let mut slow = Client::connect(server.local_addr());
+    wait_for_clients(&server, 1);
+    // Far more than the socket buffers and the queue hold while the client is not reading.
+    const N: u64 = 50_000;
+    for seq in 0..N {
+        server.publish(&samples(seq));
+    }
+    let reader = thread::spawn(move || follow_exactly(&mut slow, N));
+    publish_tail_until(&server, N, || reader.is_finished());
+    let (received, dropped) = reader.join().unwrap();
+    assert!(dropped > 0, "the slow client should have been lagged");
+    assert!(received > 0);
+    assert_eq!(
+        server.client_count(),
+        1,
+        "a slow client is lagged, not disconnected"
+    );
+    server.shutdown();
+}
+
+#[test]
+fn read_only_client_that_closes_its_sending_side_keeps_receiving() {
+    let server = server(ServerOptions::default());
+    let mut client = Client::connect(server.local_addr());
+    wait_for_clients(&server, 1);
+    client.writer.shutdown(std::net::Shutdown::Write).unwrap();
+    assert!(matches!(client.next_message(), StreamMessage::Hello { .. }));
+    thread::sleep(Duration::from_millis(50));
+    server.publish(&samples(7));
+    assert_eq!(client.next_message(), samples(7));
+    server.shutdown();
+}
+
+#[test]
+fn shutdown_joins_its_threads_and_closes_every_connection() {
+    let server = server(ServerOptions {
+        queue_capacity: 64,
+        write_timeout: Duration::from_secs(600),
+        ..ServerOptions::default()
+    });
+    let addr = server.local_addr();
+    let mut reading = Client::connect(addr);
+    let stalled = TcpStream::connect(addr).unwrap();
+    wait_for_clients(&server, 2);
+    // Fill the stalled client's socket so its writer is blocked in a write.
+    for seq in 0..20_000 {
+        server.publish(&samples(seq));
+    }
+    let (done_tx, done_rx) = mpsc::channel();
+    let stopper = thread::spawn(move || {
+        server.shutdown();
+        done_tx.send(()).unwrap();
+    });
+    // Shutdown must not wait for the 600 s write timeout of the blocked writer.
+    done_rx
+        .recv_timeout(Duration::from_secs(20))
+        .expect("shutdown did not return");
+    stopper.join().unwrap();
+    reading.expect_closed();
+    assert!(TcpStream::connect(addr).is_err(), "the listener is closed");
+    drop(stalled);
+}
+
+#[test]
+fn refuses_clients_beyond_the_limit_with_a_message() {
+    let server = server(ServerOptions {
+        max_clients: 1,
+        ..ServerOptions::default()
+    });
+    let mut first = Client::connect(server.local_addr());
+    wait_for_clients(&server, 1);
+    let mut second = Client::connect(server.local_addr());
+    let reply = second.next_reply();
+    assert_eq!(
+        reply.error,
+        Some(host_daemon::net::ErrorCode::TooManyClients)
+    );
+    second.expect_closed();
+    assert!(matches!(first.next_message(), StreamMessage::Hello { .. }));
+    server.publish(&samples(1));
+    assert_eq!(first.next_message(), samples(1));
+    server.shutdown();
+}

@@ -1,0 +1,230 @@
+//! The VXM driver against the emulated VXM over real pseudo-terminals: the driver holds the
+//! slave side (as it would `/dev/ttyUSB0`), the emulator the master side.
+
+use host_daemon::emulator::{VxmEmulator, VxmFault};
+use host_daemon::stage::{LimitedStage, StageError, StageGeometry};
+use host_daemon::vxm::{self, Vxm, VxmError, VxmStatus};
+use serialport::{SerialPort, TTYPort};
+use std::time::{Duration, Instant};
+
+const READ_TIMEOUT: Duration = Duration::from_millis(5);
+const REPLY_TIMEOUT: Duration = Duration::from_millis(200);
+
+fn rig() -> (VxmEmulator, Vxm<TTYPort>) {
+    let (master, mut slave) = TTYPort::pair().expect("a pseudo-terminal pair");
+    slave
+        .set_timeout(READ_TIMEOUT)
+        .expect("a timeout on the slave");
+    let emulator = VxmEmulator::spawn(master);
+    (emulator, Vxm::new(slave).with_reply_timeout(REPLY_TIMEOUT))
+}
+
+/// Waits (at most a second) until the emulator has received `expected`, then checks it.
+fn assert_received(emulator: &VxmEmulator, expected: &str) {
+    let deadline = Instant::now() + Duration::from_secs(1);
+    while emulator.received().len() < expected.len() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    assert_eq!(String::from_utf8_lossy(&emulator.received()), expected);
+}
+
+#[test]
+fn every_command_sends_its_exact_bytes_and_moves_arrive() {
+    let (emulator, mut vxm) = rig();
+    vxm.online().unwrap();
+    vxm.clear().unwrap();
+    vxm.zero().unwrap();
+    vxm.set_speed_steps_per_s(4000).unwrap();
+    assert_received(&emulator, "FCN");
+    assert!(emulator.is_online());
+
+    vxm.start_relative_steps(400).unwrap();
+    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    assert_eq!(vxm.position_steps().unwrap(), 400);
+    assert_eq!(vxm.status().unwrap(), VxmStatus::Ready);
+    assert_eq!(emulator.speed_steps_per_s(), 4000);
+
+    vxm.start_absolute_steps(-400).unwrap();
+    assert_eq!(vxm.status().unwrap(), VxmStatus::Busy);
+    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    assert_eq!(vxm.position_steps().unwrap(), -400);
+    vxm.kill().unwrap();
+    vxm.decelerate().unwrap();
+    // A relative move of zero sends nothing (I1M0 would run to the limit switch).
+    vxm.start_relative_steps(0).unwrap();
+    vxm.wait_done(Duration::from_millis(10)).unwrap();
+    assert_received(&emulator, "FCNC,S1M4000,I1M400,RXVC,S1M4000,IA1M-400,RVXKD");
+    assert_eq!(emulator.unknown_bytes(), 0);
+}
+
+#[test]
+fn out_of_range_speed_and_distance_are_refused_before_sending() {
+    let (emulator, mut vxm) = rig();
+    assert!(matches!(
+        vxm.set_speed_steps_per_s(0),
+        Err(VxmError::SpeedOutOfRange(0))
+    ));
+    assert!(matches!(
+        vxm.set_speed_steps_per_s(6001),
+        Err(VxmError::SpeedOutOfRange(6001))
+    ));
+    assert_eq!(vxm.speed_steps_per_s(), 2000);
+    assert!(matches!(
+        vxm.start_relative_steps(16_777_216),
+        Err(VxmError::StepsOutOfRange(16_777_216))
+    ));
+    std::thread::sleep(Duration::from_millis(30));
+    assert!(emulator.received().is_empty());
+}
+
+#[test]
+fn moves_take_their_time_at_the_set_speed() {
+    let (_emulator, mut vxm) = rig();
+    vxm.online().unwrap();
+    vxm.set_speed_steps_per_s(2000).unwrap();
+    let start = Instant::now();
+    vxm.start_relative_steps(1000).unwrap();
+    assert!(matches!(
+        vxm.wait_done(Duration::from_millis(50)),
+        Err(VxmError::Timeout { expected: "^", .. })
+    ));
+    let mid = vxm.position_steps().unwrap();
+    assert!((1..1000).contains(&mid), "mid-move position {mid}");
+    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    assert!(start.elapsed() >= Duration::from_millis(490));
+    assert_eq!(vxm.position_steps().unwrap(), 1000);
+}
+
+#[test]
+fn kill_mid_move_stops_short_and_no_caret_follows() {
+    let (emulator, mut vxm) = rig();
+    vxm.online().unwrap();
+    vxm.set_speed_steps_per_s(1000).unwrap();
+    vxm.start_relative_steps(5000).unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    vxm.kill().unwrap();
+    let stopped = vxm.position_steps().unwrap();
+    assert!((20..1000).contains(&stopped), "stopped at {stopped}");
+    assert_eq!(vxm.status().unwrap(), VxmStatus::Ready);
+    assert!(matches!(
+        vxm.wait_done(Duration::from_millis(50)),
+        Err(VxmError::Timeout { .. })
+    ));
+    assert_eq!(vxm.position_steps().unwrap(), stopped);
+    assert_eq!(i64::from(stopped), emulator.position_steps());
+}
+
+#[test]
+fn a_vxm_that_never_sends_the_caret_times_out() {
+    let (emulator, mut vxm) = rig();
+    emulator.set_fault(VxmFault::NeverFinish);
+    vxm.online().unwrap();
+    vxm.set_speed_steps_per_s(4000).unwrap();
+    vxm.start_relative_steps(100).unwrap();
+    let start = Instant::now();
+    let error = vxm.wait_done(Duration::from_millis(150)).unwrap_err();
+    assert!(matches!(error, VxmError::Timeout { expected: "^", .. }));
+    assert!(start.elapsed() >= Duration::from_millis(150));
+    assert!(start.elapsed() < Duration::from_secs(1));
+    // The move itself happened; only the caret is missing.
+    assert_eq!(vxm.position_steps().unwrap(), 100);
+}
+
+#[test]
+fn garbage_answers_are_typed_errors_and_the_driver_recovers() {
+    let (emulator, mut vxm) = rig();
+    vxm.online().unwrap();
+    emulator.set_fault(VxmFault::Garbage);
+    assert!(matches!(
+        vxm.status(),
+        Err(VxmError::Garbage { command: "V", ref answer }) if answer == "?"
+    ));
+    assert!(matches!(
+        vxm.position_steps(),
+        Err(VxmError::Garbage { command: "X", ref answer }) if answer == "?!#"
+    ));
+    emulator.set_fault(VxmFault::None);
+    assert_eq!(vxm.position_steps().unwrap(), 0);
+    assert_eq!(vxm.status().unwrap(), VxmStatus::Ready);
+}
+
+#[test]
+fn a_vanished_device_is_a_typed_error_and_reconnecting_by_path_restores_it() {
+    let (master, mut slave) = TTYPort::pair().unwrap();
+    slave.set_timeout(READ_TIMEOUT).unwrap();
+    let emulator = VxmEmulator::spawn(master);
+    let port: Box<dyn SerialPort> = Box::new(slave);
+    let mut vxm = Vxm::new(port).with_reply_timeout(REPLY_TIMEOUT);
+    vxm.online().unwrap();
+    vxm.set_speed_steps_per_s(6000).unwrap();
+    vxm.start_relative_steps(300).unwrap();
+    vxm.wait_done(Duration::from_secs(1)).unwrap();
+
+    emulator.close();
+    assert!(matches!(
+        vxm.position_steps(),
+        Err(VxmError::Disconnected(_))
+    ));
+    assert!(matches!(
+        vxm.start_relative_steps(10),
+        Err(VxmError::Disconnected(_))
+    ));
+
+    // The controller comes back (it kept its position) on a new device node, opened by
+    // path the way the daemon opens a configured port.
+    let (master, pair_slave) = TTYPort::pair().unwrap();
+    let path = pair_slave.name().unwrap();
+    let port = vxm::open_port(&path, READ_TIMEOUT).unwrap();
+    drop(pair_slave);
+    let emulator = VxmEmulator::spawn_at(master, 300);
+    let _dead = vxm.reconnect(port).unwrap();
+    assert_eq!(vxm.position_steps().unwrap(), 300);
+    vxm.start_relative_steps(-300).unwrap();
+    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    assert_eq!(vxm.position_steps().unwrap(), 0);
+    assert_received(&emulator, "FXC,S1M6000,I1M-300,RX");
+}
+
+#[test]
+fn soft_limits_refuse_a_move_and_nothing_is_sent() {
+    let (emulator, vxm) = rig();
+    let geometry = StageGeometry::new(100.0, -5.0, 20.0).unwrap();
+    let stage = LimitedStage::new(vxm, geometry);
+    let mut stage = stage.online().unwrap().home().unwrap();
+    stage.set_speed_mm_per_s(40.0).unwrap();
+    assert_received(&emulator, "FN");
+    emulator.clear_received();
+
+    let refused = stage.start_absolute_mm(20.5);
+    assert!(matches!(
+        refused,
+        Err(StageError::BeyondSoftLimits {
+            target_steps: 2050,
+            min_steps: -500,
+            max_steps: 2000
+        })
+    ));
+    std::thread::sleep(Duration::from_millis(30));
+    assert!(emulator.received().is_empty(), "a refused move wrote bytes");
+
+    // A relative move is checked against the position read back: only `X` goes out.
+    let refused = stage.start_relative_mm(-5.01);
+    assert!(matches!(
+        refused,
+        Err(StageError::BeyondSoftLimits {
+            target_steps: -501,
+            ..
+        })
+    ));
+    assert!(matches!(
+        stage.start_relative_mm(f64::NAN),
+        Err(StageError::InvalidNumber { .. })
+    ));
+    std::thread::sleep(Duration::from_millis(30));
+    assert_eq!(emulator.received(), b"X");
+    assert!(!emulator.is_busy());
+
+    stage.move_absolute_mm(2.0, Duration::from_secs(1)).unwrap();
+    assert_eq!(stage.position_mm().unwrap(), 2.0);
+    assert_eq!(emulator.position_steps(), 200);
+}

@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""Checks a trial recorded by antennad and exported by `antenna export` with the tools a
+scientist would use: the Python `mcap` reader on the MCAP file (complete and cut short by a
+crash), `scipy.io.loadmat` on the MAT-file, and the `csv` module on the CSV file.
+
+Usage: check_export.py EXPECTED.json
+
+EXPECTED.json (written by crates/antenna-cli/tests/export_python.rs) names the files and holds
+the values that were recorded: t_s, address, angle_rad and touch (polls x segments, null for
+a missing sample), stage_t_s, stage_position_m, servo_t_s, base_angle_rad, trial, config,
+notes, truncated_mcap and truncated_polls. Exits non-zero with a message on the first
+mismatch. Needs scipy and mcap (scripts/setup installs them).
+"""
+
+import csv
+import json
+import math
+import sys
+
+import numpy as np
+import scipy.io
+from mcap.reader import NonSeekingReader, make_reader
+
+TOPICS = {"/trial/metadata", "/antenna/segments", "/antenna/stage", "/antenna/servo"}
+
+
+def fail(message):
+    print(f"check_export: FAIL: {message}", file=sys.stderr)
+    sys.exit(1)
+
+
+def check(condition, message):
+    if not condition:
+        fail(message)
+
+
+def same(a, b):
+    """Equal values, None and NaN standing for a missing sample."""
+    if a is None or (isinstance(a, float) and math.isnan(a)):
+        return b is None or (isinstance(b, float) and math.isnan(b))
+    return b is not None and float(a) == float(b)
+
+
+def check_mcap(e):
+    polls, stage, servo, metadata = [], [], [], None
+    with open(e["mcap"], "rb") as f:
+        reader = make_reader(f, validate_crcs=True)
+        summary = reader.get_summary()
+        check(summary is not None, "the complete trial has a summary")
+        for schema in summary.schemas.values():
+            check(schema.encoding == "jsonschema", f"schema encoding {schema.encoding}")
+            json.loads(schema.data)
+        topics = {c.topic for c in summary.channels.values()}
+        check(topics == TOPICS, f"topics {topics}")
+        for channel in summary.channels.values():
+            check(channel.message_encoding == "json", f"{channel.topic}: encoding")
+        for _schema, channel, message in reader.iter_messages():
+            data = json.loads(message.data)
+            if channel.topic == "/antenna/segments":
+                check(message.log_time == round(data["t_s"] * 1e9), "log time is t_s in ns")
+                polls.append(data)
+            elif channel.topic == "/antenna/stage":
+                stage.append(data)
+            elif channel.topic == "/antenna/servo":
+                servo.append(data)
+            else:
+                metadata = data
+        records = list(reader.iter_metadata())
+        check([r.name for r in records] == ["trial"], "one Metadata record named trial")
+        check(records[0].metadata["trial"] == e["trial"], "Metadata record: trial")
+    check(len(polls) == len(e["t_s"]), f"MCAP: {len(polls)} polls, expected {len(e['t_s'])}")
+    for i, poll in enumerate(polls):
+        check(poll["t_s"] == e["t_s"][i], f"MCAP: t_s of poll {i}")
+        for k, seg in enumerate(poll["segments"]):
+            check(seg["address"] == e["address"][k], f"MCAP: address {i},{k}")
+            check(same(seg["angle_rad"], e["angle_rad"][i][k]), f"MCAP: angle_rad {i},{k}")
+            check(same(seg["touch"], e["touch"][i][k]), f"MCAP: touch {i},{k}")
+    check([s["t_s"] for s in stage] == e["stage_t_s"], "MCAP: stage times")
+    check([s["position_m"] for s in stage] == e["stage_position_m"], "MCAP: stage positions")
+    check([s["t_s"] for s in servo] == e["servo_t_s"], "MCAP: servo times")
+    check([s["base_angle_rad"] for s in servo] == e["base_angle_rad"], "MCAP: base angles")
+    check(metadata is not None and metadata["trial"] == e["trial"], "MCAP: metadata message")
+    check(metadata["notes"] == e["notes"], "MCAP: notes")
+    print(f"check_export: MCAP ok ({len(polls)} polls, {len(stage)} stage, {len(servo)} servo)")
+
+
+def check_truncated_mcap(e):
+    """A file cut by kill -9 has no footer: a streaming reader gets every flushed poll."""
+    polls = []
+    with open(e["truncated_mcap"], "rb") as f:
+        reader = NonSeekingReader(f, validate_crcs=True)
+        try:
+            # In file order: log-time order would hold messages back to sort them.
+            for _schema, channel, message in reader.iter_messages(log_time_order=False):
+                if channel.topic == "/antenna/segments":
+                    polls.append(json.loads(message.data))
+        except Exception as error:  # the cut record at the end
+            print(f"check_export: truncated MCAP stops with {type(error).__name__}")
+    check(len(polls) >= e["truncated_polls"],
+          f"truncated MCAP: {len(polls)} polls, {e['truncated_polls']} were flushed")
+    for i, poll in enumerate(polls):
+        check(poll["t_s"] == e["t_s"][i], f"truncated MCAP: t_s of poll {i}")
+        for k, seg in enumerate(poll["segments"]):
+            check(same(seg["angle_rad"], e["angle_rad"][i][k]), f"truncated: angle {i},{k}")
+    print(f"check_export: truncated MCAP ok ({len(polls)} polls)")
+
+
+def check_mat(e):
+    m = scipy.io.loadmat(e["mat"], mat_dtype=True)
+    n, s = len(e["t_s"]), len(e["address"])
+    expected_shapes = {
+        "t_s": (n, 1), "address": (1, s), "angle_rad": (n, s), "angle_counts": (n, s),
+        "touch": (n, s), "ok": (n, s), "nack": (n, s), "pec_error": (n, s),
+        "bus_error": (n, s), "stale": (n, s),
+        "stage_t_s": (len(e["stage_t_s"]), 1), "stage_position_m": (len(e["stage_t_s"]), 1),
+        "servo_t_s": (len(e["servo_t_s"]), 1), "base_angle_rad": (len(e["servo_t_s"]), 1),
+        "started_unix_s": (1, 1),
+    }
+    for name, shape in expected_shapes.items():
+        check(name in m, f"MAT: no variable {name}")
+        check(m[name].shape == shape, f"MAT: {name} has shape {m[name].shape}, expected {shape}")
+        check(m[name].dtype == np.float64, f"MAT: {name} is {m[name].dtype}, not double")
+    check(np.array_equal(m["t_s"][:, 0], np.array(e["t_s"])), "MAT: t_s")
+    check(np.array_equal(m["address"][0], np.array(e["address"], dtype=float)), "MAT: address")
+    angle = np.array([[np.nan if v is None else v for v in row] for row in e["angle_rad"]])
+    check(np.array_equal(m["angle_rad"], angle, equal_nan=True), "MAT: angle_rad")
+    touch = np.array([[np.nan if v is None else v for v in row] for row in e["touch"]])
+    check(np.array_equal(m["touch"], touch, equal_nan=True), "MAT: touch")
+    check(np.array_equal(np.isnan(m["angle_rad"]), 1.0 - m["ok"] == 1.0), "MAT: ok flags")
+    check(np.array_equal(m["stage_t_s"][:, 0], np.array(e["stage_t_s"])), "MAT: stage_t_s")
+    check(np.array_equal(m["stage_position_m"][:, 0], np.array(e["stage_position_m"])),
+          "MAT: stage_position_m")
+    check(np.array_equal(m["servo_t_s"][:, 0], np.array(e["servo_t_s"])), "MAT: servo_t_s")
+    check(np.array_equal(m["base_angle_rad"][:, 0], np.array(e["base_angle_rad"])),
+          "MAT: base_angle_rad")
+    check(str(m["trial"][0]) == e["trial"], f"MAT: trial {m['trial']!r}")
+    check(str(m["config"][0]) == e["config"], f"MAT: config {m['config']!r}")
+    notes = {str(m["notes"][i, 0][0]): str(m["notes"][i, 1][0]) for i in range(m["notes"].shape[0])}
+    check(notes == e["notes"], f"MAT: notes {notes}")
+    print(f"check_export: MAT ok ({n} x {s})")
+
+
+def check_csv(e):
+    with open(e["csv"], newline="") as f:
+        lines = [line for line in f if not line.startswith("#")]
+    rows = list(csv.DictReader(lines))
+    n, s = len(e["t_s"]), len(e["address"])
+    check(len(rows) == n * s, f"CSV: {len(rows)} rows, expected {n * s}")
+    for j, row in enumerate(rows):
+        i, k = j // s, j % s
+        check(int(row["poll"]) == i, f"CSV row {j}: poll")
+        check(float(row["t_s"]) == e["t_s"][i], f"CSV row {j}: t_s")
+        check(int(row["address"]) == e["address"][k], f"CSV row {j}: address")
+        a = None if row["angle_rad"] == "" else float(row["angle_rad"])
+        check(same(a, e["angle_rad"][i][k]), f"CSV row {j}: angle_rad")
+        t = None if row["touch"] == "" else int(row["touch"])
+        check(same(t, e["touch"][i][k]), f"CSV row {j}: touch")
+    print(f"check_export: CSV ok ({len(rows)} rows)")
+
+
+def main():
+    if len(sys.argv) != 2:
+        fail("usage: check_export.py EXPECTED.json")
+    with open(sys.argv[1]) as f:
+        e = json.load(f)
+    check_mcap(e)
+    check_truncated_mcap(e)
+    check_mat(e)
+    check_csv(e)
+    print("check_export: all ok")
+
+
+if __name__ == "__main__":
+    main()
