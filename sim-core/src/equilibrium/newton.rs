@@ -230,7 +230,7 @@ fn line_search(ws: &mut Workspace, merit: &Merit) -> Option<(f64, f64)> {
 
 /// `S = J_F M^-1 J_F^T` (symmetrized) with `ws.y1`, `ws.y2` left holding `M^-1 J_F^T`,
 /// `M` the factorization in `ws.piv`, `ws.cc`.
-fn pin_columns_solved(ws: &mut Workspace) -> [[f64; 2]; 2] {
+pub(crate) fn pin_columns_solved(ws: &mut Workspace) -> [[f64; 2]; 2] {
     for j in 0..ws.n {
         ws.y1[j] = -ws.qy[j];
         ws.y2[j] = ws.qx[j];

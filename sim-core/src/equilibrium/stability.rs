@@ -23,9 +23,9 @@
 
 use nalgebra::{DMatrix, Vector2};
 
-use super::newton::inertia_2x2;
+use super::newton::{inertia_2x2, pin_columns_solved};
 use super::options::LinearSolver;
-use super::structured::{factor_masked, solve_masked};
+use super::structured::factor_masked;
 use super::workspace::Workspace;
 
 /// Whether `ws.x` is a strict local minimum for the tip force `f` (dead load plus pin force),
@@ -71,22 +71,7 @@ fn structured(ws: &mut Workspace, pinned: bool, scale: f64) -> bool {
     if inertia.negative > 2 {
         return false;
     }
-    for j in 0..ws.n {
-        ws.y1[j] = -ws.qy[j];
-        ws.y2[j] = ws.qx[j];
-    }
-    solve_masked(&ws.piv, &ws.cc, &ws.free, &mut ws.y1);
-    solve_masked(&ws.piv, &ws.cc, &ws.free, &mut ws.y2);
-    let mut s = [[0.0; 2]; 2];
-    for j in 0..ws.n {
-        if ws.free[j] {
-            let (u, v) = (-ws.qy[j], ws.qx[j]);
-            s[0][0] += u * ws.y1[j];
-            s[0][1] += 0.5 * (u * ws.y2[j] + v * ws.y1[j]);
-            s[1][1] += v * ws.y2[j];
-        }
-    }
-    s[1][0] = s[0][1];
+    let s = pin_columns_solved(ws);
     let (pos, nonsingular) = inertia_2x2(s);
     nonsingular && inertia.negative == 2 - pos
 }
