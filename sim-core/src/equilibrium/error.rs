@@ -59,14 +59,21 @@ pub enum EquilibriumError {
         /// The smallest distance the tip can be from `C_0` without limits, metres.
         min_reach_m: f64,
     },
-    /// The pin could not be met within the joint limits: the augmented-Lagrangian penalty
-    /// reached its cap while the gap stopped shrinking.
+    /// The search found no posture within the joint limits that meets the pin: from the
+    /// given start and from every standard restart, the augmented-Lagrangian penalty reached
+    /// its cap while the gap stopped shrinking (the chain jammed against its limits). This
+    /// is what a local search can say: the limits keep the target out of reach of the
+    /// postures it tried, not a proof that no posture reaches it.
     #[error(
-        "pin not reachable within the joint limits: gap {gap_m} m after {iterations} iterations"
+        "pin not reached within the joint limits: the search from {starts} start(s) jammed \
+         against the limits, closest gap {gap_m} m, after {iterations} iterations"
     )]
     PinInfeasible {
-        /// The remaining distance from the tip to the target, metres.
+        /// The smallest remaining distance from the tip to the target over the starts
+        /// tried, metres.
         gap_m: f64,
+        /// How many starts were tried (the given one and the restarts).
+        starts: usize,
         /// Newton iterations spent.
         iterations: usize,
     },

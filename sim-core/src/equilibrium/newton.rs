@@ -86,6 +86,7 @@ pub(crate) fn minimize(
         0.0
     };
     let mut first = true;
+    let mut stage_iterations = 0_usize;
     loop {
         ws.kinematics();
         let f = merit.effective_force(ws.tip);
@@ -128,9 +129,17 @@ pub(crate) fn minimize(
 
         // 1. Active set.
         let eps = residual.min(1e-2);
+        let sticky = stage_iterations >= STICKY_AFTER;
+        let release = if sticky { free_residual(ws, ts) } else { 0.0 };
+        stage_iterations += 1;
         for j in 0..ws.n {
             let (x, lo, hi, g) = (ws.x[j], ws.lo[j], ws.hi[j], ws.g[j]);
-            let held = lo >= hi || (x <= lo + eps && g > 0.0) || (x >= hi - eps && g < 0.0);
+            let mut held = lo >= hi || (x <= lo + eps && g > 0.0) || (x >= hi - eps && g < 0.0);
+            // Zig-zag guard: a joint held on its limit stays held while its multiplier has
+            // the wrong sign by less than the rest of the face is from stationary.
+            if sticky && !held && !ws.free[j] && (x <= lo || x >= hi) {
+                held = g.abs() / ts <= release;
+            }
             ws.free[j] = !held;
             ws.a[j] = f.x * ws.qx[j] + f.y * ws.qy[j];
         }
@@ -169,6 +178,21 @@ pub(crate) fn minimize(
             });
         }
     }
+}
+
+/// Iterations of one stage after which a joint held on a limit is released only once the
+/// rest of the face is nearly stationary (see [`free_residual`]).
+const STICKY_AFTER: usize = 50;
+
+/// The largest scaled gradient `|g_j| / T` over the joints that were free in the last
+/// iteration: how far the current face is from stationary. A joint held on its limit whose
+/// multiplier has the wrong sign is released (after [`STICKY_AFTER`] iterations) only when
+/// its `|g_j| / T` exceeds this, the classical guard against zig-zagging between faces of
+/// the box (an active-set method releases a constraint once the face is minimized).
+fn free_residual(ws: &Workspace, ts: f64) -> f64 {
+    (0..ws.n)
+        .filter(|&j| ws.free[j])
+        .fold(0.0_f64, |m, j| m.max(ws.g[j].abs() / ts))
 }
 
 /// Held joints move onto the limit they are pushed into.

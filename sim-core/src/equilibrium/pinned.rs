@@ -73,8 +73,17 @@ pub(crate) fn solve_pinned(
     let rho0 = 1e3 * ts / (length * length);
     let rho_max = 1e8 * rho0;
     let mut rho = rho0;
+    let mut reached = true;
     for stage in 1..=stages {
         let last = stage == stages;
+        // An intermediate target the limits keep out of reach (or a stage out of budget)
+        // leaves a multiplier and penalty inflated for a point the chain cannot hold:
+        // start the next stage afresh from the least-squares force instead.
+        if !reached {
+            mu = least_squares_force(ws, force);
+            rho = rho0;
+        }
+        reached = false;
         let goal = start_tip + (target - start_tip) * (stage as f64 / stages as f64);
         let tol = if last { tolerance } else { tolerance.max(1e-6) };
         let budget = if last {
@@ -112,10 +121,11 @@ pub(crate) fn solve_pinned(
                     reason: "non-finite pin gap",
                 });
             }
-            if (status == Status::Converged && gap <= tol)
-                || status == Status::Stalled
-                || *iterations >= budget
-            {
+            if status == Status::Converged && gap <= tol {
+                reached = true;
+                break;
+            }
+            if status == Status::Stalled || *iterations >= budget {
                 break;
             }
             if gap > 0.25 * prev_gap {
@@ -130,6 +140,7 @@ pub(crate) fn solve_pinned(
                 if last {
                     return Err(EquilibriumError::PinInfeasible {
                         gap_m: gap * length,
+                        starts: 1,
                         iterations: *iterations,
                     });
                 }

@@ -3,6 +3,8 @@
 
 use nalgebra::Vector2;
 
+use super::InitialGuess;
+
 /// Which side of its range a joint rests on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum LimitSide {
@@ -50,6 +52,11 @@ pub struct Equilibrium {
     /// stop pushes counter-clockwise (`>= 0`), a counter-clockwise stop pushes clockwise
     /// (`<= 0`).
     pub limit_torques_nm: Vec<f64>,
+    /// `None` when the answer was reached from the given start. With a pin, the search from
+    /// the given start can jam against the joint limits short of the target; it then
+    /// restarts from the standard starts in turn (straight, C, mirrored C, S, mirrored S)
+    /// and this names the one it was reached from.
+    pub restarted_from: Option<InitialGuess>,
 }
 
 /// One entry of a [`SolveTrace`].

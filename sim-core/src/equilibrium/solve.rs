@@ -51,6 +51,7 @@ pub fn solve_equilibrium_with(
     let mut trace = SolveTrace::default();
     let mut iterations = 0;
     let linear = settings.linear_solver;
+    let mut restarted_from = None;
     let mu = {
         let mut rec = Recorder {
             trace: settings.record_trace.then_some(&mut trace),
@@ -71,21 +72,72 @@ pub fn solve_equilibrium_with(
                 )?;
                 Vector2::zeros()
             }
-            Some(pin) => solve_pinned(
-                &mut ws,
-                problem.tip_force_n,
-                pin,
-                options.tolerance,
-                options.max_iterations,
-                linear,
-                &mut iterations,
-                &mut rec,
-            )?,
+            Some(pin) => {
+                let mut restarts = RESTARTS
+                    .iter()
+                    .map(|make| make())
+                    .filter(|start| start != initial);
+                let mut starts = 1;
+                let mut closest_m = f64::INFINITY;
+                loop {
+                    let solved = solve_pinned(
+                        &mut ws,
+                        problem.tip_force_n,
+                        pin,
+                        options.tolerance,
+                        options.max_iterations,
+                        linear,
+                        &mut iterations,
+                        &mut rec,
+                    );
+                    // The given start's answer stands as it is (converged or out of
+                    // budget); a restart stands only if it meets the pin, else it is one
+                    // more start that failed.
+                    let gap_m = match solved {
+                        Ok(mu) if restarted_from.is_none() => break mu,
+                        Ok(mu) => {
+                            let gap_m = (ws.tip - pin).norm();
+                            if gap_m <= options.tolerance * ws.l_flex {
+                                break mu;
+                            }
+                            gap_m
+                        }
+                        Err(EquilibriumError::PinInfeasible { gap_m, .. }) => gap_m,
+                        Err(e) => return Err(e),
+                    };
+                    closest_m = closest_m.min(gap_m);
+                    match restarts.next() {
+                        Some(start) if iterations < options.max_iterations => {
+                            ws = Workspace::new(chain, start.resolve(chain, Some(pin))?);
+                            restarted_from = Some(start);
+                            starts += 1;
+                        }
+                        _ => {
+                            return Err(EquilibriumError::PinInfeasible {
+                                gap_m: closest_m,
+                                starts,
+                                iterations,
+                            });
+                        }
+                    }
+                }
+            }
         }
     };
-    let eq = report(&mut ws, problem, mu, iterations, options.tolerance, linear)?;
+    let mut eq = report(&mut ws, problem, mu, iterations, options.tolerance, linear)?;
+    eq.restarted_from = restarted_from;
     Ok((eq, trace))
 }
+
+/// The standard starts a pinned search restarts from when the given start jams against the
+/// joint limits short of the target, in this order.
+const RESTARTS: [fn() -> InitialGuess; 5] = [
+    || InitialGuess::Straight,
+    || InitialGuess::C,
+    || InitialGuess::C.mirrored(),
+    || InitialGuess::S,
+    || InitialGuess::S.mirrored(),
+];
 
 /// The distance from the first flexible joint to the pin target, if reachable.
 fn check_reach(chain: &crate::Chain, pin: Vector2<f64>) -> Result<(), EquilibriumError> {
@@ -164,5 +216,6 @@ fn report(
         pin_force_n: mu,
         limit_sides,
         limit_torques_nm,
+        restarted_from: None,
     })
 }
