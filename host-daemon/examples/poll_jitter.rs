@@ -2,13 +2,17 @@
 //! share and RSS. A measurement, not a test:
 //!
 //! ```text
-//! cargo run --release -p host-daemon --example poll_jitter [-- SECONDS]
+//! cargo run --release -p host-daemon --example poll_jitter [-- SECONDS [BUSY...]]
 //! ```
 //!
 //! It runs the default trial (the stage carrying the antenna along the wall, sim-core solving
-//! the posture at 50 Hz) twice, without and with a 100 us busy wait before each deadline,
-//! and prints one Markdown table row per run. The event consumer only keeps the time
-//! stamps (no recording, no TCP server).
+//! the posture at 50 Hz) once per way of waiting for the poll deadline: a plain sleep on
+//! normal scheduling (`bus.realtime_priority = 0`), the same then a 100 us busy wait
+//! (`bus.spin_us = 100`), a sleep on `SCHED_FIFO` priority 50 (the default, when permitted),
+//! and `SCHED_FIFO` with a 20 us busy wait; and all of that
+//! once per background load: each `BUSY` is a number of busy-looping processes (`sh -c 'while
+//! :; do :; done'`) started for those runs (default: `0 2`). It prints one Markdown table row
+//! per run. The event consumer only keeps the time stamps (no recording, no TCP server).
 
 use anyhow::{Context, Result};
 use host_daemon::acquisition::AcquisitionEvent;
@@ -42,69 +46,130 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * p).round() as usize]
 }
 
+/// Background load: `n` busy-looping processes, killed when dropped.
+struct Load(Vec<std::process::Child>);
+
+impl Load {
+    fn start(n: usize) -> Result<Self> {
+        let children = (0..n)
+            .map(|_| {
+                std::process::Command::new("sh")
+                    .args(["-c", "while :; do :; done"])
+                    .spawn()
+                    .context("starting a busy process")
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Self(children))
+    }
+}
+
+impl Drop for Load {
+    fn drop(&mut self) {
+        for child in &mut self.0 {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+/// The 1-minute load average.
+fn load_average() -> Result<f64> {
+    let text = std::fs::read_to_string("/proc/loadavg").context("/proc/loadavg")?;
+    Ok(text.split_whitespace().next().context("loadavg")?.parse()?)
+}
+
 fn main() -> Result<()> {
-    let seconds: f64 = std::env::args()
-        .nth(1)
+    let mut args = std::env::args().skip(1);
+    let seconds: f64 = args
+        .next()
         .map(|s| s.parse())
         .transpose()
         .context("SECONDS")?
         .unwrap_or(10.0);
+    let loads: Vec<usize> = args
+        .map(|s| s.parse().context("BUSY: a number of busy processes"))
+        .collect::<Result<_>>()?;
+    let loads = if loads.is_empty() { vec![0, 2] } else { loads };
     let config = Config::default();
     let period_us = 1e6 / config.bus.poll_hz;
     println!(
-        "{} segments at {} Hz on the simulated rig, {seconds} s per run",
+        "{} segments at {} Hz on the simulated rig, {seconds} s per run, {} cores",
         config.bus.segments.len(),
-        config.bus.poll_hz
+        config.bus.poll_hz,
+        std::thread::available_parallelism().map_or(0, |n| n.get())
     );
     println!(
-        "| busy wait | polls | skipped | period p50 (us) | jitter p50 / p99 / max (us) | \
-         late p50 / p99 (us) | CPU (% of a core) | RSS (MB) |"
+        "| busy processes (load avg) | wait | polls | skipped | period p50 (us) | \
+         jitter p50 / p99 / max (us) | late p50 / p99 (us) | CPU (% of a core) | RSS (MB) |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
-    for spin_us in [0u64, 100] {
-        let mut stamps: Vec<(u64, u64)> = Vec::with_capacity((seconds * 1200.0) as usize);
-        let options = TrialOptions {
-            duration: Some(Duration::from_secs_f64(seconds)),
-            spin: Some(Duration::from_micros(spin_us)),
-            ..TrialOptions::default()
-        };
-        let cpu_before = cpu_s()?;
-        let wall = Instant::now();
-        let summary = run_sim_trial(
-            &config,
-            &config.trials[0],
-            options,
-            Arc::new(AtomicBool::new(false)),
-            |event| {
-                if let AcquisitionEvent::Poll(p) = event {
-                    stamps.push((p.t_ns, p.deadline_ns));
-                }
-            },
-        )?;
-        let cpu = (cpu_s()? - cpu_before) / wall.elapsed().as_secs_f64();
-        let rss_mb = status_kb("VmRSS:")? as f64 / 1024.0;
-        let mut periods: Vec<f64> = stamps
-            .windows(2)
-            .map(|w| (w[1].0 - w[0].0) as f64 / 1e3)
-            .collect();
-        let mut jitter: Vec<f64> = periods.iter().map(|p| (p - period_us).abs()).collect();
-        let mut late: Vec<f64> = stamps.iter().map(|(t, d)| (t - d) as f64 / 1e3).collect();
-        periods.sort_by(f64::total_cmp);
-        jitter.sort_by(f64::total_cmp);
-        late.sort_by(f64::total_cmp);
-        println!(
-            "| {spin_us} us | {} | {} | {:.1} | {:.1} / {:.1} / {:.0} | {:.1} / {:.1} | {:.1} | {:.1} |",
-            summary.polls,
-            summary.skipped,
-            percentile(&periods, 0.5),
-            percentile(&jitter, 0.5),
-            percentile(&jitter, 0.99),
-            jitter.last().copied().unwrap_or(0.0),
-            percentile(&late, 0.5),
-            percentile(&late, 0.99),
-            100.0 * cpu,
-            rss_mb
-        );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let modes: [(&str, u64, u8); 4] = [
+        ("normal scheduling, sleep", 0, 0),
+        ("normal scheduling, sleep + 100 us spin", 100, 0),
+        ("SCHED_FIFO 50, sleep (default)", 0, 50),
+        ("SCHED_FIFO 50, sleep + 20 us spin", 20, 50),
+    ];
+    for &busy in &loads {
+        let _load = Load::start(busy)?;
+        // Let the load average feel the load.
+        std::thread::sleep(Duration::from_secs(if busy > 0 { 5 } else { 0 }));
+        for (mode, spin_us, priority) in modes {
+            let mut stamps: Vec<(u64, u64)> = Vec::with_capacity((seconds * 1200.0) as usize);
+            let mut refused = None;
+            let options = TrialOptions {
+                duration: Some(Duration::from_secs_f64(seconds)),
+                spin: Some(Duration::from_micros(spin_us)),
+                realtime_priority: Some(priority),
+                ..TrialOptions::default()
+            };
+            let cpu_before = cpu_s()?;
+            let wall = Instant::now();
+            let summary = run_sim_trial(
+                &config,
+                &config.trials[0],
+                options,
+                Arc::new(AtomicBool::new(false)),
+                |event| match event {
+                    AcquisitionEvent::Poll(p) => stamps.push((p.t_ns, p.deadline_ns)),
+                    AcquisitionEvent::Note { text, .. } if text.contains("refused") => {
+                        refused = Some(text.clone());
+                    }
+                    _ => {}
+                },
+            )?;
+            let cpu = (cpu_s()? - cpu_before) / wall.elapsed().as_secs_f64();
+            let rss_mb = status_kb("VmRSS:")? as f64 / 1024.0;
+            let mut periods: Vec<f64> = stamps
+                .windows(2)
+                .map(|w| (w[1].0 - w[0].0) as f64 / 1e3)
+                .collect();
+            let mut jitter: Vec<f64> = periods.iter().map(|p| (p - period_us).abs()).collect();
+            let mut late: Vec<f64> = stamps.iter().map(|(t, d)| (t - d) as f64 / 1e3).collect();
+            periods.sort_by(f64::total_cmp);
+            jitter.sort_by(f64::total_cmp);
+            late.sort_by(f64::total_cmp);
+            let mode = match &refused {
+                Some(_) => format!("{mode} (refused: normal scheduling)"),
+                None => mode.to_owned(),
+            };
+            println!(
+                "| {busy} ({:.1}) | {mode} | {} | {} | {:.1} | {:.1} / {:.1} / {:.0} | {:.1} / {:.1} | {:.1} | {:.1} |",
+                load_average()?,
+                summary.polls,
+                summary.skipped,
+                percentile(&periods, 0.5),
+                percentile(&jitter, 0.5),
+                percentile(&jitter, 0.99),
+                jitter.last().copied().unwrap_or(0.0),
+                percentile(&late, 0.5),
+                percentile(&late, 0.99),
+                100.0 * cpu,
+                rss_mb
+            );
+            if let Some(text) = refused {
+                eprintln!("{text}");
+            }
+        }
     }
     println!(
         "peak RSS (VmHWM): {:.1} MB",

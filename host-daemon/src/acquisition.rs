@@ -139,6 +139,10 @@ pub struct PollSettings {
     pub counter_check_every: u32,
     /// Busy-wait this long before each deadline (zero: sleep only).
     pub spin: Duration,
+    /// Ask for `SCHED_FIFO` at this priority (1..=99) for the polling thread; 0: normal
+    /// scheduling. The outcome is sent as an [`AcquisitionEvent::Note`]; a refusal leaves
+    /// the thread on normal scheduling.
+    pub realtime_priority: u8,
 }
 
 /// What the polling thread hands back when it stops.
@@ -175,6 +179,23 @@ where
     std::thread::Builder::new()
         .name("antennad-poll".to_owned())
         .spawn(move || {
+            crate::realtime::minimize_timer_slack();
+            if settings.realtime_priority > 0 {
+                let text = match crate::realtime::request_fifo(settings.realtime_priority) {
+                    Ok(()) => format!(
+                        "polling thread on SCHED_FIFO priority {}",
+                        settings.realtime_priority
+                    ),
+                    Err(why) => format!(
+                        "SCHED_FIFO priority {} refused ({why}); polling on normal scheduling",
+                        settings.realtime_priority
+                    ),
+                };
+                events.send(AcquisitionEvent::Note {
+                    t_ns: clock.elapsed_ns(),
+                    text,
+                });
+            }
             let mut schedule = Schedule::new(clock, settings.period).with_spin(settings.spin);
             let check_every = u64::from(settings.counter_check_every.max(1));
             let addresses = poller.addresses().to_vec();

@@ -97,6 +97,12 @@ pub struct BusConfig {
     /// Busy-wait this many microseconds before each poll deadline instead of sleeping
     /// (0: sleep only). Cuts wake-up lateness to about a microsecond at the cost of CPU.
     pub spin_us: u64,
+    /// Run the polling thread under `SCHED_FIFO` at this priority (1..=99) when the system
+    /// permits it (root, `CAP_SYS_NICE` or an `RLIMIT_RTPRIO` allowance); refused, antennad
+    /// says so once and polls on normal scheduling. 0: normal scheduling. Default 50: on a
+    /// busy machine it is what keeps the p99 poll jitter in the tens of microseconds
+    /// (BENCHMARKS.md, "Host daemon").
+    pub realtime_priority: u8,
     /// The segments, base to tip.
     pub segments: Vec<SegmentConfig>,
 }
@@ -108,6 +114,7 @@ impl Default for BusConfig {
             poll_hz: 1000.0,
             counter_check_every: 50,
             spin_us: 0,
+            realtime_priority: 50,
             // Each magnet is press-fit at its own angle: every segment has its own zero.
             segments: (0..9u8)
                 .map(|k| SegmentConfig {
@@ -330,6 +337,35 @@ pub struct SimConfig {
     pub wall: WallConfig,
     /// The simulated antenna.
     pub antenna: AntennaConfig,
+    /// Faults to inject into simulated segments (none by default), to see and test how the
+    /// daemon copes.
+    pub faults: Vec<SimFaultConfig>,
+}
+
+/// What an injected fault does to a simulated segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SimFaultKind {
+    /// It stops acknowledging its address (a NACK storm).
+    Nack,
+    /// Its reads come back with a wrong PEC byte.
+    Pec,
+    /// Its main loop stops: it answers with its last word, its sample counter stuck.
+    Stuck,
+}
+
+/// A fault injected into one simulated segment for a while.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimFaultConfig {
+    /// The segment's address (one of `bus.segments`).
+    pub address: u8,
+    /// `nack`, `pec` or `stuck`.
+    pub kind: SimFaultKind,
+    /// From this many seconds after the daemon started...
+    pub from_s: f64,
+    /// ...until this many.
+    pub until_s: f64,
 }
 
 /// A flat wall: a line `distance_m` from the stage's track (at the track's origin), tilted
@@ -486,6 +522,15 @@ impl Config {
                 "must be shorter than the poll period".to_owned(),
             );
         }
+        if bus.realtime_priority > 99 {
+            return fail(
+                "bus.realtime_priority",
+                format!(
+                    "must be 0 (normal scheduling) or 1..=99, got {}",
+                    bus.realtime_priority
+                ),
+            );
+        }
         if bus.segments.is_empty() {
             return fail("bus.segments", "needs at least one segment".to_owned());
         }
@@ -602,6 +647,27 @@ impl Config {
         }
         if !positive(wall.stiffness_n_per_m) {
             return fail("sim.wall.stiffness_n_per_m", "must be positive".to_owned());
+        }
+        for (i, fault) in self.sim.faults.iter().enumerate() {
+            if !bus.segments.iter().any(|s| s.address == fault.address) {
+                return fail(
+                    &format!("sim.faults[{i}].address"),
+                    format!("{:#04x} is not one of bus.segments", fault.address),
+                );
+            }
+            if !(fault.from_s.is_finite()
+                && fault.until_s.is_finite()
+                && 0.0 <= fault.from_s
+                && fault.from_s < fault.until_s)
+            {
+                return fail(
+                    &format!("sim.faults[{i}].until_s"),
+                    format!(
+                        "needs 0 <= from_s < until_s, got {} and {}",
+                        fault.from_s, fault.until_s
+                    ),
+                );
+            }
         }
         let antenna = &self.sim.antenna;
         if bus.is_sim() && antenna.links != bus.segments.len() {

@@ -24,13 +24,18 @@
 pub mod acquisition;
 pub mod clock;
 pub mod config;
+pub mod daemon;
 pub mod emulator;
 mod fake_servo;
 mod fake_stage;
+#[cfg(target_os = "linux")]
+pub mod i2c_bus;
 pub mod maestro;
 pub mod net;
 mod poll;
+pub mod realtime;
 pub mod record;
+pub mod rig;
 pub mod servo;
 mod sim_bus;
 pub mod sim_rig;

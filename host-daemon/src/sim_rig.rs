@@ -325,6 +325,8 @@ pub struct TrialOptions {
     pub queue: usize,
     /// Overrides `bus.spin_us`, the busy wait before each poll deadline.
     pub spin: Option<Duration>,
+    /// Overrides `bus.realtime_priority` (0: normal scheduling).
+    pub realtime_priority: Option<u8>,
 }
 
 impl Default for TrialOptions {
@@ -333,6 +335,7 @@ impl Default for TrialOptions {
             duration: None,
             queue: 8192,
             spin: None,
+            realtime_priority: None,
         }
     }
 }
@@ -386,6 +389,9 @@ pub fn run_sim_trial(
             spin: options
                 .spin
                 .unwrap_or(Duration::from_micros(config.bus.spin_us)),
+            realtime_priority: options
+                .realtime_priority
+                .unwrap_or(config.bus.realtime_priority),
         },
         sense(state),
         events.clone(),

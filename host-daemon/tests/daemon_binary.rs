@@ -1,15 +1,23 @@
 //! The `antennad` binary end to end: a short trial on the simulated rig prints sample lines
-//! and its summary, records every poll to MCAP, and a bad configuration is a clear error.
+//! and its summary and records every poll to MCAP; without `--exit-after-trial` it keeps
+//! serving after the trial and stops cleanly on SIGTERM; `kill -9` during a trial leaves a
+//! file that reads back up to its last flush; bad configurations and a missing I2C device are
+//! clear errors naming the key.
 #![allow(clippy::unwrap_used)]
 
+mod net_support;
+
+use host_daemon::net::StreamMessage;
 use host_daemon::record::TrialReader;
-use std::process::Command;
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
 
 #[test]
 fn a_short_trial_is_printed_recorded_and_streamed() {
     let dir = std::env::temp_dir().join(format!("antennad-bin-{}", std::process::id()));
     let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
         .args([
+            "--exit-after-trial",
             "--duration-s",
             "1.5",
             "--listen",
@@ -30,17 +38,19 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
         stdout.contains("-- move 1: +150.0 mm at 30 mm/s"),
         "{stdout}"
     );
-    // "antennad: N polls in ..." and the recording's own count agree.
+    // "... ended (its duration passed); recorded N polls, ..." and the file agree.
     let polls: u64 = stdout
         .lines()
         .find_map(|l| {
-            l.strip_prefix("antennad: ")?
-                .split_once(" polls in ")?
+            l.split_once("ended (its duration passed); recorded ")?
+                .1
+                .split_once(" polls")?
                 .0
                 .parse()
                 .ok()
         })
         .unwrap();
+    assert!(stdout.contains("antennad: "), "{stdout}");
     let trial = TrialReader::read(dir.join("wall-sweep.mcap")).unwrap();
     assert!(trial.truncated.is_none());
     assert_eq!(trial.segments.len() as u64, polls);
@@ -70,6 +80,125 @@ fn a_bad_configuration_names_the_key_and_exits_with_failure() {
     assert!(!output.status.success());
     assert!(
         stderr.contains(":2:1: `bus.poll_hz`: must be in (0, 10000]"),
+        "{stderr}"
+    );
+}
+
+/// Spawns antennad with `args` and reads its stdout until the "watch it with" line; returns
+/// the child, the stream address and the reader.
+fn spawn(
+    args: &[&str],
+    dir: &std::path::Path,
+) -> (
+    std::process::Child,
+    std::net::SocketAddr,
+    impl Iterator<Item = String>,
+) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_antennad"))
+        .args(args)
+        .args(["--listen", "127.0.0.1:0", "--data-dir"])
+        .arg(dir)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap())
+        .lines()
+        .map(Result::unwrap);
+    let addr = lines
+        .by_ref()
+        .find_map(|l| {
+            let rest = l.split_once("watch it with: nc ")?.1;
+            let mut words = rest.split_whitespace();
+            let ip = words.next()?;
+            let port = words.next()?;
+            format!("{ip}:{port}").parse().ok()
+        })
+        .unwrap();
+    (child, addr, lines)
+}
+
+#[test]
+fn without_exit_after_trial_it_keeps_serving_and_stops_cleanly_on_sigterm() {
+    let dir = std::env::temp_dir().join(format!("antennad-serve-{}", std::process::id()));
+    let (mut child, addr, mut lines) = spawn(&["--duration-s", "0.5"], &dir);
+    assert!(
+        lines
+            .by_ref()
+            .any(|l| l.contains("ended (its duration passed)"))
+    );
+    // After the trial: still streaming.
+    let mut client = net_support::Client::connect(addr);
+    assert!(matches!(client.next_message(), StreamMessage::Hello { .. }));
+    let mut samples = 0;
+    while samples < 100 {
+        if let StreamMessage::Samples { segments, .. } = client.next_message() {
+            assert_eq!(segments.len(), 9);
+            samples += 1;
+        }
+    }
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let rest: Vec<String> = lines.collect();
+    assert!(child.wait().unwrap().success(), "{rest:?}");
+    assert!(rest.iter().any(|l| l.contains("polls in")), "{rest:?}");
+    assert!(
+        TrialReader::read(dir.join("wall-sweep.mcap"))
+            .unwrap()
+            .truncated
+            .is_none()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn kill_9_during_a_trial_leaves_every_poll_up_to_the_last_flush() {
+    let dir = std::env::temp_dir().join(format!("antennad-kill9-{}", std::process::id()));
+    let (mut child, _addr, mut lines) = spawn(&["--duration-s", "60", "--print-hz", "10"], &dir);
+    // Wait for two seconds of trial, in sample lines ("   2.00 ...").
+    assert!(lines.by_ref().any(|l| l.trim_start().starts_with("2.")));
+    child.kill().unwrap(); // SIGKILL
+    assert!(!child.wait().unwrap().success());
+    let trial = TrialReader::read(dir.join("wall-sweep.mcap")).unwrap();
+    assert!(trial.truncated.is_some(), "no footer after kill -9");
+    let n = trial.segments.len();
+    // At least the two seconds of trial seen, less the 100 ms flush interval, at 1 kHz
+    // (with room for skipped deadlines on a loaded machine).
+    assert!(n > 1000, "{n} polls read back");
+    let seqs: Vec<u64> = trial.segments.iter().map(|m| m.seq.unwrap()).collect();
+    assert!(seqs.windows(2).all(|w| w[1] > w[0]), "polls in order");
+    assert!(
+        trial
+            .segments
+            .iter()
+            .all(|m| m.segments.len() == 9 && m.segments.iter().all(|s| s.ok))
+    );
+    assert!(trial.segments.windows(2).all(|w| w[1].t_s > w[0].t_s));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_missing_i2c_device_names_the_key_and_the_path() {
+    let path = std::env::temp_dir().join(format!("antennad-i2c-{}.toml", std::process::id()));
+    std::fs::write(&path, "[bus]\ndevice = \"/dev/i2c-250\"\n").unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
+        .arg("--config")
+        .arg(&path)
+        .args([
+            "--exit-after-trial",
+            "--listen",
+            "127.0.0.1:0",
+            "--no-record",
+        ])
+        .output()
+        .unwrap();
+    std::fs::remove_file(&path).ok();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains("`bus.device` = \"/dev/i2c-250\": cannot open the I2C bus"),
         "{stderr}"
     );
 }

@@ -66,6 +66,10 @@ pub struct SegmentSample {
     pub counter: Option<u32>,
     /// Why the read failed, e.g. `"nack"` or `"pec"`.
     pub error: Option<String>,
+    /// The segment's sample counter did not move at its last check: it answers, but with
+    /// old news (added in 0.1; absent from older daemons' lines, read as `false`).
+    #[serde(default)]
+    pub stale: bool,
 }
 
 /// Health counters of one segment since the daemon started.
@@ -152,5 +156,28 @@ mod tests {
             r#"{"type":"reply","id":3,"ok":false,"message":"no","error":"bad_token"}"#
         );
         assert_eq!(serde_json::from_str::<StreamMessage>(&text).unwrap(), m);
+    }
+
+    /// The `samples` example in docs/stream-protocol.md, byte for byte; a line from a daemon
+    /// that did not send `stale` still reads, as not stale.
+    #[test]
+    fn documented_samples_line_and_stale_compatibility() {
+        let doc = include_str!("../../../docs/stream-protocol.md");
+        let line = doc
+            .lines()
+            .find(|l| l.starts_with(r#"{"type":"samples""#))
+            .unwrap();
+        let message: StreamMessage = serde_json::from_str(line).unwrap();
+        assert_eq!(serde_json::to_string(&message).unwrap(), line);
+        let StreamMessage::Samples { segments, .. } = &message else {
+            panic!("not samples: {message:?}");
+        };
+        assert_eq!(
+            segments.iter().map(|s| s.stale).collect::<Vec<_>>(),
+            [false, false, true]
+        );
+        let old = r#"{"address":33,"angle_rad":0.5,"contact":false,"counter":17,"error":null}"#;
+        let sample: SegmentSample = serde_json::from_str(old).unwrap();
+        assert!(!sample.stale);
     }
 }

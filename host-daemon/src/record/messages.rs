@@ -68,6 +68,10 @@ impl SegmentSample {
 /// One poll of every segment (`/antenna/segments`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SegmentsMessage {
+    /// The poll's number on the daemon's clock: +1 per poll, so a gap means skipped poll
+    /// deadlines, never a lost sample (files written before this field have none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seq: Option<u64>,
     /// Monotonic time since the trial started, s.
     pub t_s: f64,
     /// The segments in polling order (base first).
@@ -90,6 +94,16 @@ pub struct ServoMessage {
     pub t_s: f64,
     /// Base angle, rad.
     pub base_angle_rad: f64,
+}
+
+/// Something the daemon said during the trial (`/trial/log`): a stage or servo device
+/// vanishing or coming back, a move refused, a segment's counter stopping, ...
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LogMessage {
+    /// Monotonic time since the trial started, s (the same clock as the segments).
+    pub t_s: f64,
+    /// What happened, for humans.
+    pub text: String,
 }
 
 /// What the trial was (`/trial/metadata`, written once, first; also an MCAP Metadata record

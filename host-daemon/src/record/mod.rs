@@ -9,6 +9,12 @@
 //! | `/antenna/segments` | [`SegmentsMessage`]: `t_s` and per segment address, angle counts, `angle_rad`, touch bits, ok/nack/pec/bus/stale flags | every poll |
 //! | `/antenna/stage` | [`StageMessage`]: `t_s`, `position_m` | the stage's rate |
 //! | `/antenna/servo` | [`ServoMessage`]: `t_s`, `base_angle_rad` | the servo's rate |
+//! | `/trial/log` | [`LogMessage`]: `t_s`, `text` (a device vanished or came back, a move refused, a counter stopped) | when it happens |
+//!
+//! Segment polls carry `seq`, the poll's number on the daemon's clock (+1 per poll deadline),
+//! so a reader can tell that none is missing. While the stage's (or servo's) serial device is
+//! gone, no stage (servo) samples are recorded, and `/trial/log` says when it vanished and
+//! came back.
 //!
 //! `t_s` is monotonic time since the trial started, on one clock for all topics; each
 //! message's MCAP log time is the same instant in nanoseconds.
@@ -48,7 +54,9 @@ mod synthetic;
 mod writer;
 
 pub use error::RecordError;
-pub use messages::{SegmentSample, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
+pub use messages::{
+    LogMessage, SegmentSample, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+};
 pub use reader::{Trial, TrialReader};
 pub use synthetic::{
     SYNTHETIC_POLL_PERIOD_S, synthetic_metadata, synthetic_segments, synthetic_servo,

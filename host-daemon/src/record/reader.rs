@@ -7,8 +7,8 @@ use mcap::read::Options;
 use serde::de::DeserializeOwned;
 
 use super::error::RecordError;
-use super::messages::{SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
-use super::schema::{METADATA_TOPIC, SEGMENTS_TOPIC, SERVO_TOPIC, STAGE_TOPIC};
+use super::messages::{LogMessage, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
+use super::schema::{LOG_TOPIC, METADATA_TOPIC, SEGMENTS_TOPIC, SERVO_TOPIC, STAGE_TOPIC};
 
 /// A trial read back from its MCAP file.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -21,6 +21,8 @@ pub struct Trial {
     pub stage: Vec<StageMessage>,
     /// Every `/antenna/servo` message, in recording order.
     pub servo: Vec<ServoMessage>,
+    /// Every `/trial/log` message, in recording order (none in files from before it existed).
+    pub log: Vec<LogMessage>,
     /// `None` for a complete file; otherwise why reading stopped early (a file cut by a crash
     /// ends in a partial record after its last flush). Everything before that point is
     /// returned, CRC-checked.
@@ -92,6 +94,7 @@ impl TrialReader {
                 SEGMENTS_TOPIC => trial.segments.push(decode(path, topic, data)?),
                 STAGE_TOPIC => trial.stage.push(decode(path, topic, data)?),
                 SERVO_TOPIC => trial.servo.push(decode(path, topic, data)?),
+                LOG_TOPIC => trial.log.push(decode(path, topic, data)?),
                 METADATA_TOPIC => trial.metadata = Some(decode(path, topic, data)?),
                 _ => {}
             }

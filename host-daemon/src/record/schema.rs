@@ -9,6 +9,8 @@ pub const SEGMENTS_TOPIC: &str = "/antenna/segments";
 pub const STAGE_TOPIC: &str = "/antenna/stage";
 /// Topic of [`super::ServoMessage`].
 pub const SERVO_TOPIC: &str = "/antenna/servo";
+/// Topic of [`super::LogMessage`].
+pub const LOG_TOPIC: &str = "/trial/log";
 /// Topic of [`super::TrialMetadata`].
 pub const METADATA_TOPIC: &str = "/trial/metadata";
 
@@ -28,6 +30,7 @@ pub fn segments_schema() -> Value {
         "description": "One poll of every segment",
         "type": "object",
         "properties": {
+            "seq": { "type": "integer", "description": "poll number, +1 per poll deadline" },
             "t_s": { "type": "number", "description": "monotonic time since trial start, s" },
             "segments": {
                 "type": "array",
@@ -76,6 +79,19 @@ pub fn servo_schema() -> Value {
             "base_angle_rad": { "type": "number", "description": "base angle, rad" }
         },
         "required": ["t_s", "base_angle_rad"]
+    })
+}
+
+/// The schema of `/trial/log` (name `antenna.Log`).
+pub fn log_schema() -> Value {
+    json!({
+        "title": "antenna.Log",
+        "type": "object",
+        "properties": {
+            "t_s": { "type": "number", "description": "monotonic time since trial start, s" },
+            "text": { "type": "string", "description": "what the daemon said" }
+        },
+        "required": ["t_s", "text"]
     })
 }
 

@@ -36,6 +36,7 @@ pub fn synthetic_segments(i: u64, segments: usize) -> SegmentsMessage {
         })
         .collect();
     SegmentsMessage {
+        seq: Some(i),
         t_s: i as f64 * SYNTHETIC_POLL_PERIOD_S,
         segments: samples,
     }

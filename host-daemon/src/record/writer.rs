@@ -11,10 +11,10 @@ use serde::Serialize;
 use serde_json::Value;
 
 use super::error::RecordError;
-use super::messages::{SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
+use super::messages::{LogMessage, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
 use super::schema::{
-    MESSAGE_ENCODING, METADATA_TOPIC, SCHEMA_ENCODING, SEGMENTS_TOPIC, SERVO_TOPIC, STAGE_TOPIC,
-    metadata_schema, segments_schema, servo_schema, stage_schema,
+    LOG_TOPIC, MESSAGE_ENCODING, METADATA_TOPIC, SCHEMA_ENCODING, SEGMENTS_TOPIC, SERVO_TOPIC,
+    STAGE_TOPIC, log_schema, metadata_schema, segments_schema, servo_schema, stage_schema,
 };
 
 /// The default and largest flush interval, s of trial time.
@@ -30,6 +30,8 @@ pub struct RecordCounts {
     pub stage: u64,
     /// `/antenna/servo` messages.
     pub servo: u64,
+    /// `/trial/log` messages.
+    pub log: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -59,6 +61,8 @@ pub struct TrialRecorder {
     segments: Channel,
     stage: Channel,
     servo: Channel,
+    /// Added with the first log line, so a trial with none has no `/trial/log` channel.
+    log: Option<Channel>,
     flush_interval_s: f64,
     last_flush_t_s: f64,
     written: RecordCounts,
@@ -134,6 +138,7 @@ impl TrialRecorder {
             segments,
             stage,
             servo,
+            log: None,
             flush_interval_s: FLUSH_INTERVAL_S,
             last_flush_t_s: 0.0,
             written: RecordCounts::default(),
@@ -204,6 +209,18 @@ impl TrialRecorder {
         self.flush_if_due(message.t_s)
     }
 
+    /// Records a log line.
+    pub fn record_log(&mut self, message: &LogMessage) -> Result<(), RecordError> {
+        let mut channel = match self.log {
+            Some(channel) => channel,
+            None => self.add_channel(LOG_TOPIC, "antenna.Log", &log_schema())?,
+        };
+        self.write(LOG_TOPIC, &mut channel, message.t_s, message)?;
+        self.log = Some(channel);
+        self.written.log += 1;
+        self.flush_if_due(message.t_s)
+    }
+
     /// Flushes if `now_t_s` (trial time, s) is at least the flush interval after the last
     /// flush. Call it from the daemon's timer too.
     pub fn flush_if_due(&mut self, now_t_s: f64) -> Result<(), RecordError> {
@@ -237,6 +254,32 @@ impl TrialRecorder {
         })?;
         self.flushed = self.written;
         Ok(self.path.clone())
+    }
+
+    fn add_channel(
+        &mut self,
+        topic: &str,
+        name: &str,
+        schema: &Value,
+    ) -> Result<Channel, RecordError> {
+        let data = serde_json::to_vec(schema).map_err(|source| RecordError::Json {
+            path: self.path.clone(),
+            topic: topic.to_string(),
+            source,
+        })?;
+        let mcap_err = |source| RecordError::Mcap {
+            path: self.path.clone(),
+            source,
+        };
+        let schema_id = self
+            .writer
+            .add_schema(name, SCHEMA_ENCODING, &data)
+            .map_err(mcap_err)?;
+        let id = self
+            .writer
+            .add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())
+            .map_err(mcap_err)?;
+        Ok(Channel { id, sequence: 0 })
     }
 
     fn write<T: Serialize>(

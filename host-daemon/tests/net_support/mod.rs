@@ -100,6 +100,7 @@ pub fn samples(seq: u64) -> StreamMessage {
             contact: Some(seq.is_multiple_of(2)),
             counter: Some((seq % 65_536) as u32),
             error: None,
+            stale: i == 4 && seq.is_multiple_of(3),
         })
         .collect();
     StreamMessage::Samples {

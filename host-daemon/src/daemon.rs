@@ -1,0 +1,1525 @@
+//! The daemon as a service: [`Daemon::start`] wires the bus, the rig, the TCP server and the
+//! recorder from a [`Config`] and returns a [`DaemonHandle`]; the `antennad` binary is a thin
+//! shell around it, and other crates' tests can run a real antennad in-process.
+//!
+//! # What runs
+//!
+//! - **Acquisition and streaming run continuously**, from start to shutdown, on one clock
+//!   (`t_ns` in the stream is time since the daemon started): the polling thread reads every
+//!   segment on absolute deadlines; the motion thread samples the stage and the base at their
+//!   own rates and carries out motion commands; the hub thread publishes every poll to the
+//!   TCP clients, keeps per-segment health and sends a `status` line every second and on
+//!   every change.
+//! - **A trial is a recorded window with its script**: `start_trial` (or the first trial, at
+//!   start) opens `<data_dir>/<name>.mcap`, runs the trial's base angle and stage moves, and
+//!   records every poll, stage and base sample until its duration has passed (duration 0:
+//!   until its moves are done), `stop_trial` or `stop_all`; then the file is finalized. Only
+//!   one trial runs at a time.
+//!
+//! # Control rule
+//!
+//! `move_stage` and `set_base_angle` are carried out when no trial runs, and refused with the
+//! reason while one does: the trial's script owns the stage and the base, so a recording
+//! always shows the motion its metadata describes. `stop_trial` and `stop_all` always work;
+//! `stop_all` kills the stage motion at once (the VXM's `K`) and ends any trial. Whatever a
+//! trial or a client asks, the stage never goes beyond the soft limits (the move is refused
+//! and nothing moves), nor faster than `stage.max_speed_mm_per_s`.
+//!
+//! # Example
+//!
+//! ```no_run
+//! use host_daemon::config::Config;
+//! use host_daemon::daemon::{Daemon, DaemonOptions};
+//!
+//! let mut config = Config::default();
+//! config.server.listen = "127.0.0.1:0".to_owned();
+//! let daemon = Daemon::start(config, DaemonOptions::default())?;
+//! println!("stream on {:?}, token {}", daemon.local_addr(), daemon.token());
+//! let summary = daemon.shutdown()?;
+//! println!("{} polls", summary.polls);
+//! # Ok::<(), anyhow::Error>(())
+//! ```
+
+use crate::acquisition::{
+    AcquisitionEvent, EventSender, HealthChange, PollRecord, PollSettings, Shared, event_channel,
+    spawn_poller,
+};
+use crate::clock::{Schedule, TrialClock};
+use crate::config::{Config, SimFaultKind, TrialConfig};
+use crate::net::{
+    ControlCommand, ControlHandler, ControlToken, SegmentSample as NetSample, SegmentStatus,
+    ServerOptions, StageTarget, StreamMessage, StreamServer,
+};
+use crate::poll::{PollError, Poller, SegmentHealth};
+use crate::record::{
+    LogMessage, RecordCounts, SegmentSample, SegmentsMessage, ServoMessage, StageMessage,
+    TrialMetadata, TrialRecorder,
+};
+use crate::rig::{DaemonRig, RigError};
+use crate::sim_rig::{SimState, sense, sim_bus};
+use crate::{SegmentFault, SimBus};
+use antenna_protocol::Calibration;
+use anyhow::{Context, Result, anyhow, bail};
+use std::collections::{BTreeMap, VecDeque};
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, SyncSender, channel, sync_channel};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+/// How long a control request waits for the daemon's threads to answer.
+const CONTROL_TIMEOUT: Duration = Duration::from_secs(5);
+/// Log lines kept for [`DaemonHandle::log_lines`].
+const LOG_LINES_KEPT: usize = 4000;
+
+/// How [`Daemon::start`] runs the daemon.
+#[derive(Debug, Clone)]
+pub struct DaemonOptions {
+    /// The configuration as text, kept in every recording's metadata.
+    pub config_text: String,
+    /// Start a trial at once: `Some(None)` the configuration's first trial, `Some(Some(name))`
+    /// the one called `name`, `None` none (wait for `start_trial`).
+    pub first_trial: Option<Option<String>>,
+    /// Overrides the first trial's duration (zero: until its moves are done).
+    pub first_trial_duration: Option<Duration>,
+    /// Stop the daemon when the first trial has ended.
+    pub exit_after_trial: bool,
+    /// Record trials to `<data_dir>/<trial>.mcap`.
+    pub record: bool,
+    /// Start the TCP server on `server.listen`.
+    pub serve: bool,
+    /// Print the log and, during a trial, sample lines to stdout.
+    pub echo: bool,
+    /// Sample lines printed per second during a trial (with `echo`).
+    pub print_hz: f64,
+    /// Capacity of the acquisition event queue.
+    pub queue: usize,
+}
+
+impl Default for DaemonOptions {
+    /// No trial at start, recording, serving, quiet.
+    fn default() -> Self {
+        Self {
+            config_text: String::new(),
+            first_trial: None,
+            first_trial_duration: None,
+            exit_after_trial: false,
+            record: true,
+            serve: true,
+            echo: false,
+            print_hz: 4.0,
+            queue: 16_384,
+        }
+    }
+}
+
+/// One trial the daemon ran.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrialOutcome {
+    /// Its name.
+    pub name: String,
+    /// Its recording, if recorded.
+    pub path: Option<PathBuf>,
+    /// Messages recorded.
+    pub recorded: RecordCounts,
+    /// Why it ended.
+    pub ended: String,
+}
+
+/// What the daemon did, from start to shutdown.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DaemonSummary {
+    /// Polls made.
+    pub polls: u64,
+    /// Poll deadlines skipped.
+    pub skipped: u64,
+    /// The latest poll wake-up after its deadline.
+    pub max_lateness: Duration,
+    /// Health per segment.
+    pub health: Vec<SegmentHealth>,
+    /// Acquisition events dropped because the hub fell behind (should be 0).
+    pub dropped: u64,
+    /// The trials, in order.
+    pub trials: Vec<TrialOutcome>,
+    /// How long the daemon ran.
+    pub elapsed: Duration,
+}
+
+/// The daemon (see the module documentation).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Daemon;
+
+/// A running daemon. Dropping it shuts it down (finalizing a running trial's file).
+#[derive(Debug)]
+pub struct DaemonHandle {
+    local_addr: Option<SocketAddr>,
+    token: String,
+    stop: Arc<AtomicBool>,
+    hub: Option<JoinHandle<Result<DaemonSummary>>>,
+    log: Log,
+    trial: Arc<Mutex<Option<String>>>,
+}
+
+impl DaemonHandle {
+    /// The TCP endpoint actually bound (`None` without a server).
+    pub fn local_addr(&self) -> Option<SocketAddr> {
+        self.local_addr
+    }
+
+    /// The control token (the configured one, or the one made up at start).
+    pub fn token(&self) -> &str {
+        &self.token
+    }
+
+    /// The trial running now, if any.
+    pub fn trial(&self) -> Option<String> {
+        self.trial.lock().ok().and_then(|t| t.clone())
+    }
+
+    /// Whether the daemon has stopped on its own (after its trial with `exit_after_trial`, or
+    /// a fatal error).
+    pub fn is_finished(&self) -> bool {
+        self.hub.as_ref().is_none_or(JoinHandle::is_finished)
+    }
+
+    /// The log so far (the last few thousand lines), oldest first.
+    pub fn log_lines(&self) -> Vec<String> {
+        self.log.lines()
+    }
+
+    /// Waits until the daemon stops on its own (see [`DaemonHandle::is_finished`]).
+    pub fn wait(mut self) -> Result<DaemonSummary> {
+        self.join()
+    }
+
+    /// Stops the daemon: ends any trial (its file finalized), stops the stage, the threads
+    /// and the server.
+    pub fn shutdown(mut self) -> Result<DaemonSummary> {
+        self.stop.store(true, Ordering::Relaxed);
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<DaemonSummary> {
+        let hub = self
+            .hub
+            .take()
+            .ok_or_else(|| anyhow!("the daemon was already joined"))?;
+        hub.join()
+            .map_err(|_| anyhow!("the daemon's hub thread panicked"))?
+    }
+}
+
+impl Drop for DaemonHandle {
+    fn drop(&mut self) {
+        if self.hub.is_some() {
+            self.stop.store(true, Ordering::Relaxed);
+            let _ = self.join();
+        }
+    }
+}
+
+/// Lines for humans: echoed to stdout if asked, and kept.
+#[derive(Debug, Clone)]
+struct Log {
+    echo: bool,
+    lines: Arc<Mutex<VecDeque<String>>>,
+}
+
+impl Log {
+    fn line(&self, text: String) {
+        if self.echo {
+            println!("{text}");
+        }
+        if let Ok(mut lines) = self.lines.lock() {
+            if lines.len() >= LOG_LINES_KEPT {
+                lines.pop_front();
+            }
+            lines.push_back(text);
+        }
+    }
+
+    fn lines(&self) -> Vec<String> {
+        self.lines
+            .lock()
+            .map(|l| l.iter().cloned().collect())
+            .unwrap_or_default()
+    }
+}
+
+/// Whether the stage and the servo answer, as the motion thread last found them.
+#[derive(Debug)]
+struct RigStatus {
+    stage: AtomicBool,
+    servo: AtomicBool,
+}
+
+/// Where a commanded stage move goes, millimetres.
+#[derive(Debug, Clone, Copy)]
+enum MoveTarget {
+    To(f64),
+    By(f64),
+}
+
+type Reply = SyncSender<Result<String, String>>;
+
+enum MotionCommand {
+    RunScript {
+        id: u64,
+        trial: Box<TrialConfig>,
+    },
+    EndScript,
+    Move {
+        target: MoveTarget,
+        speed_mm_per_s: f64,
+        reply: Reply,
+    },
+    SetBase {
+        angle_deg: f64,
+        reply: Reply,
+    },
+    StopAll {
+        reply: Reply,
+    },
+}
+
+enum HubRequest {
+    Start {
+        name: String,
+        metadata: BTreeMap<String, String>,
+        reply: Reply,
+    },
+    Stop {
+        why: &'static str,
+        reply: Reply,
+    },
+}
+
+fn ask<T>(sender: &Sender<T>, make: impl FnOnce(Reply) -> T) -> Result<String, String> {
+    let (reply, answer) = sync_channel(1);
+    sender
+        .send(make(reply))
+        .map_err(|_| "the daemon is shutting down".to_owned())?;
+    answer
+        .recv_timeout(CONTROL_TIMEOUT)
+        .map_err(|_| "the daemon did not answer in time".to_owned())?
+}
+
+/// The control commands, from any client thread.
+struct DaemonControl {
+    hub: Mutex<Sender<HubRequest>>,
+    motion: Mutex<Sender<MotionCommand>>,
+    trial: Arc<Mutex<Option<String>>>,
+    max_speed_mm_per_s: f64,
+}
+
+impl DaemonControl {
+    fn hub(&self) -> Result<Sender<HubRequest>, String> {
+        self.hub
+            .lock()
+            .map(|s| s.clone())
+            .map_err(|_| "the daemon is shutting down".to_owned())
+    }
+
+    fn motion(&self) -> Result<Sender<MotionCommand>, String> {
+        self.motion
+            .lock()
+            .map(|s| s.clone())
+            .map_err(|_| "the daemon is shutting down".to_owned())
+    }
+
+    fn refuse_during_trial(&self, what: &str) -> Result<(), String> {
+        match self.trial.lock().ok().and_then(|t| t.clone()) {
+            Some(name) => Err(format!(
+                "{what} refused: trial {name:?} is running and its script drives the stage and \
+                 the base; send stop_trial (or stop_all) first"
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+impl ControlHandler for DaemonControl {
+    fn handle(&self, command: ControlCommand) -> Result<String, String> {
+        match command {
+            ControlCommand::StartTrial { name, metadata } => {
+                ask(&self.hub()?, |reply| HubRequest::Start {
+                    name,
+                    metadata,
+                    reply,
+                })
+            }
+            ControlCommand::StopTrial => ask(&self.hub()?, |reply| HubRequest::Stop {
+                why: "stop_trial",
+                reply,
+            }),
+            ControlCommand::MoveStage {
+                target,
+                speed_m_per_s,
+            } => {
+                self.refuse_during_trial("move_stage")?;
+                let speed_mm_per_s =
+                    speed_m_per_s.map_or(self.max_speed_mm_per_s / 2.0, |v| v * 1e3);
+                if speed_mm_per_s > self.max_speed_mm_per_s {
+                    return Err(format!(
+                        "move_stage refused: {speed_mm_per_s} mm/s is faster than \
+                         stage.max_speed_mm_per_s = {} mm/s",
+                        self.max_speed_mm_per_s
+                    ));
+                }
+                let target = match target {
+                    StageTarget::Absolute { position_m } => MoveTarget::To(position_m * 1e3),
+                    StageTarget::Relative { distance_m } => MoveTarget::By(distance_m * 1e3),
+                };
+                ask(&self.motion()?, |reply| MotionCommand::Move {
+                    target,
+                    speed_mm_per_s,
+                    reply,
+                })
+            }
+            ControlCommand::SetBaseAngle { angle_deg } => {
+                self.refuse_during_trial("set_base_angle")?;
+                ask(&self.motion()?, |reply| MotionCommand::SetBase {
+                    angle_deg,
+                    reply,
+                })
+            }
+            ControlCommand::StopAll => {
+                let stopped = ask(&self.motion()?, |reply| MotionCommand::StopAll { reply });
+                let ended = ask(&self.hub()?, |reply| HubRequest::Stop {
+                    why: "stop_all",
+                    reply,
+                });
+                let stopped = stopped?;
+                Ok(match ended {
+                    Ok(ended) => format!("{stopped}; {ended}"),
+                    Err(_) => format!("{stopped}; no trial was running"),
+                })
+            }
+        }
+    }
+}
+
+/// A control token for this run when none is configured: not guessable from outside.
+fn generated_token() -> String {
+    use std::hash::{BuildHasher, Hasher};
+    let mut hasher = std::collections::hash_map::RandomState::new().build_hasher();
+    hasher.write_u128(
+        SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos()),
+    );
+    hasher.write_u32(std::process::id());
+    format!("{:016x}", hasher.finish())
+}
+
+/// `<dir>/<name>.mcap`, or `<dir>/<name>-2.mcap` and so on if it exists.
+fn free_path(dir: &Path, name: &str) -> PathBuf {
+    let first = dir.join(format!("{name}.mcap"));
+    if !first.exists() {
+        return first;
+    }
+    (2u32..)
+        .map(|k| dir.join(format!("{name}-{k}.mcap")))
+        .find(|p| !p.exists())
+        .unwrap_or(first)
+}
+
+type PollJoin = Box<dyn FnOnce() -> Result<(u64, u64, Duration, Vec<SegmentHealth>)> + Send>;
+
+impl Daemon {
+    /// Starts the daemon of `config`: opens the bus (`bus.device`), the stage and the servo,
+    /// binds the TCP server, starts the threads and, if asked, the first trial. Every error
+    /// names the configuration key or the file at fault.
+    pub fn start(config: Config, options: DaemonOptions) -> Result<DaemonHandle> {
+        if !(options.print_hz.is_finite() && options.print_hz > 0.0) {
+            bail!("the print rate must be positive, got {}", options.print_hz);
+        }
+        if let Some(name) = &options.first_trial
+            && config.trial(name.as_deref()).is_none()
+        {
+            bail!(
+                "no trial {:?} in the configuration (trials: {})",
+                name.as_deref().unwrap_or("(first)"),
+                trial_names(&config)
+            );
+        }
+        let log = Log {
+            echo: options.echo,
+            lines: Arc::new(Mutex::new(VecDeque::new())),
+        };
+        let token_text = config.server.token.clone().unwrap_or_else(generated_token);
+        let token = ControlToken::new(token_text.clone()).context("`server.token` is empty")?;
+        let addresses = config.bus.addresses();
+        let clock = TrialClock::start();
+        let stop_threads = Arc::new(AtomicBool::new(false));
+        let (events, receiver) = event_channel(options.queue);
+
+        // The bus first (polling starts), then the stage and servo: a missing device fails
+        // before anything is sent to the others.
+        let sim_state: Option<Shared<SimState>> = config
+            .bus
+            .is_sim()
+            .then(|| Arc::new(Mutex::new(SimState::default())));
+        let settings = PollSettings {
+            period: Duration::from_secs_f64(1.0 / config.bus.poll_hz),
+            counter_check_every: config.bus.counter_check_every,
+            spin: Duration::from_micros(config.bus.spin_us),
+            realtime_priority: config.bus.realtime_priority,
+        };
+        let (poll_join, bus_description) = match &sim_state {
+            Some(state) => {
+                let handle = spawn_poller(
+                    Poller::new(sim_bus(&config), &addresses),
+                    clock,
+                    settings,
+                    sense_with_faults(sense(Arc::clone(state)), &config),
+                    events.clone(),
+                    Arc::clone(&stop_threads),
+                )
+                .context("starting the polling thread")?;
+                let join: PollJoin = Box::new(move || {
+                    let r = handle
+                        .join()
+                        .map_err(|_| anyhow!("the polling thread panicked"))?;
+                    Ok((r.polls, r.skipped, r.max_lateness, r.health))
+                });
+                (join, "simulated rig (virtual I2C bus)".to_owned())
+            }
+            None => hardware_poller(&config, &addresses, clock, settings, &events, &stop_threads)?,
+        };
+        let rig = match DaemonRig::open(&config, sim_state.clone()) {
+            Ok(rig) => rig,
+            Err(e) => {
+                stop_threads.store(true, Ordering::Relaxed);
+                let _ = poll_join();
+                return Err(e);
+            }
+        };
+        let rig_description = format!("{}, {}", rig.stage_description(), rig.servo_description());
+        let rig_status = Arc::new(RigStatus {
+            stage: AtomicBool::new(true),
+            servo: AtomicBool::new(true),
+        });
+
+        let (motion_tx, motion_rx) = channel();
+        let (hub_tx, hub_rx) = channel();
+        let trial_state = Arc::new(Mutex::new(None));
+        let script_done = Arc::new(AtomicU64::new(0));
+        let motion = {
+            let events = events.clone();
+            let stop = Arc::clone(&stop_threads);
+            let status = Arc::clone(&rig_status);
+            let done = Arc::clone(&script_done);
+            let periods = (
+                Duration::from_secs_f64(1.0 / config.stage.sample_hz),
+                Duration::from_secs_f64(1.0 / config.servo.sample_hz),
+            );
+            std::thread::Builder::new()
+                .name("antennad-motion".to_owned())
+                .spawn(move || {
+                    motion_loop(
+                        rig, clock, periods, &events, &motion_rx, &stop, &status, &done,
+                    )
+                })
+                .context("starting the motion thread")?
+        };
+
+        let server = if options.serve {
+            let handler = Arc::new(DaemonControl {
+                hub: Mutex::new(hub_tx),
+                motion: Mutex::new(motion_tx.clone()),
+                trial: Arc::clone(&trial_state),
+                max_speed_mm_per_s: config.stage.max_speed_mm_per_s,
+            });
+            let server_options = ServerOptions {
+                segment_addresses: addresses.clone(),
+                ..ServerOptions::default()
+            };
+            match StreamServer::bind_with(
+                config.server.listen.as_str(),
+                token,
+                handler,
+                server_options,
+            ) {
+                Ok(server) => Some(server),
+                Err(e) => {
+                    stop_threads.store(true, Ordering::Relaxed);
+                    let _ = motion.join();
+                    let _ = poll_join();
+                    return Err(anyhow!(e)).context(format!(
+                        "`server.listen` = {:?}: starting the TCP server",
+                        config.server.listen
+                    ));
+                }
+            }
+        } else {
+            None
+        };
+        let local_addr = server.as_ref().map(StreamServer::local_addr);
+        let first = &addresses[0];
+        let last = &addresses[addresses.len() - 1];
+        log.line(format!(
+            "antennad: {bus_description}; {} segments at {first:#04x}..={last:#04x}, polling at \
+             {} Hz; {rig_description}",
+            addresses.len(),
+            config.bus.poll_hz,
+        ));
+        if let Some(addr) = local_addr {
+            let token_shown = if config.server.token.is_some() {
+                "(the configured server.token)".to_owned()
+            } else {
+                token_text.clone()
+            };
+            log.line(format!(
+                "  watch it with: nc {ip} {port}   (or, without nc: cat </dev/tcp/{ip}/{port}; \
+                 newline-delimited JSON, docs/stream-protocol.md; control token: {token_shown})",
+                ip = addr.ip(),
+                port = addr.port()
+            ));
+        }
+
+        let stop = Arc::new(AtomicBool::new(false));
+        let mut hub = Hub {
+            calibrations: config.bus.calibrations(),
+            config,
+            options: options.clone(),
+            clock,
+            server,
+            log: log.clone(),
+            trial: None,
+            trial_state: Arc::clone(&trial_state),
+            next_trial_id: 1,
+            motion: motion_tx,
+            script_done,
+            rig_status,
+            stage_mm: None,
+            base_rad: None,
+            health: addresses
+                .iter()
+                .map(|&address| SegmentStatus {
+                    address,
+                    ok: 0,
+                    nack: 0,
+                    pec_error: 0,
+                    stale: 0,
+                })
+                .collect(),
+            note: None,
+            status_due: Instant::now(),
+            outcomes: Vec::new(),
+            finished: false,
+        };
+        if let Some(name) = &options.first_trial {
+            let name = hub
+                .config
+                .trial(name.as_deref())
+                .map(|t| t.name.clone())
+                .unwrap_or_default();
+            if let Err(e) = hub.start_trial(&name, BTreeMap::new(), options.first_trial_duration) {
+                stop_threads.store(true, Ordering::Relaxed);
+                let _ = motion.join();
+                let _ = poll_join();
+                bail!("starting trial {name:?}: {e}");
+            }
+        }
+        let hub_thread = {
+            let stop = Arc::clone(&stop);
+            std::thread::Builder::new()
+                .name("antennad-hub".to_owned())
+                .spawn(move || {
+                    hub.run(&receiver, &hub_rx, &stop);
+                    stop_threads.store(true, Ordering::Relaxed);
+                    let motion_ok = motion.join().is_ok();
+                    let polled = poll_join();
+                    // Whatever the threads sent last.
+                    hub.drain(&receiver);
+                    hub.finish();
+                    if !motion_ok {
+                        bail!("the motion thread panicked");
+                    }
+                    let (polls, skipped, max_lateness, health) = polled?;
+                    Ok(DaemonSummary {
+                        polls,
+                        skipped,
+                        max_lateness,
+                        health,
+                        dropped: events.dropped(),
+                        trials: hub.outcomes,
+                        elapsed: clock.elapsed(),
+                    })
+                })
+                .context("starting the hub thread")?
+        };
+        Ok(DaemonHandle {
+            local_addr,
+            token: token_text,
+            stop,
+            hub: Some(hub_thread),
+            log,
+            trial: trial_state,
+        })
+    }
+}
+
+/// The simulated segments' hook, with `sim.faults` applied by the time since the start.
+fn sense_with_faults(
+    mut sense: impl FnMut(&mut SimBus, Duration) + Send + 'static,
+    config: &Config,
+) -> impl FnMut(&mut SimBus, Duration) + Send + 'static {
+    let faults: Vec<(usize, SegmentFault, Duration, Duration)> = config
+        .sim
+        .faults
+        .iter()
+        .filter_map(|f| {
+            let index = config
+                .bus
+                .segments
+                .iter()
+                .position(|s| s.address == f.address)?;
+            let kind = match f.kind {
+                SimFaultKind::Nack => SegmentFault::Nack,
+                SimFaultKind::Pec => SegmentFault::CorruptPec,
+                SimFaultKind::Stuck => SegmentFault::StuckCounter,
+            };
+            Some((
+                index,
+                kind,
+                Duration::from_secs_f64(f.from_s),
+                Duration::from_secs_f64(f.until_s),
+            ))
+        })
+        .collect();
+    let segments = config.bus.segments.len();
+    move |bus, now| {
+        if !faults.is_empty() {
+            for k in 0..segments {
+                let fault = faults
+                    .iter()
+                    .find(|(index, _, from, until)| *index == k && *from <= now && now < *until)
+                    .map_or(SegmentFault::None, |f| f.1);
+                if let Some(segment) = bus.segment_mut(k) {
+                    segment.set_fault(fault);
+                }
+            }
+        }
+        sense(bus, now);
+    }
+}
+
+fn trial_names(config: &Config) -> String {
+    config
+        .trials
+        .iter()
+        .map(|t| t.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The polling thread on the Linux I2C bus of `bus.device`.
+#[cfg(target_os = "linux")]
+fn hardware_poller(
+    config: &Config,
+    addresses: &[u8],
+    clock: TrialClock,
+    settings: PollSettings,
+    events: &EventSender,
+    stop: &Arc<AtomicBool>,
+) -> Result<(PollJoin, String)> {
+    let bus = crate::i2c_bus::LinuxI2cBus::open(&config.bus.device, addresses)?;
+    let handle = spawn_poller(
+        Poller::new(bus, addresses),
+        clock,
+        settings,
+        |_: &mut crate::i2c_bus::LinuxI2cBus, _| {},
+        events.clone(),
+        Arc::clone(stop),
+    )
+    .context("starting the polling thread")?;
+    let join: PollJoin = Box::new(move || {
+        let r = handle
+            .join()
+            .map_err(|_| anyhow!("the polling thread panicked"))?;
+        Ok((r.polls, r.skipped, r.max_lateness, r.health))
+    });
+    Ok((join, format!("I2C bus {}", config.bus.device)))
+}
+
+/// The polling thread on a hardware bus: Linux only.
+#[cfg(not(target_os = "linux"))]
+fn hardware_poller(
+    config: &Config,
+    _addresses: &[u8],
+    _clock: TrialClock,
+    _settings: PollSettings,
+    _events: &EventSender,
+    _stop: &Arc<AtomicBool>,
+) -> Result<(PollJoin, String)> {
+    bail!(
+        "`bus.device` = {:?}: hardware I2C needs Linux; use \"sim\"",
+        config.bus.device
+    )
+}
+
+/// A trial being recorded.
+struct ActiveTrial {
+    id: u64,
+    name: String,
+    start_ns: u64,
+    /// Zero: until the script is done.
+    duration: Duration,
+    recorder: Option<TrialRecorder>,
+    print_every: u64,
+}
+
+struct Hub {
+    config: Config,
+    options: DaemonOptions,
+    clock: TrialClock,
+    calibrations: Vec<Calibration>,
+    server: Option<StreamServer>,
+    log: Log,
+    trial: Option<ActiveTrial>,
+    trial_state: Arc<Mutex<Option<String>>>,
+    next_trial_id: u64,
+    motion: Sender<MotionCommand>,
+    script_done: Arc<AtomicU64>,
+    rig_status: Arc<RigStatus>,
+    stage_mm: Option<f64>,
+    base_rad: Option<f64>,
+    health: Vec<SegmentStatus>,
+    note: Option<String>,
+    status_due: Instant,
+    outcomes: Vec<TrialOutcome>,
+    finished: bool,
+}
+
+impl Hub {
+    fn run(
+        &mut self,
+        receiver: &Receiver<AcquisitionEvent>,
+        requests: &Receiver<HubRequest>,
+        stop: &AtomicBool,
+    ) {
+        while !stop.load(Ordering::Relaxed) && !self.finished {
+            if let Ok(event) = receiver.recv_timeout(Duration::from_millis(10)) {
+                self.on_event(&event);
+                self.drain(receiver);
+            }
+            while let Ok(request) = requests.try_recv() {
+                self.on_request(request);
+            }
+            self.check_trial_end();
+            if Instant::now() >= self.status_due {
+                self.publish_status();
+            }
+        }
+    }
+
+    fn drain(&mut self, receiver: &Receiver<AcquisitionEvent>) {
+        while let Ok(event) = receiver.try_recv() {
+            self.on_event(&event);
+        }
+    }
+
+    fn finish(&mut self) {
+        if self.trial.is_some() {
+            self.end_trial("the daemon stopped");
+        }
+        if let Some(server) = self.server.take() {
+            server.shutdown();
+        }
+    }
+
+    fn t_s(&self, t_ns: u64) -> f64 {
+        t_ns as f64 * 1e-9
+    }
+
+    fn on_request(&mut self, request: HubRequest) {
+        match request {
+            HubRequest::Start {
+                name,
+                metadata,
+                reply,
+            } => {
+                let _ = reply.send(self.start_trial(&name, metadata, None));
+            }
+            HubRequest::Stop { why, reply } => {
+                let answer = if self.trial.is_some() {
+                    Ok(self.end_trial(why))
+                } else {
+                    Err("no trial is running".to_owned())
+                };
+                let _ = reply.send(answer);
+            }
+        }
+    }
+
+    fn start_trial(
+        &mut self,
+        name: &str,
+        metadata: BTreeMap<String, String>,
+        duration: Option<Duration>,
+    ) -> Result<String, String> {
+        if let Some(trial) = &self.trial {
+            return Err(format!(
+                "trial {:?} is already running; send stop_trial first",
+                trial.name
+            ));
+        }
+        let Some(config) = self.config.trial(Some(name)).cloned() else {
+            return Err(format!(
+                "no trial {name:?} in the configuration (trials: {})",
+                trial_names(&self.config)
+            ));
+        };
+        let mut notes = config.metadata.clone();
+        notes.extend(metadata);
+        let recorder = if self.options.record {
+            let dir = &self.config.data_dir;
+            std::fs::create_dir_all(dir)
+                .map_err(|e| format!("creating the data directory {}: {e}", dir.display()))?;
+            let path = free_path(dir, &config.name);
+            let metadata = TrialMetadata {
+                trial: config.name.clone(),
+                started_unix_s: SystemTime::now()
+                    .duration_since(UNIX_EPOCH)
+                    .map_or(0.0, |d| d.as_secs_f64()),
+                config: self.options.config_text.clone(),
+                notes,
+            };
+            Some(
+                TrialRecorder::create(&path, &metadata)
+                    .map_err(|e| format!("creating the recording {}: {e}", path.display()))?,
+            )
+        } else {
+            None
+        };
+        let id = self.next_trial_id;
+        self.next_trial_id += 1;
+        let duration = duration.unwrap_or(Duration::from_secs_f64(config.duration_s));
+        let start_ns = self.clock.elapsed_ns();
+        let moves = config
+            .moves
+            .iter()
+            .map(|m| format!("{:+} mm at {} mm/s", m.distance_mm, m.speed_mm_per_s))
+            .collect::<Vec<_>>()
+            .join(", then ");
+        let mut message = format!(
+            "trial {:?} started: base angle {} deg, stage moves {}, {}",
+            config.name,
+            config.base_angle_deg,
+            if moves.is_empty() { "none" } else { &moves },
+            if duration.is_zero() {
+                "until its moves are done".to_owned()
+            } else {
+                format!("for {} s", duration.as_secs_f64())
+            }
+        );
+        if let Some(recorder) = &recorder {
+            message.push_str(&format!("; recording to {}", recorder.path().display()));
+        }
+        self.log.line(format!("antennad: {message}"));
+        if self.options.echo {
+            self.log.line(format!(
+                "{:>7} {:>8}  joint angles, deg (base to tip)                      touch",
+                "t_s", "stage_mm"
+            ));
+        }
+        let print_every = ((self.config.bus.poll_hz / self.options.print_hz).round() as u64).max(1);
+        self.trial = Some(ActiveTrial {
+            id,
+            name: config.name.clone(),
+            start_ns,
+            duration,
+            recorder,
+            print_every,
+        });
+        if let Ok(mut state) = self.trial_state.lock() {
+            *state = Some(config.name.clone());
+        }
+        let _ = self.motion.send(MotionCommand::RunScript {
+            id,
+            trial: Box::new(config),
+        });
+        self.note = Some(message.clone());
+        self.publish_status();
+        Ok(message)
+    }
+
+    /// Ends the running trial (there must be one): stops its script and the stage, finalizes
+    /// the file. Returns what happened.
+    fn end_trial(&mut self, why: &str) -> String {
+        let Some(trial) = self.trial.take() else {
+            return "no trial was running".to_owned();
+        };
+        if let Ok(mut state) = self.trial_state.lock() {
+            *state = None;
+        }
+        let _ = self.motion.send(MotionCommand::EndScript);
+        let (path, recorded, result) = match trial.recorder {
+            Some(recorder) => {
+                let written = recorder.written();
+                let path = recorder.path().to_path_buf();
+                let result = recorder.finish().map(|_| ());
+                (Some(path), written, result)
+            }
+            None => (None, RecordCounts::default(), Ok(())),
+        };
+        let mut message = format!("trial {:?} ended ({why})", trial.name);
+        if let Some(path) = &path {
+            match result {
+                Ok(()) => message.push_str(&format!(
+                    "; recorded {} polls, {} stage and {} servo samples to {}",
+                    recorded.segments,
+                    recorded.stage,
+                    recorded.servo,
+                    path.display()
+                )),
+                Err(e) => message.push_str(&format!("; closing {} failed: {e}", path.display())),
+            }
+        }
+        self.log.line(format!("antennad: {message}"));
+        self.outcomes.push(TrialOutcome {
+            name: trial.name,
+            path,
+            recorded,
+            ended: why.to_owned(),
+        });
+        if self.options.exit_after_trial {
+            self.finished = true;
+        }
+        self.note = Some(message.clone());
+        self.publish_status();
+        message
+    }
+
+    fn check_trial_end(&mut self) {
+        let Some(trial) = &self.trial else { return };
+        let elapsed_ns = self.clock.elapsed_ns().saturating_sub(trial.start_ns);
+        let why = if trial.duration.is_zero() {
+            (self.script_done.load(Ordering::Relaxed) == trial.id).then_some("its moves are done")
+        } else {
+            (u128::from(elapsed_ns) >= trial.duration.as_nanos()).then_some("its duration passed")
+        };
+        if let Some(why) = why {
+            self.end_trial(why);
+        }
+    }
+
+    /// Records `f`'s message if a trial runs and `t_ns` is inside it; a failing recorder ends
+    /// the trial.
+    fn record(
+        &mut self,
+        t_ns: u64,
+        f: impl FnOnce(&mut TrialRecorder, f64) -> Result<(), crate::record::RecordError>,
+    ) {
+        let Some(trial) = &mut self.trial else { return };
+        if t_ns < trial.start_ns {
+            return;
+        }
+        let t_s = (t_ns - trial.start_ns) as f64 * 1e-9;
+        let Some(recorder) = &mut trial.recorder else {
+            return;
+        };
+        if let Err(e) = f(recorder, t_s).and_then(|()| recorder.flush_if_due(t_s)) {
+            self.log
+                .line(format!("antennad: recording failed, ending the trial: {e}"));
+            self.end_trial("the recording failed");
+        }
+    }
+
+    fn on_event(&mut self, event: &AcquisitionEvent) {
+        match event {
+            AcquisitionEvent::Poll(poll) => self.on_poll(poll),
+            AcquisitionEvent::Stage { t_ns, position_mm } => {
+                self.stage_mm = Some(*position_mm);
+                let position_m = position_mm * 1e-3;
+                self.record(*t_ns, |r, t_s| {
+                    r.record_stage(&StageMessage { t_s, position_m })
+                });
+            }
+            AcquisitionEvent::Base { t_ns, angle_rad } => {
+                self.base_rad = Some(*angle_rad);
+                let base_angle_rad = *angle_rad;
+                self.record(*t_ns, |r, t_s| {
+                    r.record_servo(&ServoMessage {
+                        t_s,
+                        base_angle_rad,
+                    })
+                });
+            }
+            AcquisitionEvent::Health {
+                t_ns,
+                address,
+                change,
+            } => {
+                let text = match change {
+                    HealthChange::Stale => {
+                        format!("segment {address:#04x}: counter stopped (stale)")
+                    }
+                    HealthChange::Recovered => {
+                        format!("segment {address:#04x}: counter moving again")
+                    }
+                };
+                self.log
+                    .line(format!("{:7.2}   -- {text}", self.t_s(*t_ns)));
+                self.record_log(*t_ns, &text);
+                self.note = Some(text);
+                self.publish_status();
+            }
+            AcquisitionEvent::Note { t_ns, text } => {
+                self.log
+                    .line(format!("{:7.2}   -- {text}", self.t_s(*t_ns)));
+                self.record_log(*t_ns, text);
+                self.note = Some(text.clone());
+                self.publish_status();
+            }
+        }
+    }
+
+    fn record_log(&mut self, t_ns: u64, text: &str) {
+        self.record(t_ns, |r, t_s| {
+            r.record_log(&LogMessage {
+                t_s,
+                text: text.to_owned(),
+            })
+        });
+    }
+
+    fn on_poll(&mut self, poll: &PollRecord) {
+        for (k, (reading, status)) in poll.readings.iter().zip(&mut self.health).enumerate() {
+            match reading.result {
+                Ok(_) => status.ok += 1,
+                Err(PollError::Nack { .. }) => status.nack += 1,
+                Err(PollError::Corrupted { .. }) => status.pec_error += 1,
+                Err(PollError::Bus { .. }) => {}
+            }
+            if poll.is_stale(k) {
+                status.stale += 1;
+            }
+        }
+        if !self.rig_status.stage.load(Ordering::Relaxed) {
+            self.stage_mm = None;
+        }
+        if !self.rig_status.servo.load(Ordering::Relaxed) {
+            self.base_rad = None;
+        }
+        if let Some(server) = &self.server {
+            server.publish(&StreamMessage::Samples {
+                seq: poll.seq,
+                t_ns: poll.t_ns,
+                segments: poll
+                    .readings
+                    .iter()
+                    .zip(&self.calibrations)
+                    .enumerate()
+                    .map(|(k, (r, c))| net_sample(r, *c, poll.is_stale(k)))
+                    .collect(),
+                stage_position_m: self.stage_mm.map(|mm| mm * 1e-3),
+                base_angle_deg: self.base_rad.map(f64::to_degrees),
+            });
+        }
+        let calibrations = self.calibrations.clone();
+        let seq = poll.seq;
+        self.record(poll.t_ns, |r, t_s| {
+            r.record_segments(&SegmentsMessage {
+                seq: Some(seq),
+                t_s,
+                segments: poll
+                    .readings
+                    .iter()
+                    .zip(&calibrations)
+                    .enumerate()
+                    .map(|(k, (r, &c))| SegmentSample::from_reading(r, c, poll.is_stale(k)))
+                    .collect(),
+            })
+        });
+        if self.options.echo
+            && let Some(trial) = &self.trial
+            && poll.t_ns >= trial.start_ns
+            && poll.seq.is_multiple_of(trial.print_every)
+        {
+            let t_s = (poll.t_ns - trial.start_ns) as f64 * 1e-9;
+            self.log
+                .line(sample_line(t_s, self.stage_mm, poll, &self.calibrations));
+        }
+    }
+
+    fn publish_status(&mut self) {
+        self.status_due = Instant::now() + Duration::from_secs(1);
+        let Some(server) = &self.server else { return };
+        let mut notes = Vec::new();
+        if !self.rig_status.stage.load(Ordering::Relaxed) {
+            notes.push("stage unavailable".to_owned());
+        }
+        if !self.rig_status.servo.load(Ordering::Relaxed) {
+            notes.push("servo unavailable".to_owned());
+        }
+        if let Some(note) = self.note.take() {
+            notes.push(note);
+        }
+        server.publish(&StreamMessage::Status {
+            t_ns: self.clock.elapsed_ns(),
+            trial: self.trial.as_ref().map(|t| t.name.clone()),
+            segments: self.health.clone(),
+            note: (!notes.is_empty()).then(|| notes.join("; ")),
+        });
+    }
+}
+
+fn net_sample(reading: &crate::SegmentReading, c: Calibration, stale: bool) -> NetSample {
+    match reading.result {
+        Ok(word) => NetSample {
+            address: reading.address,
+            angle_rad: Some(c.angle_rad(word.angle_counts())),
+            contact: Some(word.touch().any()),
+            counter: None,
+            error: None,
+            stale,
+        },
+        Err(e) => NetSample {
+            address: reading.address,
+            angle_rad: None,
+            contact: None,
+            counter: None,
+            error: Some(
+                match e {
+                    PollError::Nack { .. } => "nack",
+                    PollError::Corrupted { .. } => "pec",
+                    PollError::Bus { .. } => "bus",
+                }
+                .to_owned(),
+            ),
+            stale,
+        },
+    }
+}
+
+/// `   1.25    37.5   -3.1  -2.9 ...   ....#` : trial time, stage, angles, touch marks.
+fn sample_line(
+    t_s: f64,
+    stage_mm: Option<f64>,
+    poll: &PollRecord,
+    calibrations: &[Calibration],
+) -> String {
+    let mut angles = String::new();
+    let mut touches = String::new();
+    for (k, (reading, calibration)) in poll.readings.iter().zip(calibrations).enumerate() {
+        match reading.result {
+            Ok(word) => {
+                let deg = calibration.angle_rad(word.angle_counts()).to_degrees();
+                angles.push_str(&format!("{deg:6.1}"));
+                touches.push(if poll.is_stale(k) {
+                    's'
+                } else if word.touch().any() {
+                    '#'
+                } else {
+                    '.'
+                });
+            }
+            Err(_) => {
+                angles.push_str("   ---");
+                touches.push('?');
+            }
+        }
+    }
+    let stage = stage_mm.map_or("     ---".to_owned(), |mm| format!("{mm:8.1}"));
+    format!("{t_s:7.2} {stage} {angles}   {touches}")
+}
+
+/// A trial's script on the motion thread.
+struct Script {
+    id: u64,
+    trial: Box<TrialConfig>,
+    next_move: usize,
+    step: Step,
+}
+
+enum Step {
+    Idle,
+    Moving(usize),
+    Pausing(Duration),
+    Done,
+}
+
+/// Notes from the motion thread: a repeated failure is sent once a second, not every sample.
+struct Notes<'a> {
+    events: &'a EventSender,
+    last: Option<(String, Duration)>,
+}
+
+impl Notes<'_> {
+    fn send(&mut self, now: Duration, text: String) {
+        if let Some((last, at)) = &self.last
+            && *last == text
+            && now < *at + Duration::from_secs(1)
+        {
+            return;
+        }
+        self.last = Some((text.clone(), now));
+        self.events.send(AcquisitionEvent::Note {
+            t_ns: u64::try_from(now.as_nanos()).unwrap_or(u64::MAX),
+            text,
+        });
+    }
+}
+
+fn nanos(d: Duration) -> u64 {
+    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
+}
+
+/// The motion thread: samples the stage and the base at their own rates, carries out motion
+/// commands at once, runs a trial's script, and reports the stage and the servo vanishing and
+/// coming back.
+#[allow(clippy::too_many_arguments)]
+fn motion_loop(
+    mut rig: DaemonRig,
+    clock: TrialClock,
+    (stage_period, base_period): (Duration, Duration),
+    events: &EventSender,
+    commands: &Receiver<MotionCommand>,
+    stop: &AtomicBool,
+    status: &RigStatus,
+    script_done: &AtomicU64,
+) {
+    let mut stage_schedule = Schedule::new(clock, stage_period);
+    let mut base_schedule = Schedule::new(clock, base_period);
+    let mut notes = Notes { events, last: None };
+    let mut script: Option<Script> = None;
+    let mut stage_ok = true;
+    let mut servo_ok = true;
+    while !stop.load(Ordering::Relaxed) {
+        let stage_next = stage_schedule.next_deadline() <= base_schedule.next_deadline();
+        let due = stage_schedule
+            .next_deadline()
+            .min(base_schedule.next_deadline());
+        let now = clock.elapsed();
+        if due > now {
+            match commands.recv_timeout((due - now).min(Duration::from_millis(50))) {
+                Ok(command) => {
+                    let now = clock.elapsed();
+                    on_motion_command(&mut rig, command, now, &mut script, &mut notes);
+                    check_availability(&rig, &mut stage_ok, &mut servo_ok, status, &mut notes, now);
+                    continue;
+                }
+                Err(RecvTimeoutError::Timeout) => {
+                    if clock.elapsed() < due {
+                        continue;
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => {
+                    std::thread::sleep(due - now);
+                }
+            }
+        }
+        let tick = if stage_next {
+            stage_schedule.wait_next()
+        } else {
+            base_schedule.wait_next()
+        };
+        let now = tick.woke;
+        if stage_next {
+            match rig.stage_mm(now) {
+                Ok(position_mm) => events.send(AcquisitionEvent::Stage {
+                    t_ns: nanos(now),
+                    position_mm,
+                }),
+                Err(RigError::Unavailable { .. }) => {}
+                Err(e) => notes.send(now, format!("stage position unavailable: {e}")),
+            }
+        } else {
+            match rig.base_angle_rad(now) {
+                Ok(angle_rad) => events.send(AcquisitionEvent::Base {
+                    t_ns: nanos(now),
+                    angle_rad,
+                }),
+                Err(RigError::Unavailable { .. }) => {}
+                Err(e) => notes.send(now, format!("base angle unavailable: {e}")),
+            }
+        }
+        if let Some(s) = &mut script {
+            step_script(&mut rig, s, now, &mut notes);
+            if matches!(s.step, Step::Done) {
+                script_done.store(s.id, Ordering::Relaxed);
+            }
+        }
+        check_availability(&rig, &mut stage_ok, &mut servo_ok, status, &mut notes, now);
+    }
+    if let Err(e) = rig.stop(clock.elapsed()) {
+        notes.send(clock.elapsed(), format!("stopping the stage failed: {e}"));
+    }
+}
+
+fn check_availability(
+    rig: &DaemonRig,
+    stage_ok: &mut bool,
+    servo_ok: &mut bool,
+    status: &RigStatus,
+    notes: &mut Notes<'_>,
+    now: Duration,
+) {
+    let stage = rig.stage_available();
+    if stage != *stage_ok {
+        *stage_ok = stage;
+        status.stage.store(stage, Ordering::Relaxed);
+        notes.send(
+            now,
+            if stage {
+                format!(
+                    "stage back: {} reopened and on line; stage samples resume",
+                    rig.stage_description()
+                )
+            } else {
+                format!(
+                    "stage unavailable: {} vanished; polling and recording go on without stage \
+                     samples, reopening it every {} ms",
+                    rig.stage_description(),
+                    crate::rig::REOPEN_INTERVAL.as_millis()
+                )
+            },
+        );
+    }
+    let servo = rig.servo_available();
+    if servo != *servo_ok {
+        *servo_ok = servo;
+        status.servo.store(servo, Ordering::Relaxed);
+        notes.send(
+            now,
+            if servo {
+                format!("servo back: {} reopened", rig.servo_description())
+            } else {
+                format!(
+                    "servo unavailable: {} vanished; polling and recording go on without base \
+                     samples, reopening it every {} ms",
+                    rig.servo_description(),
+                    crate::rig::REOPEN_INTERVAL.as_millis()
+                )
+            },
+        );
+    }
+}
+
+fn on_motion_command(
+    rig: &mut DaemonRig,
+    command: MotionCommand,
+    now: Duration,
+    script: &mut Option<Script>,
+    notes: &mut Notes<'_>,
+) {
+    match command {
+        MotionCommand::RunScript { id, trial } => {
+            if let Err(e) = rig.set_base_angle_rad(trial.base_angle_deg.to_radians(), now) {
+                notes.send(now, format!("base angle refused: {e}"));
+            }
+            *script = Some(Script {
+                id,
+                trial,
+                next_move: 0,
+                step: Step::Idle,
+            });
+        }
+        MotionCommand::EndScript => {
+            if script.take().is_some()
+                && let Err(e) = rig.stop(now)
+            {
+                notes.send(now, format!("stopping the stage failed: {e}"));
+            }
+        }
+        MotionCommand::Move {
+            target,
+            speed_mm_per_s,
+            reply,
+        } => {
+            let result = match target {
+                MoveTarget::To(mm) => rig.start_move_to_mm(mm, speed_mm_per_s, now),
+                MoveTarget::By(mm) => rig.start_move_mm(mm, speed_mm_per_s, now),
+            };
+            let answer = match result {
+                Ok(()) => {
+                    let text = match target {
+                        MoveTarget::To(mm) => {
+                            format!("stage moving to {mm:.1} mm at {speed_mm_per_s} mm/s")
+                        }
+                        MoveTarget::By(mm) => {
+                            format!("stage moving {mm:+.1} mm at {speed_mm_per_s} mm/s")
+                        }
+                    };
+                    notes.send(now, text.clone());
+                    Ok(text)
+                }
+                Err(e) => {
+                    let text = format!("move_stage refused: {e}");
+                    notes.send(now, text.clone());
+                    Err(text)
+                }
+            };
+            let _ = reply.send(answer);
+        }
+        MotionCommand::SetBase { angle_deg, reply } => {
+            let answer = match rig.set_base_angle_rad(angle_deg.to_radians(), now) {
+                Ok(()) => Ok(format!("base angle set to {angle_deg} deg")),
+                Err(e) => Err(format!("set_base_angle refused: {e}")),
+            };
+            let (Ok(text) | Err(text)) = &answer;
+            notes.send(now, text.clone());
+            let _ = reply.send(answer);
+        }
+        MotionCommand::StopAll { reply } => {
+            *script = None;
+            let answer = match rig.stop(now) {
+                Ok(()) => Ok("stage stopped".to_owned()),
+                Err(e) => Err(format!("stopping the stage failed: {e}")),
+            };
+            let (Ok(text) | Err(text)) = &answer;
+            notes.send(now, format!("stop_all: {text}"));
+            let _ = reply.send(answer);
+        }
+    }
+}
+
+fn step_script(rig: &mut DaemonRig, script: &mut Script, now: Duration, notes: &mut Notes<'_>) {
+    script.step = match std::mem::replace(&mut script.step, Step::Idle) {
+        Step::Moving(j) => match rig.stage_moving(now) {
+            Ok(true) => Step::Moving(j),
+            Ok(false) => {
+                let pause = script.trial.moves.get(j).map_or(0.0, |m| m.pause_s);
+                Step::Pausing(now + Duration::from_secs_f64(pause))
+            }
+            Err(e) => {
+                notes.send(now, format!("stage failed: {e}"));
+                Step::Moving(j)
+            }
+        },
+        Step::Pausing(until) if now < until => Step::Pausing(until),
+        Step::Done => Step::Done,
+        Step::Pausing(_) | Step::Idle => match script.trial.moves.get(script.next_move).copied() {
+            Some(m) => {
+                let j = script.next_move;
+                match rig.start_move_mm(m.distance_mm, m.speed_mm_per_s, now) {
+                    Ok(()) => {
+                        script.next_move += 1;
+                        notes.send(
+                            now,
+                            format!(
+                                "move {}: {:+.1} mm at {} mm/s",
+                                j + 1,
+                                m.distance_mm,
+                                m.speed_mm_per_s
+                            ),
+                        );
+                        Step::Moving(j)
+                    }
+                    Err(RigError::Unavailable { .. }) => Step::Idle,
+                    Err(e) => {
+                        script.next_move += 1;
+                        notes.send(now, format!("move {} refused: {e}", j + 1));
+                        Step::Idle
+                    }
+                }
+            }
+            None => Step::Done,
+        },
+    };
+}

@@ -1,0 +1,98 @@
+//! Opening the hardware I2C bus (`bus.device = "/dev/i2c-N"`) through linux-embedded-hal,
+//! whose `I2cdev` implements embedded-hal 1.0's [`I2c`].
+//!
+//! linux-embedded-hal's `I2cdev` reopens the device whenever the target address changes;
+//! polling nine segments a millisecond would do that nine thousand times a second. So
+//! [`LinuxI2cBus`] opens one `I2cdev` per segment address at start (each keeps its address)
+//! plus one for any other address.
+//!
+//! ```
+//! use host_daemon::i2c_bus::LinuxI2cBus;
+//!
+//! let error = LinuxI2cBus::open("/dev/i2c-250", &[0x20]).unwrap_err();
+//! assert!(error.to_string().starts_with("`bus.device` = \"/dev/i2c-250\": cannot open"));
+//! ```
+
+use embedded_hal::i2c::{ErrorType, I2c, Operation};
+use linux_embedded_hal::{I2CError, I2cdev};
+
+/// The I2C device named by `bus.device` could not be opened.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "`bus.device` = {path:?}: cannot open the I2C bus: {reason} (is the i2c-dev module loaded, \
+     the bus enabled and this user allowed to open it? bus.device = \"sim\" runs the \
+     simulated rig)"
+)]
+pub struct BusOpenError {
+    /// The device path from the configuration.
+    pub path: String,
+    /// What the kernel said.
+    pub reason: String,
+}
+
+/// A Linux I2C character device, one open file per segment address.
+pub struct LinuxI2cBus {
+    path: String,
+    devices: Vec<(u8, I2cdev)>,
+    other: I2cdev,
+}
+
+impl std::fmt::Debug for LinuxI2cBus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LinuxI2cBus")
+            .field("path", &self.path)
+            .field("addresses", &self.addresses())
+            .finish_non_exhaustive()
+    }
+}
+
+impl LinuxI2cBus {
+    /// Opens the I2C character device at `path` (e.g. `/dev/i2c-1`) once per address in
+    /// `addresses` and once more for any other address.
+    pub fn open(path: &str, addresses: &[u8]) -> Result<Self, BusOpenError> {
+        let open = || {
+            I2cdev::new(path).map_err(|e| BusOpenError {
+                path: path.to_owned(),
+                reason: e.to_string(),
+            })
+        };
+        let other = open()?;
+        let devices = addresses
+            .iter()
+            .map(|&a| open().map(|d| (a, d)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            path: path.to_owned(),
+            devices,
+            other,
+        })
+    }
+
+    /// The device path.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// The addresses with their own open device.
+    pub fn addresses(&self) -> Vec<u8> {
+        self.devices.iter().map(|(a, _)| *a).collect()
+    }
+}
+
+impl ErrorType for LinuxI2cBus {
+    type Error = I2CError;
+}
+
+impl I2c for LinuxI2cBus {
+    fn transaction(
+        &mut self,
+        address: u8,
+        operations: &mut [Operation<'_>],
+    ) -> Result<(), Self::Error> {
+        let device = match self.devices.iter_mut().find(|(a, _)| *a == address) {
+            Some((_, device)) => device,
+            None => &mut self.other,
+        };
+        device.transaction(address, operations)
+    }
+}

@@ -1,0 +1,361 @@
+//! A real antennad, in-process, driving the emulated Velmex VXM and Pololu Maestro on real
+//! pseudo-terminals (the daemon opens the slave side by its path, as it would
+//! `/dev/ttyUSB0`), with the segments on the simulated bus: the trial's stage positions and
+//! base angles are what the emulators were told; the stage's serial device vanishing and
+//! returning mid-trial costs stage samples only, never a segment sample.
+#![allow(clippy::unwrap_used)]
+
+mod net_support;
+
+use host_daemon::config::{Config, MoveConfig};
+use host_daemon::daemon::{Daemon, DaemonOptions};
+use host_daemon::emulator::{MaestroEmulator, VxmEmulator};
+use host_daemon::net::StreamMessage;
+use host_daemon::record::TrialReader;
+use net_support::{Client, TOKEN};
+use serialport::{SerialPort, TTYPort};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("antennad-{name}-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A pseudo-terminal with the emulator on its master side; returns the slave's path (the
+/// slave handle itself is closed, for the daemon to open by name).
+fn pty() -> (TTYPort, String) {
+    let (master, slave) = TTYPort::pair().unwrap();
+    let path = slave.name().unwrap();
+    drop(slave);
+    (master, path)
+}
+
+fn config(dir: &Path, stage_port: &str, servo_port: &str) -> Config {
+    let mut config = Config::default();
+    config.server.listen = "127.0.0.1:0".to_owned();
+    config.server.token = Some(TOKEN.to_owned());
+    config.data_dir = dir.to_path_buf();
+    config.bus.poll_hz = 500.0;
+    config.stage.port = stage_port.to_owned();
+    config.stage.reply_timeout_ms = 300;
+    config.stage.steps_per_mm = 80.0;
+    config.stage.max_mm = 60.0;
+    config.servo.port = servo_port.to_owned();
+    config.servo.channel = 3;
+    config
+}
+
+fn wait_for(what: &str, timeout: Duration, mut ok: impl FnMut() -> bool) {
+    let deadline = Instant::now() + timeout;
+    while !ok() {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn a_trial_on_the_vxm_and_maestro_records_what_they_were_told() {
+    let dir = temp_dir("serial-trial");
+    let (vxm_master, vxm_path) = pty();
+    let (maestro_master, maestro_path) = pty();
+    let vxm = VxmEmulator::spawn(vxm_master);
+    let maestro = MaestroEmulator::spawn(maestro_master);
+    let mut config = config(&dir, &vxm_path, &maestro_path);
+    config.trials[0].base_angle_deg = 10.0;
+    config.trials[0].duration_s = 0.0;
+    config.trials[0].moves = vec![
+        MoveConfig {
+            distance_mm: 25.0,
+            speed_mm_per_s: 50.0,
+            pause_s: 0.2,
+        },
+        // Beyond the 60 mm soft limit from 25 mm: refused, the VXM never hears of it.
+        MoveConfig {
+            distance_mm: 40.0,
+            speed_mm_per_s: 50.0,
+            pause_s: 0.0,
+        },
+        MoveConfig {
+            distance_mm: -5.0,
+            speed_mm_per_s: 25.0,
+            pause_s: 0.2,
+        },
+    ];
+    let options = DaemonOptions {
+        first_trial: Some(None),
+        exit_after_trial: true,
+        ..DaemonOptions::default()
+    };
+    let daemon = Daemon::start(config, options).unwrap();
+    let log_lines = {
+        let summary_wait = Instant::now();
+        while !daemon.is_finished() {
+            assert!(
+                summary_wait.elapsed() < Duration::from_secs(30),
+                "trial too long"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        daemon.log_lines()
+    };
+    let summary = daemon.wait().unwrap();
+    let log = log_lines.join("\n");
+    assert!(log.contains("VXM on /dev/pts/"), "{log}");
+    assert!(log.contains("move 2 refused"), "{log}");
+    assert_eq!(summary.trials.len(), 1);
+    assert_eq!(summary.trials[0].ended, "its moves are done");
+
+    // What the emulators were told: online, home (N), two moves at 80 steps/mm; never the
+    // refused one; the servo target for 10 degrees on channel 3.
+    let sent = String::from_utf8_lossy(&vxm.received()).into_owned();
+    assert!(sent.starts_with("FN"), "{sent}");
+    assert!(sent.contains("C,S1M4000,I1M2000,R"), "{sent}");
+    assert!(sent.contains("C,S1M2000,I1M-400,R"), "{sent}");
+    assert!(!sent.contains("I1M3200"), "{sent}");
+    assert_eq!(vxm.position_steps(), 1600);
+    let calibration = host_daemon::PulseCalibration::new(
+        (-45f64).to_radians(),
+        1000.0,
+        45f64.to_radians(),
+        2000.0,
+    )
+    .unwrap();
+    let target = (calibration.pulse_us(10f64.to_radians()) * 4.0).round() as u16;
+    assert_eq!(maestro.position_quarter_us(3), Some(target));
+
+    // What was recorded: the stage's path out to 25 mm and back to 20 mm, the base at 10 deg.
+    let trial = TrialReader::read(summary.trials[0].path.as_ref().unwrap()).unwrap();
+    assert!(trial.truncated.is_none());
+    let stage: Vec<f64> = trial.stage.iter().map(|s| s.position_m).collect();
+    let max = stage.iter().copied().fold(f64::MIN, f64::max);
+    assert!((max - 0.025).abs() < 1e-9, "{stage:?}");
+    assert!((stage.last().unwrap() - 0.020).abs() < 1e-9, "{stage:?}");
+    assert!(stage.iter().filter(|&&m| m > 0.0 && m < 0.025).count() > 5);
+    let last_base = trial.servo.last().unwrap().base_angle_rad;
+    assert!(
+        (last_base - calibration.angle_rad(f64::from(target) / 4.0)).abs() < 1e-12,
+        "{last_base}"
+    );
+    // Within the Maestro's quarter-microsecond resolution (0.0225 degrees here).
+    assert!((last_base.to_degrees() - 10.0).abs() < 0.025);
+    assert!(
+        trial
+            .segments
+            .iter()
+            .all(|m| m.segments.iter().all(|s| s.ok))
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
+    let dir = temp_dir("serial-vanish");
+    let link = dir.join("vxm");
+    let (vxm_master, vxm_path) = pty();
+    let (maestro_master, maestro_path) = pty();
+    std::os::unix::fs::symlink(&vxm_path, &link).unwrap();
+    let vxm = VxmEmulator::spawn(vxm_master);
+    let _maestro = MaestroEmulator::spawn(maestro_master);
+    let mut config = config(&dir, link.to_str().unwrap(), &maestro_path);
+    config.trials[0].duration_s = 6.0;
+    config.trials[0].moves = vec![MoveConfig {
+        distance_mm: 10.0,
+        speed_mm_per_s: 20.0,
+        pause_s: 0.0,
+    }];
+    let options = DaemonOptions {
+        first_trial: Some(None),
+        ..DaemonOptions::default()
+    };
+    let daemon = Daemon::start(config, options).unwrap();
+    let mut client = Client::connect(daemon.local_addr().unwrap());
+    let log_has = |text: &str| -> bool { daemon.log_lines().iter().any(|l| l.contains(text)) };
+    wait_for("the move to end", Duration::from_secs(10), || {
+        vxm.position_steps() == 800
+    });
+    std::thread::sleep(Duration::from_millis(300));
+
+    // The device vanishes: the emulator's end closes and the path disappears.
+    vxm.close();
+    std::fs::remove_file(&link).unwrap();
+    let vanished = Instant::now();
+    wait_for(
+        "the stage to be reported unavailable",
+        Duration::from_secs(5),
+        || log_has("stage unavailable"),
+    );
+    // The stream says so: samples with a null stage, a status naming it.
+    let (mut null_stage, mut status_note) = (false, false);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !(null_stage && status_note) {
+        assert!(
+            Instant::now() < deadline,
+            "null {null_stage}, status {status_note}"
+        );
+        match client.next_message() {
+            StreamMessage::Samples {
+                stage_position_m: None,
+                segments,
+                ..
+            } => {
+                null_stage = true;
+                assert!(segments.iter().all(|s| s.error.is_none()));
+            }
+            StreamMessage::Status {
+                note: Some(note), ..
+            } if note.contains("stage unavailable") => status_note = true,
+            _ => {}
+        }
+    }
+    std::thread::sleep(Duration::from_millis(500));
+
+    // It returns on a new pseudo-terminal behind the same path, where it was.
+    let (vxm_master, vxm_path) = pty();
+    let vxm = VxmEmulator::spawn_at(vxm_master, 800);
+    std::os::unix::fs::symlink(&vxm_path, &link).unwrap();
+    wait_for("the stage to come back", Duration::from_secs(5), || {
+        log_has("stage back")
+    });
+    let outage = vanished.elapsed();
+    assert!(vxm.is_online(), "the daemon put the VXM on line again");
+    let mut back = false;
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !back {
+        assert!(
+            Instant::now() < deadline,
+            "no stage sample after the return"
+        );
+        if let StreamMessage::Samples {
+            stage_position_m: Some(m),
+            ..
+        } = client.next_message()
+        {
+            assert!((m - 0.01).abs() < 1e-9, "{m}");
+            back = true;
+        }
+    }
+    drop(client);
+    wait_for("the trial to end", Duration::from_secs(20), || {
+        daemon.trial().is_none()
+    });
+    let summary = daemon.shutdown().unwrap();
+    assert_eq!(summary.dropped, 0);
+    let trial = TrialReader::read(summary.trials[0].path.as_ref().unwrap()).unwrap();
+    assert!(trial.truncated.is_none());
+    // Every segment poll of the trial is there, intact: consecutive numbers but for the
+    // deadlines the poller reports skipped, every segment read.
+    let seqs: Vec<u64> = trial.segments.iter().map(|m| m.seq.unwrap()).collect();
+    let gaps: u64 = seqs.windows(2).map(|w| w[1] - w[0] - 1).sum();
+    assert!(seqs.windows(2).all(|w| w[1] > w[0]));
+    assert!(
+        gaps <= summary.skipped,
+        "{gaps} gaps, {} skipped",
+        summary.skipped
+    );
+    assert!(trial.segments.len() > 2000, "{}", trial.segments.len());
+    assert!(
+        trial
+            .segments
+            .iter()
+            .all(|m| m.segments.len() == 9 && m.segments.iter().all(|s| s.ok))
+    );
+    // The stage samples have a hole as long as the outage (less a sampling period or so),
+    // and resume at the same position.
+    let hole = trial
+        .stage
+        .windows(2)
+        .map(|w| w[1].t_s - w[0].t_s)
+        .fold(0.0, f64::max);
+    assert!(
+        hole > outage.as_secs_f64() * 0.5 && hole < outage.as_secs_f64() + 1.0,
+        "hole {hole} s, outage {outage:?}"
+    );
+    assert!((trial.stage.last().unwrap().position_m - 0.01).abs() < 1e-9);
+    // The recording says why: when the stage vanished and when it came back, around the hole.
+    let said = |what: &str| {
+        trial
+            .log
+            .iter()
+            .find(|l| l.text.contains(what))
+            .unwrap_or_else(|| panic!("no {what:?} in {:?}", trial.log))
+            .t_s
+    };
+    let (gone, back) = (said("stage unavailable"), said("stage back"));
+    assert!((back - gone - hole).abs() < 0.5, "{gone} {back} {hole}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn stop_all_kills_a_vxm_move_at_once_and_a_move_beyond_the_limits_never_reaches_it() {
+    let dir = temp_dir("serial-stop");
+    let (vxm_master, vxm_path) = pty();
+    let (maestro_master, maestro_path) = pty();
+    let vxm = VxmEmulator::spawn(vxm_master);
+    let _maestro = MaestroEmulator::spawn(maestro_master);
+    let daemon = Daemon::start(
+        config(&dir, &vxm_path, &maestro_path),
+        DaemonOptions::default(),
+    )
+    .unwrap();
+    let mut client = Client::connect(daemon.local_addr().unwrap());
+    let mut request = |id: u64, body: &str| {
+        client.send_line(&format!(r#"{{"id":{id},"token":"{TOKEN}",{body}}}"#));
+        client.next_reply()
+    };
+    wait_for("the VXM on line", Duration::from_secs(5), || {
+        vxm.is_online()
+    });
+    vxm.clear_received();
+    // 61 mm is beyond the 60 mm soft limit: refused before anything is sent.
+    let reply = request(1, r#""cmd":"move_stage","position_m":0.061"#);
+    assert!(
+        !reply.ok && reply.message.contains("soft limits"),
+        "{reply:?}"
+    );
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(!String::from_utf8_lossy(&vxm.received()).contains('I'));
+    // A slow move (5 mm/s), killed early.
+    let reply = request(
+        2,
+        r#""cmd":"move_stage","position_m":0.05,"speed_m_per_s":0.005"#,
+    );
+    assert!(reply.ok, "{reply:?}");
+    wait_for("the move to start", Duration::from_secs(5), || {
+        vxm.is_busy()
+    });
+    std::thread::sleep(Duration::from_millis(300));
+    let reply = request(3, r#""cmd":"stop_all""#);
+    assert!(
+        reply.ok && reply.message.contains("stage stopped"),
+        "{reply:?}"
+    );
+    wait_for("the kill", Duration::from_secs(2), || !vxm.is_busy());
+    let sent = String::from_utf8_lossy(&vxm.received()).into_owned();
+    assert!(sent.contains("C,S1M400,IA1M4000,R"), "{sent}");
+    assert!(sent.contains('K'), "{sent}");
+    let stopped_at = vxm.position_steps();
+    assert!(stopped_at > 0 && stopped_at < 400, "{stopped_at}");
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(vxm.position_steps(), stopped_at);
+    daemon.shutdown().unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_missing_serial_port_names_the_key_and_the_path() {
+    let dir = temp_dir("serial-missing");
+    let error = Daemon::start(
+        config(&dir, "/dev/antennad-no-such-tty", "sim"),
+        DaemonOptions::default(),
+    )
+    .unwrap_err();
+    let text = format!("{error:#}");
+    assert!(
+        text.contains("`stage.port` = \"/dev/antennad-no-such-tty\": cannot open the serial port"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
