@@ -39,6 +39,11 @@
 //! - [`nitinol`]: the wire law `k = C r^4 + k_cable` and the nearest available wire per joint.
 //! - [`identify`]: joint stiffness from a free-oscillation recording (model.md 9, seed 6.2).
 //! - [`elastica`]: the reference solver for the clamped inextensible beam under a tip load.
+//! - [`wall`]: walls (line, polyline, sinusoid) with a solid side and surface zones; signed
+//!   distance and the deepest point of a link against a wall (model.md 6).
+//! - [`metrics`]: point of bend, point of contact, preview distance, flip detection and
+//!   correlations (model.md 8); [`mapping`]: wall contact points estimated from 12-bit joint
+//!   angles and touch bits, and their error against the true wall (seed 4.2.2).
 //! - [`beam`]: chains that stand for a beam (the first-order equal-links and the second-order
 //!   Hencky layouts) and Richardson extrapolation over the number of links.
 //!
@@ -97,12 +102,15 @@ pub mod hair;
 pub mod identify;
 pub mod jacobian;
 pub mod joint_limits;
+pub mod mapping;
 pub mod matrix_forms;
+pub mod metrics;
 pub mod nitinol;
 pub mod positions;
 pub mod profile;
 pub mod tip_force;
 pub mod velocity;
+pub mod wall;
 
 pub use active_frames::{
     active_frames_matrix, active_frames_matrix_from_vector, active_frames_vector,
@@ -139,6 +147,16 @@ pub use jacobian::{
     jacobian_into, spatial_jacobian, tip_jacobian, tip_jacobian_into,
 };
 pub use joint_limits::{d2theta_dq2, dtheta_dq, q_from_theta, theta_from_q};
+pub use mapping::{
+    ANGLE_QUANTUM_RAD, EstimatedContact, MappingAccumulator, MappingError, MappingScore,
+    SENSOR_COUNTS_PER_TURN, SWITCHES_PER_SEGMENT, TouchLayout, estimate_contacts, mapping_score,
+    point_error_mm, quantize_angle_rad, sensed_theta_rad, switch_for_fraction,
+    touch_bits_from_contacts,
+};
+pub use metrics::{
+    ChainContact, FlipState, PointOfContact, angle_to_wall_rad, flip_state, pearson_correlation,
+    point_of_bend, point_of_contact, preview_distance_m, spearman_correlation,
+};
 pub use nitinol::{
     Design, JointWire, NitinolError, RangeFlag, WireDiameter, WireModel, available_wires,
     design as design_wires, wire_stiffness_n_m_per_rad,
@@ -151,4 +169,8 @@ pub use tip_force::{
 };
 pub use velocity::{
     FrameVelocities, Twist2, frame_velocities, frame_velocities_into, frame_velocity,
+};
+pub use wall::{
+    Line, Polyline, SMOOTH_MU_DEFAULT, SegmentContact, Sinusoid, SolidSide, Surface, SurfaceMap,
+    Wall, WallError, WallPoint, WallShape, ZoneAxis,
 };

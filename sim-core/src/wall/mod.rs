@@ -1,0 +1,285 @@
+//! Walls (model.md 6, seed 3.3, 4.2): curves with a solid side, in the ground frame.
+//!
+//! # Conventions
+//! - Every wall curve has a **tangent orientation**: the direction of increasing arclength
+//!   (for a [`Line`] its angle, for a [`Polyline`] from the first vertex to the last, for a
+//!   [`Sinusoid`] the direction of its baseline).
+//! - The **solid side** ([`SolidSide`]) is given relative to that tangent, and the unit
+//!   **normal** always points into free space: for [`SolidSide::Left`] `normal = (t_y, -t_x)`,
+//!   for [`SolidSide::Right`] `normal = (-t_y, t_x)`.
+//! - **Signed distance** `gap_m` is the Euclidean distance to the curve, positive in free
+//!   space and negative inside the solid; its gradient is the normal wherever the nearest point
+//!   is unique.
+//! - **Moving a wall.** A chain's positions are relative to its base pivot; to test a chain
+//!   whose base is at `base_m`, add `base_m` to its points or move the wall by `-base_m`
+//!   ([`Wall::translate`] works in place and does not allocate).
+//!   `gap(p; wall moved by o) = gap(p - o; wall)`.
+//!
+//! Queries ([`Wall::signed_distance`], [`Wall::segment_contact`], [`Wall::surface_at`]) do
+//! not allocate.
+//!
+//! # Example: a link against the seed's 4.2.1 wall
+//! ```
+//! use nalgebra::Vector2;
+//! use sim_core::{Line, SolidSide, Wall};
+//!
+//! # fn main() -> Result<(), sim_core::WallError> {
+//! // A smooth wall (mu = 0.3) at 8 degrees, 0.2 m from the base pivot, solid beyond it.
+//! let wall = Wall::smooth(Line::new(Vector2::new(0.0, 0.2), 8f64.to_radians(), SolidSide::Left)?);
+//! // A 40 mm link poking 1 mm into it.
+//! let a = Vector2::new(0.0, 0.161);
+//! let b = Vector2::new(0.0, 0.201);
+//! let c = wall.segment_contact(&a, &b);
+//! assert_eq!(c.s, 1.0); // its distal end is deepest
+//! assert!((c.wall.gap_m + 0.001 * 8f64.to_radians().cos()).abs() < 1e-12);
+//! assert!(c.wall.normal.y < 0.0); // into free space, toward the antenna
+//! assert_eq!(wall.surface_at(&c.wall).mu(), 0.3);
+//! // The base has moved 0.1 m along x: move the wall the other way instead of the chain.
+//! let seen_from_base = wall.translated(Vector2::new(-0.1, 0.0));
+//! let moved = seen_from_base.signed_distance(&a).gap_m;
+//! assert!((moved - wall.signed_distance(&(a + Vector2::new(0.1, 0.0))).gap_m).abs() < 1e-15);
+//! # Ok(())
+//! # }
+//! ```
+
+mod error;
+mod line;
+mod polyline;
+mod sinusoid;
+mod surface;
+
+use nalgebra::Vector2;
+
+pub use error::WallError;
+pub use line::Line;
+pub use polyline::Polyline;
+pub use sinusoid::Sinusoid;
+pub use surface::{SMOOTH_MU_DEFAULT, Surface, SurfaceMap, ZoneAxis};
+
+/// Which side of a wall curve is solid, relative to the curve's tangent orientation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SolidSide {
+    /// Solid on the `+90 deg` (counter-clockwise) side of the tangent: a wall along `+x`
+    /// with the solid at larger `y`.
+    Left,
+    /// Solid on the `-90 deg` (clockwise) side of the tangent.
+    Right,
+}
+
+impl SolidSide {
+    /// The unit normal into free space for a unit tangent `t`.
+    pub fn free_normal(self, tangent: &Vector2<f64>) -> Vector2<f64> {
+        match self {
+            SolidSide::Left => Vector2::new(tangent.y, -tangent.x),
+            SolidSide::Right => Vector2::new(-tangent.y, tangent.x),
+        }
+    }
+
+    /// The unit tangent for a unit normal `n` into free space (the inverse of
+    /// [`Self::free_normal`]).
+    pub fn tangent_from_normal(self, normal: &Vector2<f64>) -> Vector2<f64> {
+        match self {
+            SolidSide::Left => Vector2::new(-normal.y, normal.x),
+            SolidSide::Right => Vector2::new(normal.y, -normal.x),
+        }
+    }
+}
+
+/// The nearest point of a wall curve to a query point, and the local frame there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallPoint {
+    /// Signed distance from the query point to the curve, metres: positive in free space,
+    /// negative inside the solid.
+    pub gap_m: f64,
+    /// The nearest point of the curve (ground frame, metres).
+    pub closest_m: Vector2<f64>,
+    /// Unit normal into free space at `closest_m`. At a polyline corner it is the direction
+    /// from the corner to the query point (signed into free space), or the corner's
+    /// pseudo-normal (the mean of its edges' normals) when the query point is the corner.
+    pub normal: Vector2<f64>,
+    /// Unit tangent at `closest_m`, in the direction of increasing `arclength_m`; tied to
+    /// `normal` as [`SolidSide::free_normal`] says.
+    pub tangent: Vector2<f64>,
+    /// Arclength of `closest_m` along the curve from the curve's origin, metres (see each
+    /// shape; negative before the origin).
+    pub arclength_m: f64,
+}
+
+/// The point of a segment `a -> b` with the smallest signed gap to a wall: its deepest
+/// penetration, or its closest approach if it is entirely in free space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentContact {
+    /// Where along the segment, in `[0, 1]`: `point_m = a + s (b - a)`.
+    pub s: f64,
+    /// That point of the segment (ground frame, metres).
+    pub point_m: Vector2<f64>,
+    /// The wall's nearest point to `point_m` (`signed_distance(point_m)`).
+    pub wall: WallPoint,
+}
+
+/// The geometry of a wall.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WallShape {
+    /// A straight line.
+    Line(Line),
+    /// An open polyline with infinite end rays (the seed's trapezoid).
+    Polyline(Polyline),
+    /// A sinusoid about a straight baseline (seed 4.2.2).
+    Sinusoid(Sinusoid),
+}
+
+impl From<Line> for WallShape {
+    fn from(line: Line) -> Self {
+        WallShape::Line(line)
+    }
+}
+
+impl From<Polyline> for WallShape {
+    fn from(polyline: Polyline) -> Self {
+        WallShape::Polyline(polyline)
+    }
+}
+
+impl From<Sinusoid> for WallShape {
+    fn from(sinusoid: Sinusoid) -> Self {
+        WallShape::Sinusoid(sinusoid)
+    }
+}
+
+impl WallShape {
+    /// The signed distance and nearest point (see [`WallPoint`]).
+    pub fn signed_distance(&self, p_m: &Vector2<f64>) -> WallPoint {
+        match self {
+            WallShape::Line(w) => w.signed_distance(p_m),
+            WallShape::Polyline(w) => w.signed_distance(p_m),
+            WallShape::Sinusoid(w) => w.signed_distance(p_m),
+        }
+    }
+
+    /// The deepest (or closest) point of the segment `a -> b` (see [`SegmentContact`]).
+    pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
+        match self {
+            WallShape::Line(w) => w.segment_contact(a_m, b_m),
+            WallShape::Polyline(w) => w.segment_contact(a_m, b_m),
+            WallShape::Sinusoid(w) => w.segment_contact(a_m, b_m),
+        }
+    }
+
+    /// [`Self::segment_contact`] if the segment comes within `max_gap_m` of the wall (its
+    /// smallest gap `<= max_gap_m`), else `None`; a sinusoid answers a segment beyond its
+    /// amplitude band by more than `max_gap_m` without searching.
+    pub fn segment_contact_within(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        max_gap_m: f64,
+    ) -> Option<SegmentContact> {
+        if let WallShape::Sinusoid(w) = self
+            && w.segment_gap_lower_bound_m(a_m, b_m) > max_gap_m
+        {
+            return None;
+        }
+        let contact = self.segment_contact(a_m, b_m);
+        (contact.wall.gap_m <= max_gap_m).then_some(contact)
+    }
+
+    /// Moves the curve by `offset_m`, in place.
+    pub fn translate(&mut self, offset_m: Vector2<f64>) {
+        match self {
+            WallShape::Line(w) => w.translate(offset_m),
+            WallShape::Polyline(w) => w.translate(offset_m),
+            WallShape::Sinusoid(w) => w.translate(offset_m),
+        }
+    }
+
+    /// Which side is solid.
+    pub fn solid_side(&self) -> SolidSide {
+        match self {
+            WallShape::Line(w) => w.solid_side(),
+            WallShape::Polyline(w) => w.solid_side(),
+            WallShape::Sinusoid(w) => w.solid_side(),
+        }
+    }
+}
+
+/// A wall: a curve with a solid side and a surface along it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wall {
+    /// The geometry.
+    pub shape: WallShape,
+    /// The surface zones along the wall.
+    pub surfaces: SurfaceMap,
+}
+
+impl Wall {
+    /// A wall of the given shape and surfaces.
+    pub fn new(shape: impl Into<WallShape>, surfaces: SurfaceMap) -> Wall {
+        Wall {
+            shape: shape.into(),
+            surfaces,
+        }
+    }
+
+    /// A smooth wall with the default friction (`mu = 0.3`, model.md 6) everywhere.
+    pub fn smooth(shape: impl Into<WallShape>) -> Wall {
+        Wall::new(shape, SurfaceMap::default())
+    }
+
+    /// The signed distance and nearest point (see [`WallPoint`]); no allocation.
+    pub fn signed_distance(&self, p_m: &Vector2<f64>) -> WallPoint {
+        self.shape.signed_distance(p_m)
+    }
+
+    /// The deepest (or closest) point of the segment `a -> b` (see [`SegmentContact`]); no
+    /// allocation. Checks the whole segment, not only its ends: a polyline corner or a
+    /// sinusoid crest inside the segment is found.
+    pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
+        self.shape.segment_contact(a_m, b_m)
+    }
+
+    /// [`Self::segment_contact`] if the segment comes within `max_gap_m` of the wall, else
+    /// `None` (see [`WallShape::segment_contact_within`]); no allocation.
+    pub fn segment_contact_within(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        max_gap_m: f64,
+    ) -> Option<SegmentContact> {
+        self.shape.segment_contact_within(a_m, b_m, max_gap_m)
+    }
+
+    /// The surface at a wall point found by [`Self::signed_distance`].
+    pub fn surface_at(&self, point: &WallPoint) -> Surface {
+        self.surfaces.surface_at(point)
+    }
+
+    /// Moves the wall (curve and world-x zone boundaries) by `offset_m`, in place, without
+    /// allocating.
+    pub fn translate(&mut self, offset_m: Vector2<f64>) {
+        self.shape.translate(offset_m);
+        self.surfaces.translate_x(offset_m.x);
+    }
+
+    /// A copy of the wall moved by `offset_m`.
+    pub fn translated(&self, offset_m: Vector2<f64>) -> Wall {
+        let mut moved = self.clone();
+        moved.translate(offset_m);
+        moved
+    }
+}
+
+/// The point of `a -> b` at parameter `s`.
+pub(crate) fn lerp(a_m: &Vector2<f64>, b_m: &Vector2<f64>, s: f64) -> Vector2<f64> {
+    a_m + (b_m - a_m) * s
+}
+
+/// Keeps the better of two segment candidates: the smaller gap, ties to the smaller `s`.
+pub(crate) fn better(best: SegmentContact, candidate: SegmentContact) -> SegmentContact {
+    if candidate.wall.gap_m < best.wall.gap_m
+        || (candidate.wall.gap_m == best.wall.gap_m && candidate.s < best.s)
+    {
+        candidate
+    } else {
+        best
+    }
+}

@@ -1,0 +1,344 @@
+//! A polyline wall (the seed's trapezoid, 4.2.2): an open chain of straight edges whose first
+//! and last edges extend to infinity as rays, so the wall splits the plane into a solid and a
+//! free side.
+//!
+//! `segment_contact` is exact, from a finite candidate set: along a segment the signed
+//! distance is, piece by piece (one piece per nearest feature: an edge line or a corner),
+//! `+|linear|`/`+sqrt(quadratic)` (convex) in free space and their negatives (concave) in the
+//! solid. So the minimum is at a segment end, at the foot of a corner on the segment (free
+//! side: a corner poking into the middle of a link), or where two features are equidistant
+//! (solid side: a crossing of the medial axis, e.g. a link pushed across a corner).
+
+use nalgebra::Vector2;
+
+use super::error::{WallError, finite};
+use super::{SegmentContact, SolidSide, WallPoint, better, lerp};
+
+/// An open polyline wall. Tangent from the first vertex toward the last; arclength from the
+/// first vertex (negative along the first ray).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Polyline {
+    vertices_m: Vec<Vector2<f64>>,
+    /// Unit tangent of edge `i` (vertex `i` to `i + 1`).
+    tangents: Vec<Vector2<f64>>,
+    /// Unit normal (into free space) of edge `i`.
+    normals: Vec<Vector2<f64>>,
+    /// Length of edge `i`, metres.
+    lengths_m: Vec<f64>,
+    /// Arclength of vertex `i` from vertex 0, metres.
+    arclengths_m: Vec<f64>,
+    solid: SolidSide,
+}
+
+/// Which feature of the polyline is nearest.
+enum Nearest {
+    /// The interior of edge `edge` (or one of the end rays), at `u_m` from its first vertex.
+    Edge { edge: usize, u_m: f64 },
+    /// An interior vertex.
+    Vertex(usize),
+}
+
+impl Polyline {
+    /// A polyline through `vertices_m` (ground frame, metres), solid on `solid`'s side of the
+    /// tangent (which runs from the first vertex to the last). The first and the last edge
+    /// extend to infinity. A trapezoidal bump on a wall along `+x` at `y = d`, solid above:
+    /// `[(x0, d), (x1, d - h), (x2, d - h), (x3, d)]` with `SolidSide::Left`.
+    ///
+    /// # Errors
+    /// [`WallError::TooFewVertices`] (< 2), [`WallError::NotFinite`],
+    /// [`WallError::ZeroLengthEdge`], [`WallError::EdgeDoublesBack`] (a 180 degree turn),
+    /// [`WallError::EdgesCross`] (two non-adjacent edges, end rays included, meet).
+    pub fn new(vertices_m: Vec<Vector2<f64>>, solid: SolidSide) -> Result<Polyline, WallError> {
+        if vertices_m.len() < 2 {
+            return Err(WallError::TooFewVertices {
+                count: vertices_m.len(),
+            });
+        }
+        for (index, v) in vertices_m.iter().enumerate() {
+            finite("vertices_m.x", index, v.x)?;
+            finite("vertices_m.y", index, v.y)?;
+        }
+        let edges = vertices_m.len() - 1;
+        let mut tangents = Vec::with_capacity(edges);
+        let mut normals = Vec::with_capacity(edges);
+        let mut lengths_m = Vec::with_capacity(edges);
+        let mut arclengths_m = Vec::with_capacity(vertices_m.len());
+        arclengths_m.push(0.0);
+        for (index, pair) in vertices_m.windows(2).enumerate() {
+            let d = pair[1] - pair[0];
+            let length_m = d.norm();
+            if !(length_m > 0.0 && length_m.is_finite()) {
+                return Err(WallError::ZeroLengthEdge { index });
+            }
+            let t = d / length_m;
+            tangents.push(t);
+            normals.push(solid.free_normal(&t));
+            lengths_m.push(length_m);
+            arclengths_m.push(arclengths_m[index] + length_m);
+        }
+        for vertex in 1..edges {
+            let (t0, t1) = (tangents[vertex - 1], tangents[vertex]);
+            if cross(&t0, &t1).abs() <= 1e-12 && t0.dot(&t1) < 0.0 {
+                return Err(WallError::EdgeDoublesBack { vertex });
+            }
+        }
+        let polyline = Polyline {
+            vertices_m,
+            tangents,
+            normals,
+            lengths_m,
+            arclengths_m,
+            solid,
+        };
+        for first in 0..edges {
+            for second in first + 2..edges {
+                if polyline.edges_meet(first, second) {
+                    return Err(WallError::EdgesCross { first, second });
+                }
+            }
+        }
+        Ok(polyline)
+    }
+
+    /// The vertices, metres.
+    pub fn vertices_m(&self) -> &[Vector2<f64>] {
+        &self.vertices_m
+    }
+
+    /// Which side is solid.
+    pub fn solid_side(&self) -> SolidSide {
+        self.solid
+    }
+
+    /// The parameter range of edge `i` in metres from its first vertex (infinite for the end
+    /// rays).
+    fn range_m(&self, edge: usize) -> (f64, f64) {
+        let lo = if edge == 0 { f64::NEG_INFINITY } else { 0.0 };
+        let hi = if edge + 1 == self.tangents.len() {
+            f64::INFINITY
+        } else {
+            self.lengths_m[edge]
+        };
+        (lo, hi)
+    }
+
+    /// Whether edges `i` and `j` (as clamped to their ranges) share a point.
+    fn edges_meet(&self, i: usize, j: usize) -> bool {
+        let (ai, ti) = (self.vertices_m[i], self.tangents[i]);
+        let (aj, tj) = (self.vertices_m[j], self.tangents[j]);
+        let (lo_i, hi_i) = self.range_m(i);
+        let (lo_j, hi_j) = self.range_m(j);
+        let denom = cross(&ti, &tj);
+        let r = aj - ai;
+        if denom.abs() <= 1e-12 {
+            // Parallel: they meet only if collinear with overlapping ranges.
+            if cross(&ti, &r).abs() > 1e-12 {
+                return false;
+            }
+            let start = ti.dot(&r);
+            let sign = ti.dot(&tj);
+            let (w0, w1) = (start + sign * lo_j, start + sign * hi_j);
+            let (w_lo, w_hi) = (w0.min(w1), w0.max(w1));
+            return w_lo <= hi_i && w_hi >= lo_i;
+        }
+        let u = cross(&r, &tj) / denom;
+        let w = cross(&r, &ti) / denom;
+        u >= lo_i && u <= hi_i && w >= lo_j && w <= hi_j
+    }
+
+    /// The nearest feature to `p_m` and the squared distance to it.
+    fn nearest(&self, p_m: &Vector2<f64>) -> (Nearest, f64) {
+        let last = self.tangents.len() - 1;
+        let mut best = (Nearest::Edge { edge: 0, u_m: 0.0 }, f64::INFINITY);
+        for edge in 0..=last {
+            let (lo, hi) = self.range_m(edge);
+            let u = self.tangents[edge].dot(&(p_m - self.vertices_m[edge]));
+            let u_m = u.clamp(lo, hi);
+            let q = self.vertices_m[edge] + self.tangents[edge] * u_m;
+            let d2 = (p_m - q).norm_squared();
+            if d2 < best.1 {
+                let feature = if u_m == 0.0 && edge > 0 {
+                    Nearest::Vertex(edge)
+                } else if u_m == hi && edge < last {
+                    Nearest::Vertex(edge + 1)
+                } else {
+                    Nearest::Edge { edge, u_m }
+                };
+                best = (feature, d2);
+            }
+        }
+        best
+    }
+
+    /// The signed distance and nearest point (see [`WallPoint`]); `O(edges)`, no allocation.
+    pub fn signed_distance(&self, p_m: &Vector2<f64>) -> WallPoint {
+        match self.nearest(p_m) {
+            (Nearest::Edge { edge, u_m }, _) => {
+                let closest_m = self.vertices_m[edge] + self.tangents[edge] * u_m;
+                WallPoint {
+                    gap_m: self.normals[edge].dot(&(p_m - closest_m)),
+                    closest_m,
+                    normal: self.normals[edge],
+                    tangent: self.tangents[edge],
+                    arclength_m: self.arclengths_m[edge] + u_m,
+                }
+            }
+            (Nearest::Vertex(vertex), d2) => {
+                let v = self.vertices_m[vertex];
+                let pseudo = self.normals[vertex - 1] + self.normals[vertex];
+                let pseudo = pseudo / pseudo.norm();
+                let r = p_m - v;
+                let distance_m = d2.sqrt();
+                let sign = if pseudo.dot(&r) < 0.0 { -1.0 } else { 1.0 };
+                let normal = if distance_m > 0.0 {
+                    r * (sign / distance_m)
+                } else {
+                    pseudo
+                };
+                WallPoint {
+                    gap_m: sign * distance_m,
+                    closest_m: v,
+                    normal,
+                    tangent: self.solid.tangent_from_normal(&normal),
+                    arclength_m: self.arclengths_m[vertex],
+                }
+            }
+        }
+    }
+
+    /// The deepest (or closest) point of `a -> b` (see the module docs); `O(edges^3)` (the
+    /// pairs of features, each checked in `O(edges)`), no allocation.
+    pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
+        let d = b_m - a_m;
+        let at = |s: f64| {
+            let point_m = lerp(a_m, b_m, s);
+            SegmentContact {
+                s,
+                point_m,
+                wall: self.signed_distance(&point_m),
+            }
+        };
+        let mut best = at(0.0);
+        best = better(best, at(1.0));
+        // The solid-side candidates matter only if part of the segment is in the solid: an
+        // end is, or the segment crosses the wall.
+        let needs_solid_side = best.wall.gap_m <= 0.0 || self.crosses(a_m, b_m);
+        let mut consider = |s: f64| {
+            if (0.0..=1.0).contains(&s) {
+                best = better(best, at(s));
+            }
+        };
+        let d2 = d.norm_squared();
+        let edges = self.tangents.len();
+        let interior = 1..edges; // interior vertices
+        if d2 > 0.0 {
+            // Corners on the segment: their feet.
+            for k in interior.clone() {
+                consider(((self.vertices_m[k] - a_m).dot(&d) / d2).clamp(0.0, 1.0));
+            }
+            if !needs_solid_side {
+                return best;
+            }
+            // Equidistant from two edge lines: (alpha_i + beta_i s) = +-(alpha_j + beta_j s).
+            let line = |i: usize| {
+                let n = self.normals[i];
+                (n.dot(&(a_m - self.vertices_m[i])), n.dot(&d))
+            };
+            for i in 0..edges {
+                let (ai, bi) = line(i);
+                for j in i + 1..edges {
+                    let (aj, bj) = line(j);
+                    for sign in [1.0, -1.0] {
+                        let denom = bi - sign * bj;
+                        if denom != 0.0 {
+                            consider(-(ai - sign * aj) / denom);
+                        }
+                    }
+                }
+                // Equidistant from edge line i and corner k: (alpha + beta s)^2 = |a - v + s d|^2.
+                for k in interior.clone() {
+                    let r = a_m - self.vertices_m[k];
+                    let qa = bi * bi - d2;
+                    let qb = 2.0 * (ai * bi - r.dot(&d));
+                    let qc = ai * ai - r.norm_squared();
+                    for_roots(qa, qb, qc, &mut consider);
+                }
+            }
+            // Equidistant from two corners: the perpendicular bisector.
+            for k in interior.clone() {
+                for m in k + 1..edges {
+                    let (v, w) = (self.vertices_m[k], self.vertices_m[m]);
+                    let denom = 2.0 * d.dot(&(w - v));
+                    if denom != 0.0 {
+                        consider(
+                            (w.norm_squared() - v.norm_squared() - 2.0 * a_m.dot(&(w - v))) / denom,
+                        );
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// Whether the segment `a -> b` crosses an edge (end rays included).
+    fn crosses(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> bool {
+        let d = b_m - a_m;
+        (0..self.tangents.len()).any(|edge| {
+            let t = self.tangents[edge];
+            let denom = cross(&d, &t);
+            if denom == 0.0 {
+                return false;
+            }
+            let r = self.vertices_m[edge] - a_m;
+            let s = cross(&r, &t) / denom;
+            let u = cross(&r, &d) / denom;
+            let (lo, hi) = self.range_m(edge);
+            (0.0..=1.0).contains(&s) && u >= lo && u <= hi
+        })
+    }
+
+    /// Moves the polyline by `offset_m`, without allocating.
+    pub fn translate(&mut self, offset_m: Vector2<f64>) {
+        for v in &mut self.vertices_m {
+            *v += offset_m;
+        }
+    }
+
+    /// A copy moved by `offset_m`.
+    pub fn translated(&self, offset_m: Vector2<f64>) -> Polyline {
+        let mut moved = self.clone();
+        moved.translate(offset_m);
+        moved
+    }
+}
+
+/// The z component of `a x b`.
+fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Calls `f` with each real root of `qa s^2 + qb s + qc = 0` (the linear case included).
+pub(crate) fn for_roots(qa: f64, qb: f64, qc: f64, f: &mut impl FnMut(f64)) {
+    let scale = qa.abs().max(qb.abs()).max(qc.abs());
+    if scale == 0.0 {
+        return;
+    }
+    if qa.abs() <= 1e-14 * scale {
+        if qb != 0.0 {
+            f(-qc / qb);
+        }
+        return;
+    }
+    let disc = qb * qb - 4.0 * qa * qc;
+    if disc < 0.0 {
+        return;
+    }
+    // The numerically stable pair of roots.
+    let q = -0.5 * (qb + qb.signum() * disc.sqrt());
+    if q != 0.0 {
+        f(q / qa);
+        f(qc / q);
+    } else {
+        f(0.0);
+    }
+}

@@ -1,0 +1,445 @@
+//! A sinusoidal wall (seed 4.2.2): `c(t) = o + t u + A sin(2 pi f t + phase) v` about a
+//! straight baseline through `o` with direction `u = (cos a, sin a)`, `v = (-sin a, cos a)`.
+//!
+//! **Frequency unit.** `frequency_per_m` counts **cycles per metre** (wavelength `1 / f`).
+//! The seed writes only "1/m" for its walls (2.8 to 14.2 1/m); cycles per metre puts the
+//! finest at a 70 mm wavelength, under two 40 mm segments, which fits its mapping errors
+//! growing to 25 mm there; radians per metre would make even the finest wall 0.44 m per cycle.
+//!
+//! **Nearest point.** The true Euclidean one: in the baseline frame the query point is
+//! `(x, y)`; the nearest parameter lies within `|t - x| <= |y - g(x)|` (the vertical gap is an
+//! upper bound on the distance). That bracket is sampled at no more than a 32nd of a wavelength
+//! (and a quarter of the bracket), scanning outward from `x` and stopping once the lower bound
+//! `(t - x)^2 + max(|y| - A, 0)^2` exceeds the best squared distance found; every sampled local
+//! minimum is refined by Newton's method on `D'(t)`, safeguarded by bisection. The sign comes
+//! from the vertical test (the curve is a graph over its baseline), which is exact. A
+//! non-finite query gives a NaN answer (no panic, no endless loop).
+//!
+//! **Segments.** Along a segment the signed distance `F(s)` has stationary points only where
+//! the curve's tangent at the nearest point is parallel to the segment (`g'(t) = slope`, solved
+//! in closed form and mapped back along the curve normal: a crest inside a link) and kinks only
+//! on the solid's medial axis, which lies on the vertical lines through the crests. Those
+//! points, and the segment ends, are the candidates; each is evaluated exactly.
+
+use core::f64::consts::{FRAC_PI_2, PI, TAU};
+
+use nalgebra::Vector2;
+
+use super::error::{WallError, finite};
+use super::{SegmentContact, SolidSide, WallPoint, better, lerp};
+
+/// Sub-intervals per wavelength in the arclength table.
+const ARCLENGTH_TABLE_INTERVALS: usize = 256;
+/// Samples per wavelength in the nearest-point scan.
+const SAMPLES_PER_WAVELENGTH: f64 = 32.0;
+/// The most samples (or candidate wavelengths) a query visits each way: 2048 wavelengths of
+/// scan, reached only by points tens of kilometres from a centimetre-amplitude wall; beyond it
+/// the answer is the best point visited (its distance still an upper bound).
+const MAX_SCAN_STEPS: u32 = 1 << 16;
+
+/// Five-point Gauss-Legendre nodes and weights on `[-1, 1]`.
+const GAUSS_5: [(f64, f64); 5] = [
+    (0.0, 0.568_888_888_888_888_9),
+    (-0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+    (0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+    (-0.906_179_845_938_664, 0.236_926_885_056_189_1),
+    (0.906_179_845_938_664, 0.236_926_885_056_189_1),
+];
+
+/// A sinusoidal wall; arclength is measured along the curve from the parameter `t = 0` (the
+/// baseline point), negative for `t < 0`. Tangent in the direction of increasing `t`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sinusoid {
+    baseline_point_m: Vector2<f64>,
+    direction_rad: f64,
+    u: Vector2<f64>,
+    v: Vector2<f64>,
+    amplitude_m: f64,
+    frequency_per_m: f64,
+    phase_rad: f64,
+    solid: SolidSide,
+    /// `k = 2 pi f`, radians per metre.
+    wavenumber_rad_per_m: f64,
+    /// Arclength at `t = j / (f N)`, `j = 0..=N`.
+    arclength_table_m: Vec<f64>,
+}
+
+impl Sinusoid {
+    /// The sinusoid through `baseline_point_m` (at `t = 0`) along `direction_rad`, with
+    /// `amplitude_m` (>= 0), `frequency_per_m` (cycles per metre, > 0) and `phase_rad`, solid
+    /// on `solid`'s side of the baseline direction (`Left`: the `+v` side).
+    ///
+    /// # Errors
+    /// [`WallError::NotFinite`], [`WallError::NegativeAmplitude`],
+    /// [`WallError::NonPositiveFrequency`].
+    pub fn new(
+        baseline_point_m: Vector2<f64>,
+        direction_rad: f64,
+        amplitude_m: f64,
+        frequency_per_m: f64,
+        phase_rad: f64,
+        solid: SolidSide,
+    ) -> Result<Sinusoid, WallError> {
+        finite("baseline_point_m.x", 0, baseline_point_m.x)?;
+        finite("baseline_point_m.y", 0, baseline_point_m.y)?;
+        finite("direction_rad", 0, direction_rad)?;
+        finite("amplitude_m", 0, amplitude_m)?;
+        finite("frequency_per_m", 0, frequency_per_m)?;
+        finite("phase_rad", 0, phase_rad)?;
+        if amplitude_m < 0.0 {
+            return Err(WallError::NegativeAmplitude { amplitude_m });
+        }
+        if frequency_per_m <= 0.0 {
+            return Err(WallError::NonPositiveFrequency { frequency_per_m });
+        }
+        let (sin, cos) = direction_rad.sin_cos();
+        let mut wall = Sinusoid {
+            baseline_point_m,
+            direction_rad,
+            u: Vector2::new(cos, sin),
+            v: Vector2::new(-sin, cos),
+            amplitude_m,
+            frequency_per_m,
+            phase_rad,
+            solid,
+            wavenumber_rad_per_m: TAU * frequency_per_m,
+            arclength_table_m: Vec::with_capacity(ARCLENGTH_TABLE_INTERVALS + 1),
+        };
+        let step = wall.wavelength_m() / ARCLENGTH_TABLE_INTERVALS as f64;
+        let mut total_m = 0.0;
+        wall.arclength_table_m.push(0.0);
+        for j in 0..ARCLENGTH_TABLE_INTERVALS {
+            let t0 = j as f64 * step;
+            total_m += wall.arclength_between(t0, t0 + step);
+            wall.arclength_table_m.push(total_m);
+        }
+        Ok(wall)
+    }
+
+    /// The baseline point (curve parameter `t = 0`), metres.
+    pub fn baseline_point_m(&self) -> Vector2<f64> {
+        self.baseline_point_m
+    }
+
+    /// The baseline direction from the ground x-axis, radians.
+    pub fn direction_rad(&self) -> f64 {
+        self.direction_rad
+    }
+
+    /// The amplitude, metres.
+    pub fn amplitude_m(&self) -> f64 {
+        self.amplitude_m
+    }
+
+    /// The spatial frequency, cycles per metre.
+    pub fn frequency_per_m(&self) -> f64 {
+        self.frequency_per_m
+    }
+
+    /// The wavelength `1 / f`, metres.
+    pub fn wavelength_m(&self) -> f64 {
+        1.0 / self.frequency_per_m
+    }
+
+    /// The phase, radians.
+    pub fn phase_rad(&self) -> f64 {
+        self.phase_rad
+    }
+
+    /// Which side is solid.
+    pub fn solid_side(&self) -> SolidSide {
+        self.solid
+    }
+
+    /// The curve point at parameter `t_m` (ground frame).
+    pub fn point_at_m(&self, t_m: f64) -> Vector2<f64> {
+        self.baseline_point_m + self.u * t_m + self.v * self.g(t_m)
+    }
+
+    /// The arclength from `t = 0` to `t = t_m` (negative for `t_m < 0`), metres.
+    pub fn arclength_at_m(&self, t_m: f64) -> f64 {
+        let wavelength_m = self.wavelength_m();
+        let periods = (t_m / wavelength_m).floor();
+        let rest_m = (t_m - periods * wavelength_m).clamp(0.0, wavelength_m);
+        let step = wavelength_m / ARCLENGTH_TABLE_INTERVALS as f64;
+        let j = ((rest_m / step) as usize).min(ARCLENGTH_TABLE_INTERVALS - 1);
+        let period_m = self.arclength_table_m[ARCLENGTH_TABLE_INTERVALS];
+        periods * period_m
+            + self.arclength_table_m[j]
+            + self.arclength_between(j as f64 * step, rest_m)
+    }
+
+    /// `g(t) = A sin(k t + phase)`.
+    fn g(&self, t: f64) -> f64 {
+        self.amplitude_m * (self.wavenumber_rad_per_m * t + self.phase_rad).sin()
+    }
+
+    /// `(g, g', g'')` at `t`.
+    fn g_derivatives(&self, t: f64) -> (f64, f64, f64) {
+        let k = self.wavenumber_rad_per_m;
+        let (sin, cos) = (k * t + self.phase_rad).sin_cos();
+        let a = self.amplitude_m;
+        (a * sin, a * k * cos, -a * k * k * sin)
+    }
+
+    /// `int_t0^t1 sqrt(1 + g'^2) dt` by five-point Gauss-Legendre (for short intervals).
+    fn arclength_between(&self, t0: f64, t1: f64) -> f64 {
+        let (mid, half) = (0.5 * (t0 + t1), 0.5 * (t1 - t0));
+        GAUSS_5
+            .iter()
+            .map(|&(x, w)| {
+                let (_, slope, _) = self.g_derivatives(mid + half * x);
+                w * (1.0 + slope * slope).sqrt()
+            })
+            .sum::<f64>()
+            * half
+    }
+
+    /// `+1` if free space is at larger baseline-frame `y` (above the curve), else `-1`.
+    fn free_sign(&self) -> f64 {
+        match self.solid {
+            SolidSide::Left => -1.0,
+            SolidSide::Right => 1.0,
+        }
+    }
+
+    /// The query point in the baseline frame `(x, y)`.
+    fn local(&self, p_m: &Vector2<f64>) -> (f64, f64) {
+        let r = p_m - self.baseline_point_m;
+        (self.u.dot(&r), self.v.dot(&r))
+    }
+
+    /// The nearest curve parameter to the baseline-frame point `(x, y)` and the squared
+    /// distance.
+    fn nearest(&self, x: f64, y: f64) -> (f64, f64) {
+        let r0 = (y - self.g(x)).abs();
+        if !r0.is_finite() {
+            return (x, f64::NAN);
+        }
+        if r0 == 0.0 || self.amplitude_m == 0.0 {
+            return (x, r0 * r0);
+        }
+        let d2 = |t: f64| {
+            let dy = self.g(t) - y;
+            (t - x) * (t - x) + dy * dy
+        };
+        let band = (y.abs() - self.amplitude_m).max(0.0);
+        let band2 = band * band;
+        let h = (self.wavelength_m() / SAMPLES_PER_WAVELENGTH).min(0.25 * r0);
+        let mut best = (x, r0 * r0);
+        for direction in [1.0, -1.0] {
+            // Samples t_i = x + direction * i h, i = -1, 0, 1, ...; a discrete local minimum
+            // at the middle of three is refined.
+            let mut prev2 = (x - direction * h, d2(x - direction * h));
+            let mut prev = (x, best.1);
+            let mut i = 1.0;
+            for _ in 0..MAX_SCAN_STEPS {
+                let t = x + direction * i * h;
+                let here = (t, d2(t));
+                if prev.1 <= prev2.1 && prev.1 <= here.1 {
+                    let refined = self.refine(x, y, prev.0 - h, prev.0 + h, prev.0);
+                    let candidate = (refined, d2(refined));
+                    for c in [candidate, prev] {
+                        if c.1 < best.1 {
+                            best = c;
+                        }
+                    }
+                }
+                let offset = prev.0 - x;
+                if offset * offset + band2 > best.1 {
+                    break;
+                }
+                prev2 = prev;
+                prev = here;
+                i += 1.0;
+            }
+        }
+        best
+    }
+
+    /// Newton's method on `D'(t) = 2 ((t - x) + (g - y) g')` in `[lo, hi]` from `t`,
+    /// safeguarded by bisection when `D'` changes sign over the bracket.
+    fn refine(&self, x: f64, y: f64, mut lo: f64, mut hi: f64, mut t: f64) -> f64 {
+        let derivative = |t: f64| {
+            let (g, g1, g2) = self.g_derivatives(t);
+            ((t - x) + (g - y) * g1, 1.0 + g1 * g1 + (g - y) * g2)
+        };
+        let bracketed = derivative(lo).0 < 0.0 && derivative(hi).0 > 0.0;
+        for _ in 0..100 {
+            let (f, fp) = derivative(t);
+            if f == 0.0 {
+                break;
+            }
+            if bracketed {
+                if f < 0.0 {
+                    lo = t;
+                } else {
+                    hi = t;
+                }
+            }
+            let newton = t - f / fp;
+            let next = if fp > 0.0 && newton > lo && newton < hi {
+                newton
+            } else if bracketed {
+                0.5 * (lo + hi)
+            } else {
+                // No sign change to trust: keep the sample.
+                return t;
+            };
+            let done = (next - t).abs() <= 1e-15 * (1.0 + t.abs());
+            t = next;
+            if done {
+                break;
+            }
+        }
+        t
+    }
+
+    /// The wall point at curve parameter `t` for a query point at baseline-frame height `y`
+    /// and squared distance `d2`.
+    fn wall_point(&self, t: f64, x: f64, y: f64, d2: f64) -> WallPoint {
+        let (_, slope, _) = self.g_derivatives(t);
+        let tangent = (self.u + self.v * slope).normalize();
+        let vertical = y - self.g(x);
+        let gap_abs = d2.sqrt();
+        let gap_m = if self.free_sign() * vertical >= 0.0 {
+            gap_abs
+        } else {
+            -gap_abs
+        };
+        WallPoint {
+            gap_m,
+            closest_m: self.point_at_m(t),
+            normal: self.solid.free_normal(&tangent),
+            tangent,
+            arclength_m: self.arclength_at_m(t),
+        }
+    }
+
+    /// The signed distance and true Euclidean nearest point (see [`WallPoint`] and the module
+    /// docs); no allocation.
+    pub fn signed_distance(&self, p_m: &Vector2<f64>) -> WallPoint {
+        let (x, y) = self.local(p_m);
+        let (t, d2) = self.nearest(x, y);
+        self.wall_point(t, x, y, d2)
+    }
+
+    /// The deepest (or closest) point of `a -> b` (see the module docs); no allocation.
+    pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
+        let at = |s: f64| {
+            let point_m = lerp(a_m, b_m, s);
+            SegmentContact {
+                s,
+                point_m,
+                wall: self.signed_distance(&point_m),
+            }
+        };
+        let mut best = better(at(0.0), at(1.0));
+        if self.amplitude_m == 0.0 {
+            return best;
+        }
+        let (xa, ya) = self.local(a_m);
+        let (xb, yb) = self.local(b_m);
+        let (dx, dy) = (xb - xa, yb - ya);
+        let (x_min, x_max) = (xa.min(xb), xa.max(xb));
+        let k = self.wavenumber_rad_per_m;
+        let (a, phase) = (self.amplitude_m, self.phase_rad);
+        let slope_amplitude = a * k;
+        let slope = if dx != 0.0 { dy / dx } else { f64::INFINITY };
+        // Parameters t in [lo, hi] with k t + phase = base + 2 pi j.
+        let each = |lo: f64, hi: f64, base: f64, f: &mut dyn FnMut(f64)| {
+            let j0 = ((k * lo + phase - base) / TAU).ceil();
+            let j1 = ((k * hi + phase - base) / TAU).floor();
+            let mut j = j0;
+            while j <= j1 && j - j0 < f64::from(MAX_SCAN_STEPS) {
+                f((base + TAU * j - phase) / k);
+                j += 1.0;
+            }
+        };
+        let roots = if slope.abs() <= slope_amplitude {
+            let theta = (slope / slope_amplitude).clamp(-1.0, 1.0).acos();
+            [Some(theta), Some(-theta)]
+        } else {
+            [None, None]
+        };
+        // Lowest vertical gap along the segment (sign-equivalent to the signed distance): its
+        // candidates are the ends and the vertical points where g' = slope.
+        let free = self.free_sign();
+        let vertical = |x: f64, y: f64| free * (y - self.g(x));
+        let mut lowest = vertical(xa, ya).min(vertical(xb, yb));
+        if dx != 0.0 {
+            for root in roots.iter().flatten() {
+                each(x_min, x_max, *root, &mut |t| {
+                    let y = ya + (t - xa) * slope;
+                    lowest = lowest.min(vertical(t, y));
+                });
+            }
+        }
+        // The nearest parameter of any segment point s* that beats the ends lies within
+        // |t - x(s*)| <= |F(s*)|: at most the best end gap if the segment stays free, at most
+        // the deepest vertical penetration otherwise.
+        let reach = if lowest >= 0.0 {
+            best.wall.gap_m.max(0.0)
+        } else {
+            -lowest
+        };
+        let (lo, hi) = (x_min - reach, x_max + reach);
+        let d_len2 = dx * dx + dy * dy;
+        // Crests: segment crossings of the vertical lines through the extrema.
+        if dx != 0.0 {
+            for base in [FRAC_PI_2, FRAC_PI_2 + PI] {
+                each(lo.max(x_min), hi.min(x_max), base, &mut |t| {
+                    let s = (t - xa) / dx;
+                    if (0.0..=1.0).contains(&s) {
+                        best = better(best, at(s));
+                    }
+                });
+            }
+            // Stationary points: the curve tangent at t parallel to the segment; the segment
+            // point on the curve normal there.
+            for root in roots.iter().flatten() {
+                each(lo, hi, *root, &mut |t| {
+                    let (g, g1, _) = self.g_derivatives(t);
+                    // Normal direction (-g', 1) in the baseline frame.
+                    let (nx, ny) = (-g1, 1.0);
+                    let (cx, cy) = (t - xa, g - ya);
+                    let denom = dx * ny - dy * nx;
+                    if denom != 0.0 && d_len2 > 0.0 {
+                        let s = (cx * ny - cy * nx) / denom;
+                        if (0.0..=1.0).contains(&s) {
+                            best = better(best, at(s));
+                        }
+                    }
+                });
+            }
+        }
+        best
+    }
+
+    /// A lower bound on the gap of every point of `a -> b`: its height beyond the band
+    /// `|y| <= A` on the free side (`-inf` if it reaches into the band).
+    pub(crate) fn segment_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
+        let free = self.free_sign();
+        let (_, ya) = self.local(a_m);
+        let (_, yb) = self.local(b_m);
+        let beyond = (free * ya).min(free * yb) - self.amplitude_m;
+        if beyond > 0.0 {
+            beyond
+        } else {
+            f64::NEG_INFINITY
+        }
+    }
+
+    /// Moves the sinusoid by `offset_m` (arclength stays measured from the moved baseline
+    /// point).
+    pub fn translate(&mut self, offset_m: Vector2<f64>) {
+        self.baseline_point_m += offset_m;
+    }
+
+    /// A copy moved by `offset_m`.
+    pub fn translated(&self, offset_m: Vector2<f64>) -> Sinusoid {
+        let mut moved = self.clone();
+        moved.translate(offset_m);
+        moved
+    }
+}

@@ -1,0 +1,225 @@
+//! Wall queries against brute force (model.md 6): the sinusoid's nearest point against dense
+//! sampling of the curve, the polyline's signed distance against an independent
+//! point-to-segment computation, and `segment_contact` against dense sampling along the
+//! segment for all three shapes (amplitudes up to 5 cm, 1 to 20 cycles/m, links 5 to 60 mm,
+//! and some up to 150 mm).
+#![allow(clippy::unwrap_used)]
+
+use nalgebra::Vector2;
+use proptest::prelude::*;
+use sim_core::{Line, Polyline, Sinusoid, SolidSide, Wall, WallShape};
+
+fn v(x: f64, y: f64) -> Vector2<f64> {
+    Vector2::new(x, y)
+}
+
+fn side(left: bool) -> SolidSide {
+    if left {
+        SolidSide::Left
+    } else {
+        SolidSide::Right
+    }
+}
+
+/// Distance from `p` to the segment `a -> b`.
+fn point_segment_distance(p: Vector2<f64>, a: Vector2<f64>, b: Vector2<f64>) -> f64 {
+    let d = b - a;
+    let s = ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
+    (p - (a + d * s)).norm()
+}
+
+/// The local frame `(x, y)` of a point for a sinusoid along `direction` through `o`.
+fn local(o: Vector2<f64>, direction: f64, p: Vector2<f64>) -> (f64, f64) {
+    let (s, c) = direction.sin_cos();
+    let r = p - o;
+    (c * r.x + s * r.y, -s * r.x + c * r.y)
+}
+
+fn sinusoid_strategy() -> impl Strategy<Value = (Sinusoid, f64, f64, f64)> {
+    (
+        0.0..0.05f64,
+        1.0..20.0f64,
+        -3.2..3.2f64,
+        -1.0..1.0f64,
+        any::<bool>(),
+    )
+        .prop_map(|(amplitude, frequency, phase, direction, left)| {
+            let wall = Sinusoid::new(
+                v(0.01, 0.1),
+                direction,
+                amplitude,
+                frequency,
+                phase,
+                side(left),
+            )
+            .unwrap();
+            (wall, amplitude, frequency, phase)
+        })
+}
+
+/// A polyline over increasing x (so the vertical test gives the sign): 2 to 7 vertices.
+fn polyline_strategy() -> impl Strategy<Value = (Vec<Vector2<f64>>, bool)> {
+    (
+        prop::collection::vec((0.005..0.08f64, -0.04..0.04f64), 2..7),
+        any::<bool>(),
+    )
+        .prop_map(|(steps, left)| {
+            let mut x = -0.1;
+            let vertices = steps
+                .into_iter()
+                .map(|(dx, y)| {
+                    x += dx;
+                    v(x, 0.1 + y)
+                })
+                .collect();
+            (vertices, left)
+        })
+}
+
+/// A segment near the wall band: start within `reach` of y = 0.1, random direction.
+fn segment_strategy(reach: f64) -> impl Strategy<Value = (Vector2<f64>, Vector2<f64>)> {
+    (
+        -0.1..0.3f64,
+        -reach..reach,
+        -3.2..3.2f64,
+        prop_oneof![4 => 0.005..0.06f64, 1 => 0.06..0.15f64],
+    )
+        .prop_map(|(x, y, angle, length)| {
+            let a = v(x, 0.1 + y);
+            (a, a + v(angle.cos(), angle.sin()) * length)
+        })
+}
+
+/// Checks `segment_contact` against sampling `samples + 1` points along the segment.
+fn check_segment(wall: &WallShape, a: Vector2<f64>, b: Vector2<f64>, samples: usize) {
+    let c = wall.segment_contact(&a, &b);
+    assert!((0.0..=1.0).contains(&c.s));
+    assert!((c.point_m - (a + (b - a) * c.s)).norm() < 1e-15);
+    let again = wall.signed_distance(&c.point_m);
+    assert!((again.gap_m - c.wall.gap_m).abs() < 1e-15);
+    let sampled = (0..=samples)
+        .map(|i| {
+            wall.signed_distance(&(a + (b - a) * (i as f64 / samples as f64)))
+                .gap_m
+        })
+        .fold(f64::INFINITY, f64::min);
+    // Never shallower than any sample; no deeper than the true minimum, which the samples
+    // bound to within half their spacing (the signed distance is 1-Lipschitz).
+    assert!(
+        c.wall.gap_m <= sampled + 1e-12,
+        "segment_contact {} > sampled {sampled} for {a:?} -> {b:?}",
+        c.wall.gap_m
+    );
+    let spacing = (b - a).norm() / samples as f64;
+    assert!(c.wall.gap_m >= sampled - 0.5 * spacing - 1e-12);
+    // The early-out agrees with the full answer on both sides of the threshold.
+    for margin in [0.0, 0.002, 0.02] {
+        let within = wall.segment_contact_within(&a, &b, margin);
+        assert_eq!(within.is_some(), c.wall.gap_m <= margin);
+        if let Some(w) = within {
+            assert_eq!(w, c);
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn sinusoid_nearest_point_beats_dense_sampling(
+        (wall, amplitude, frequency, phase) in sinusoid_strategy(),
+        x in -0.2..0.3f64,
+        height in -0.08..0.08f64,
+    ) {
+        let direction = wall.direction_rad();
+        let o = wall.baseline_point_m();
+        let p = o + v(direction.cos(), direction.sin()) * x
+            + v(-direction.sin(), direction.cos()) * height;
+        let w = wall.signed_distance(&p);
+        let (px, py) = local(o, direction, p);
+        let g = |t: f64| amplitude * (std::f64::consts::TAU * frequency * t + phase).sin();
+        // The closest point is on the curve, at distance |gap|, along the normal.
+        let (cx, cy) = local(o, direction, w.closest_m);
+        prop_assert!((cy - g(cx)).abs() < 1e-12);
+        prop_assert!(((p - w.closest_m).norm() - w.gap_m.abs()).abs() < 1e-12);
+        prop_assert!((p - w.closest_m - w.normal * w.gap_m).norm() < 1e-9);
+        prop_assert!((w.normal.norm() - 1.0).abs() < 1e-12 && w.normal.dot(&w.tangent).abs() < 1e-12);
+        // The sign: free side by the vertical test.
+        let free_above = wall.solid_side() == SolidSide::Right;
+        let vertical = py - g(px);
+        if vertical.abs() > 1e-12 {
+            prop_assert_eq!(w.gap_m > 0.0, (vertical > 0.0) == free_above);
+        }
+        // Dense sampling of the curve around the point (step 10 um, covering the bracket).
+        let reach = vertical.abs() + 0.01;
+        let step = 1e-5;
+        let count = (2.0 * reach / step) as usize + 1;
+        let sampled = (0..=count)
+            .map(|i| {
+                let t = px - reach + i as f64 * step;
+                ((t - px).powi(2) + (g(t) - py).powi(2)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        prop_assert!(w.gap_m.abs() <= sampled + 1e-12, "{} > sampled {}", w.gap_m.abs(), sampled);
+        let lipschitz = (1.0 + (amplitude * std::f64::consts::TAU * frequency).powi(2)).sqrt();
+        prop_assert!(w.gap_m.abs() >= sampled - 0.5 * step * lipschitz - 1e-12);
+    }
+
+    #[test]
+    fn polyline_signed_distance_matches_point_to_segment(
+        (vertices, left) in polyline_strategy(),
+        p in (-0.3..0.5f64, 0.0..0.2f64).prop_map(|(x, y)| v(x, y)),
+    ) {
+        let wall = Polyline::new(vertices.clone(), side(left)).unwrap();
+        let w = wall.signed_distance(&p);
+        // Independent: distance to the edges, the end edges extended 100 m.
+        let k = vertices.len() - 1;
+        let mut ends = vertices.clone();
+        ends[0] = vertices[0] - (vertices[1] - vertices[0]).normalize() * 100.0;
+        ends[k] = vertices[k] + (vertices[k] - vertices[k - 1]).normalize() * 100.0;
+        let distance = ends
+            .windows(2)
+            .map(|e| point_segment_distance(p, e[0], e[1]))
+            .fold(f64::INFINITY, f64::min);
+        prop_assert!((w.gap_m.abs() - distance).abs() < 1e-12, "{} vs {distance}", w.gap_m);
+        prop_assert!(((p - w.closest_m).norm() - distance).abs() < 1e-12);
+        // Sign: the polyline is a graph over x; solid above for Left.
+        let i = ends.windows(2).position(|e| p.x <= e[1].x).unwrap();
+        let (e0, e1) = (ends[i], ends[i + 1]);
+        let y_wall = e0.y + (e1.y - e0.y) * (p.x - e0.x) / (e1.x - e0.x);
+        if (p.y - y_wall).abs() > 1e-9 && distance > 1e-9 {
+            prop_assert_eq!(w.gap_m > 0.0, (p.y < y_wall) == left);
+        }
+        prop_assert!((w.normal.norm() - 1.0).abs() < 1e-12);
+        prop_assert!((p - w.closest_m - w.normal * w.gap_m).norm() < 1e-9);
+    }
+
+    #[test]
+    fn line_segment_contact_beats_sampling(
+        angle in -3.2..3.2f64,
+        left in any::<bool>(),
+        (a, b) in segment_strategy(0.08),
+    ) {
+        let wall = WallShape::Line(Line::new(v(0.05, 0.1), angle, side(left)).unwrap());
+        check_segment(&wall, a, b, 2000);
+    }
+
+    #[test]
+    fn polyline_segment_contact_beats_sampling(
+        (vertices, left) in polyline_strategy(),
+        (a, b) in segment_strategy(0.08),
+    ) {
+        let wall = WallShape::Polyline(Polyline::new(vertices, side(left)).unwrap());
+        check_segment(&wall, a, b, 2000);
+    }
+
+    #[test]
+    fn sinusoid_segment_contact_beats_sampling(
+        (wall, amplitude, _, _) in sinusoid_strategy(),
+        (a, b) in segment_strategy(0.08),
+    ) {
+        let _ = amplitude;
+        let wall = Wall::smooth(wall);
+        check_segment(&wall.shape, a, b, 1000);
+    }
+}
