@@ -29,6 +29,8 @@ pub enum ChainField {
     HairLateralOffset,
     /// The spring preload of the hair on link `index`.
     HairPreload,
+    /// The spring stiffness of the hair on link `index`.
+    HairStiffness,
 }
 
 impl fmt::Display for ChainField {
@@ -45,6 +47,7 @@ impl fmt::Display for ChainField {
             Self::HairPivot => "hair.pivot_from_distal_end_m",
             Self::HairLateralOffset => "hair.lateral_offset_m",
             Self::HairPreload => "hair.preload_nm",
+            Self::HairStiffness => "hair.stiffness_nm_per_rad",
         })
     }
 }

@@ -60,12 +60,17 @@ pub struct Hair {
     pub direction: HairDirection,
     /// Spring preload holding the hair against its open stop, N m (`>= 0`).
     pub preload_nm: f64,
+    /// Stiffness of the hair's torsion spring, N m / rad (`>= 0`): folding the hair to angle
+    /// `beta` takes the torque `preload_nm + stiffness_nm_per_rad (open_angle_rad - beta)`.
+    pub stiffness_nm_per_rad: f64,
 }
 
 impl Hair {
     /// The seed's hair on a link of length `link_length_m`: 18 mm, open at 45 degrees,
-    /// pointing distally, pivot on the axis at the link's midpoint, on the left side, no
-    /// preload given.
+    /// pointing distally, pivot on the axis at the link's midpoint, on the left side. The
+    /// seed gives no spring constants (a 0.1 mm Nitinol wire swings the hair open, 3.3.1.1);
+    /// this takes a light spring: preload `1e-4` N m (5.6 mN at the tip of an open hair) and
+    /// stiffness `2e-4` N m / rad.
     pub fn seed(link_length_m: f64) -> Hair {
         Hair {
             length_m: 0.018,
@@ -74,7 +79,8 @@ impl Hair {
             lateral_offset_m: 0.0,
             side: HairSide::Left,
             direction: HairDirection::Distal,
-            preload_nm: 0.0,
+            preload_nm: 1e-4,
+            stiffness_nm_per_rad: 2e-4,
         }
     }
 
@@ -92,7 +98,7 @@ impl Hair {
     }
 
     /// `d delta / d beta`: `+-1` by side and direction.
-    fn direction_rate(&self) -> f64 {
+    pub fn direction_rate(&self) -> f64 {
         match self.direction {
             HairDirection::Distal => self.sigma(),
             HairDirection::Proximal => -self.sigma(),
@@ -121,6 +127,25 @@ impl Hair {
         self.pivot_in_link_m() + self.length_m * Vector2::new(cs, sn)
     }
 
+    /// `d tip / d beta` in the link frame: `l_h (d delta / d beta) (-sin delta, cos delta)`.
+    pub fn tip_rate_in_link_m(&self, beta_rad: f64) -> Vector2<f64> {
+        let (sn, cs) = self.direction_in_link_rad(beta_rad).sin_cos();
+        self.length_m * self.direction_rate() * Vector2::new(-sn, cs)
+    }
+
+    /// The spring's torque on the hair at angle `beta_rad`, as a gradient: `dU_h / d beta =
+    /// -preload - k_h (open - beta)` (negative: it pushes the hair open), with
+    /// `U_h = preload (open - beta) + k_h / 2 (open - beta)^2`.
+    pub fn spring_gradient_nm(&self, beta_rad: f64) -> f64 {
+        -self.preload_nm - self.stiffness_nm_per_rad * (self.open_angle_rad - beta_rad)
+    }
+
+    /// The spring energy `U_h(beta)`, joules (zero when open against the stop).
+    pub fn spring_energy_j(&self, beta_rad: f64) -> f64 {
+        let folded = self.open_angle_rad - beta_rad;
+        self.preload_nm * folded + 0.5 * self.stiffness_nm_per_rad * folded * folded
+    }
+
     pub(crate) fn validate(&self, link: usize, link_length_m: f64) -> Result<(), ChainError> {
         let fields = [
             (ChainField::HairLength, self.length_m),
@@ -128,6 +153,7 @@ impl Hair {
             (ChainField::HairPivot, self.pivot_from_distal_end_m),
             (ChainField::HairLateralOffset, self.lateral_offset_m),
             (ChainField::HairPreload, self.preload_nm),
+            (ChainField::HairStiffness, self.stiffness_nm_per_rad),
         ];
         for (field, value) in fields {
             finite(field, link, value)?;
@@ -153,6 +179,9 @@ impl Hair {
         }
         if self.preload_nm < 0.0 {
             return bad(ChainField::HairPreload, self.preload_nm);
+        }
+        if self.stiffness_nm_per_rad < 0.0 {
+            return bad(ChainField::HairStiffness, self.stiffness_nm_per_rad);
         }
         Ok(())
     }

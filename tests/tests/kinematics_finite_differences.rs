@@ -177,6 +177,7 @@ fn hair_strategy() -> impl Strategy<Value = Hair> {
                 HairDirection::Proximal
             },
             preload_nm: 0.0,
+            stiffness_nm_per_rad: 0.0,
         })
 }
 

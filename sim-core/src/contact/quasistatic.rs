@@ -1,0 +1,727 @@
+//! Quasi-static stepping of a chain against walls: the step driver (candidate contacts,
+//! missed contacts, hair anchoring, substeps and snaps) around the semismooth Newton solve.
+
+// Links are indexed with their ends and hair angles together: index loops say what they do.
+#![allow(clippy::needless_range_loop)]
+
+use nalgebra::Vector2;
+
+use super::ContactError;
+use super::feature::{Contact, Feature, FrictionLaw};
+use super::posture::Posture;
+use super::settings::ContactSettings;
+use super::ssn::{Candidate, Proximal, Ssn, StepProblem, hair_of};
+use crate::{Chain, Surface, Wall};
+
+/// What one call of [`QuasiStatic::step_to`] took.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// Substeps solved (1 when the step was solved whole).
+    pub substeps: usize,
+    /// Whether the posture left its branch of equilibria during the step (a flip or a spring
+    /// forward) and was followed downhill to the next one.
+    pub snapped: bool,
+    /// Pseudo-time steps taken following snaps.
+    pub snap_steps: usize,
+    /// Newton iterations over all solves of the step.
+    pub iterations: usize,
+    /// Solves repeated because a contact was missed, or a hair anchored or let go.
+    pub resolves: usize,
+    /// The final residual of the equations, metres.
+    pub residual_m: f64,
+}
+
+/// Why one attempt at a (sub)step was not accepted.
+enum Reject {
+    /// Newton did not converge.
+    NoConvergence,
+    /// It converged, but a joint moved more than the jump threshold.
+    Jump,
+}
+
+/// An accepted (sub)step, not yet committed.
+struct Accepted {
+    x: Vec<f64>,
+    hair_links: Vec<usize>,
+    cands: Vec<Candidate>,
+    residual_m: f64,
+    hand_force_n: Vector2<f64>,
+}
+
+/// A chain moving quasi-statically against walls with friction and hairs (model.md 6-7).
+///
+/// The state carries from step to step: joint and hair angles, and every contact with its
+/// forces and friction state (anchored hairs stay anchored). See the
+/// [module documentation](super) for the method.
+#[derive(Debug)]
+pub struct QuasiStatic {
+    chain: Chain,
+    walls: Vec<Wall>,
+    tip_force_n: Vector2<f64>,
+    settings: ContactSettings,
+    base_m: Vector2<f64>,
+    theta: Vec<f64>,
+    beta: Vec<f64>,
+    contacts: Vec<Candidate>,
+    ssn: Ssn,
+    start: Posture,
+    probe: Posture,
+    /// A hand holding the tip at this offset from the base pivot.
+    hand_offset_m: Option<Vector2<f64>>,
+    hand_force_n: Vector2<f64>,
+}
+
+impl QuasiStatic {
+    /// A chain at `theta_rad` (`n + 1` entries, `theta_0` the base angle) with its base pivot
+    /// at `base_m`, among `walls`. Hairs start open. No contact forces act yet: call
+    /// [`Self::settle`] to let a posture touching a wall come to rest.
+    ///
+    /// # Errors
+    /// [`ContactError::WrongLength`], [`ContactError::NotFinite`],
+    /// [`ContactError::OutsideLimits`], [`ContactError::BadSetting`], and
+    /// [`ContactError::BaseInsideWall`] or [`ContactError::StartInsideWall`] if the posture
+    /// is inside a wall by more than the penetration tolerance.
+    pub fn new(
+        chain: Chain,
+        walls: Vec<Wall>,
+        base_m: Vector2<f64>,
+        theta_rad: &[f64],
+        settings: ContactSettings,
+    ) -> Result<QuasiStatic, ContactError> {
+        settings.validate()?;
+        if theta_rad.len() != chain.dof() {
+            return Err(ContactError::WrongLength {
+                argument: "theta_rad",
+                expected: chain.dof(),
+                actual: theta_rad.len(),
+            });
+        }
+        finite("base_m", &[base_m.x, base_m.y])?;
+        finite("theta_rad", theta_rad)?;
+        for (j, (&t, lim)) in theta_rad
+            .iter()
+            .zip(chain.joint_limits())
+            .enumerate()
+            .skip(1)
+        {
+            if !lim.contains(t) {
+                return Err(ContactError::OutsideLimits {
+                    joint: j,
+                    angle_rad: t,
+                    cw_rad: lim.cw_rad,
+                    ccw_rad: lim.ccw_rad,
+                });
+            }
+        }
+        let mut theta = theta_rad.to_vec();
+        theta[0] = chain.base_angle_rad();
+        let beta = chain
+            .hairs()
+            .iter()
+            .map(|h| h.map_or(0.0, |h| h.open_angle_rad))
+            .collect();
+        let mut sim = QuasiStatic {
+            chain,
+            walls,
+            tip_force_n: Vector2::zeros(),
+            settings,
+            base_m,
+            theta,
+            beta,
+            contacts: Vec::new(),
+            ssn: Ssn::default(),
+            start: Posture::default(),
+            probe: Posture::default(),
+            hand_offset_m: None,
+            hand_force_n: Vector2::zeros(),
+        };
+        sim.check_start()?;
+        Ok(sim)
+    }
+
+    /// A dead load at the tip (ground frame, newtons) from now on.
+    pub fn set_tip_force_n(&mut self, tip_force_n: Vector2<f64>) {
+        self.tip_force_n = tip_force_n;
+    }
+
+    /// The dead load at the tip, newtons.
+    pub fn tip_force_n(&self) -> Vector2<f64> {
+        self.tip_force_n
+    }
+
+    /// Holds the tip near `offset_m` from the base pivot (a hand moving with the base, for
+    /// placing the antenna) by a stiff spring, or lets go (`None`). While held,
+    /// [`Self::hand_force_n`] is the hand's force on the tip.
+    pub fn hold_tip(&mut self, offset_m: Option<Vector2<f64>>) {
+        self.hand_offset_m = offset_m;
+        if offset_m.is_none() {
+            self.hand_force_n = Vector2::zeros();
+        }
+    }
+
+    /// The force of the hand on the tip after the last step, newtons.
+    pub fn hand_force_n(&self) -> Vector2<f64> {
+        self.hand_force_n
+    }
+
+    /// The chain.
+    pub fn chain(&self) -> &Chain {
+        &self.chain
+    }
+
+    /// The walls.
+    pub fn walls(&self) -> &[Wall] {
+        &self.walls
+    }
+
+    /// The base pivot, ground frame, metres.
+    pub fn base_m(&self) -> Vector2<f64> {
+        self.base_m
+    }
+
+    /// The joint angles `theta_0..theta_n`, radians.
+    pub fn theta_rad(&self) -> &[f64] {
+        &self.theta
+    }
+
+    /// The hair angles per link (`n + 1`; `0` on links without a hair), radians: the open
+    /// angle unless a contact folds the hair.
+    pub fn hair_angles_rad(&self) -> &[f64] {
+        &self.beta
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &ContactSettings {
+        &self.settings
+    }
+
+    /// The contacts after the last step, ordered by link then kind.
+    pub fn contacts(&self) -> Vec<Contact> {
+        let mut out = Vec::with_capacity(self.contacts.len());
+        self.contacts_into(&mut out);
+        out
+    }
+
+    /// [`Self::contacts`] into a caller's buffer (cleared first).
+    pub fn contacts_into(&self, out: &mut Vec<Contact>) {
+        out.clear();
+        out.extend(self.contacts.iter().map(|c| Contact {
+            feature: c.feature,
+            wall: c.wall,
+            s: c.s,
+            point_m: c.point_m,
+            normal: c.normal,
+            tangent: c.tangent,
+            normal_force_n: c.normal_force_n,
+            shear_force_n: c.shear_force_n,
+            law: c.law,
+            slip: c.slip,
+            slip_m: c.slip_m,
+        }));
+    }
+
+    /// Replaces the posture (joint angles), dropping every contact: for placing the antenna
+    /// by hand before a sweep. The same checks as [`Self::new`].
+    ///
+    /// # Errors
+    /// As [`Self::new`].
+    pub fn set_posture(
+        &mut self,
+        base_m: Vector2<f64>,
+        theta_rad: &[f64],
+    ) -> Result<(), ContactError> {
+        let fresh = QuasiStatic::new(
+            self.chain.clone(),
+            self.walls.clone(),
+            base_m,
+            theta_rad,
+            self.settings,
+        )?;
+        self.base_m = fresh.base_m;
+        self.theta = fresh.theta;
+        self.beta = fresh.beta;
+        self.contacts.clear();
+        Ok(())
+    }
+
+    /// Lets the current posture come to rest where it is (the base does not move): a step of
+    /// length zero. A posture that is not an equilibrium follows its downhill path.
+    ///
+    /// # Errors
+    /// As [`Self::step_to`].
+    pub fn settle(&mut self) -> Result<StepReport, ContactError> {
+        self.step_to(self.base_m)
+    }
+
+    /// Moves the base pivot to `base_m` and solves the equilibrium there with friction
+    /// remembered from the last step. A step that does not converge, or jumps, is split in
+    /// halves (up to `2^max_substep_depth` substeps); where the posture's branch of
+    /// equilibria ends, the posture follows the downhill path to the next one (a snap).
+    ///
+    /// # Errors
+    /// [`ContactError::NotFinite`], [`ContactError::BaseInsideWall`], or
+    /// [`ContactError::NoConvergence`] (the state is then that of the last substep solved).
+    pub fn step_to(&mut self, base_m: Vector2<f64>) -> Result<StepReport, ContactError> {
+        finite("base_m", &[base_m.x, base_m.y])?;
+        let mut report = StepReport::default();
+        if self.walls.is_empty() {
+            // No wall, no contact: the posture is the free equilibrium under the tip load,
+            // which the base's translation does not change.
+            self.base_m = base_m;
+            if self.tip_force_n == Vector2::zeros()
+                && self.hand_offset_m.is_none()
+                && self.at_rest()
+            {
+                report.substeps = 1;
+                return Ok(report);
+            }
+        }
+        let full_m = (base_m - self.base_m).norm();
+        let min_m = full_m / f64::powi(2.0, self.settings.max_substep_depth as i32);
+        let mut goals = vec![base_m];
+        while let Some(&goal) = goals.last() {
+            match self.attempt(goal, None, &mut report) {
+                Ok(accepted) => {
+                    report.residual_m = accepted.residual_m;
+                    self.commit(goal, accepted);
+                    report.substeps += 1;
+                    goals.pop();
+                }
+                Err(_) => {
+                    let d = goal - self.base_m;
+                    if d.norm() > min_m && d.norm() > 0.0 {
+                        goals.push(self.base_m + d * 0.5);
+                    } else {
+                        self.follow_snap(goal, &mut report)?;
+                        report.substeps += 1;
+                        goals.pop();
+                    }
+                }
+            }
+        }
+        Ok(report)
+    }
+
+    /// Whether every joint sits at its rest angle within its limits (the free equilibrium
+    /// without loads).
+    fn at_rest(&self) -> bool {
+        self.chain
+            .rest_theta()
+            .iter()
+            .zip(&self.theta)
+            .skip(1)
+            .all(|(r, t)| r == t)
+    }
+
+    /// Follows a vanished branch downhill at the base position `goal`: implicit steps of the
+    /// friction-aware gradient flow (proximal solves), until a plain solve from the posture
+    /// reached converges without a jump.
+    fn follow_snap(
+        &mut self,
+        goal: Vector2<f64>,
+        report: &mut StepReport,
+    ) -> Result<(), ContactError> {
+        report.snapped = true;
+        let mut gamma = 1.0;
+        for _ in 0..self.settings.max_snap_steps {
+            report.snap_steps += 1;
+            let x_prev = self.coordinates();
+            match self.attempt(goal, Some((gamma, &x_prev)), report) {
+                Ok(accepted) => {
+                    let moved = accepted
+                        .x
+                        .iter()
+                        .zip(&x_prev)
+                        .take(self.chain.n())
+                        .fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
+                    report.residual_m = accepted.residual_m;
+                    self.commit(goal, accepted);
+                    if (moved < 1e-7 || gamma < 1e-6)
+                        && let Ok(plain) = self.attempt(goal, None, report)
+                    {
+                        report.residual_m = plain.residual_m;
+                        self.commit(goal, plain);
+                        return Ok(());
+                    }
+                    gamma = (gamma * 0.5).max(1e-8);
+                }
+                Err(_) => {
+                    gamma *= 4.0;
+                    if gamma > 1e12 {
+                        break;
+                    }
+                }
+            }
+        }
+        Err(ContactError::no_convergence(
+            goal,
+            "the downhill path did not come to rest",
+            report.iterations,
+        ))
+    }
+
+    /// The joint angles `theta_1..theta_n` (the hair angles are not carried).
+    fn coordinates(&self) -> Vec<f64> {
+        self.theta[1..].to_vec()
+    }
+
+    /// Tries one (sub)step from the committed state to the base at `goal`.
+    fn attempt(
+        &mut self,
+        goal: Vector2<f64>,
+        proximal: Option<(f64, &[f64])>,
+        report: &mut StepReport,
+    ) -> Result<Accepted, Reject> {
+        let n = self.chain.n();
+        self.start.update(&self.chain, self.base_m, &self.theta);
+        self.probe.update(&self.chain, goal, &self.theta);
+        let mut cands = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
+        let mut demoted: Vec<usize> = Vec::new();
+        let mut promoted: Vec<usize> = Vec::new();
+        for _round in 0..8 {
+            let mut hair_links: Vec<usize> = cands
+                .iter()
+                .filter(|c| c.feature.is_hair())
+                .map(|c| c.feature.link())
+                .collect();
+            hair_links.sort_unstable();
+            hair_links.dedup();
+            let mut x: Vec<f64> = self.theta[1..].to_vec();
+            x.extend(hair_links.iter().map(|&l| self.beta[l]));
+            let prox_x: Vec<f64>;
+            let prox = match proximal {
+                Some((gamma, x_prev)) => {
+                    prox_x = x_prev
+                        .iter()
+                        .copied()
+                        .chain(hair_links.iter().map(|&l| self.beta[l]))
+                        .collect();
+                    Some(Proximal {
+                        gamma,
+                        x_prev: &prox_x,
+                    })
+                }
+                None => None,
+            };
+            let problem = StepProblem {
+                chain: &self.chain,
+                walls: &self.walls,
+                tip_force_n: self.tip_force_n,
+                base_m: goal,
+                hair_links: &hair_links,
+                hair_beta_rad: &self.beta,
+                proximal: prox,
+                hand_m: self.hand_offset_m.map(|o| goal + o),
+                tolerance_m: self.settings.tolerance_m,
+                max_iterations: self.settings.max_iterations,
+            };
+            let outcome = self.ssn.solve(&problem, &mut x, &mut cands);
+            report.iterations += outcome.iterations;
+            if !outcome.converged {
+                return Err(Reject::NoConvergence);
+            }
+            // Missed contacts: any point now inside a wall joins and the step is re-solved.
+            let missed = self.missed_contacts(&x, &hair_links, &cands, goal);
+            let mut changed = !missed.is_empty();
+            cands.extend(missed);
+            // Hair anchoring on rough surfaces (model.md 7).
+            for (k, cand) in cands.iter_mut().enumerate() {
+                let Feature::HairTip { link } = cand.feature else {
+                    continue;
+                };
+                let hair = hair_of(&self.chain, link);
+                let v = n + hair_links.iter().position(|&l| l == link).unwrap_or(0);
+                let beta = x.get(v).copied().unwrap_or(hair.open_angle_rad);
+                let on_stop = beta >= hair.open_angle_rad - 1e-12;
+                let surface = self.walls[cand.wall]
+                    .surface_at(&self.walls[cand.wall].signed_distance(&cand.point_m));
+                match (cand.law, surface) {
+                    (FrictionLaw::Anchored { .. }, _) if !on_stop => {
+                        cand.law = FrictionLaw::Coulomb { mu: surface.mu() };
+                        demoted.push(k);
+                        changed = true;
+                    }
+                    (
+                        FrictionLaw::Coulomb { .. },
+                        Surface::Rough {
+                            hold_shear_n,
+                            hold_tension_n,
+                            ..
+                        },
+                    ) if on_stop
+                        && cand.normal_active
+                        && cand.normal_force_n > 0.0
+                        && !demoted.contains(&k)
+                        && !promoted.contains(&k) =>
+                    {
+                        let force =
+                            cand.normal * cand.normal_force_n + cand.tangent * cand.shear_force_n;
+                        self.probe
+                            .update(&self.chain, goal, &theta_of(&self.theta, &x));
+                        let rate = self.probe.hair_tip_rate(hair, link, beta);
+                        if rate.dot(&force) > 0.0 {
+                            cand.law = FrictionLaw::Anchored {
+                                hold_shear_n,
+                                hold_tension_n,
+                            };
+                            promoted.push(k);
+                            changed = true;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            if changed {
+                report.resolves += 1;
+                continue;
+            }
+            let jump = x
+                .iter()
+                .zip(&self.theta[1..])
+                .take(n)
+                .fold(0.0_f64, |a, (x, t)| a.max((x - t).abs()));
+            if jump > self.settings.jump_rad {
+                return Err(Reject::Jump);
+            }
+            return Ok(Accepted {
+                x,
+                hair_links,
+                cands,
+                residual_m: outcome.residual_m,
+                hand_force_n: outcome.hand_force_n,
+            });
+        }
+        Err(Reject::NoConvergence)
+    }
+
+    /// Makes an accepted (sub)step the state.
+    fn commit(&mut self, goal: Vector2<f64>, accepted: Accepted) {
+        let n = self.chain.n();
+        self.base_m = goal;
+        self.hand_force_n = accepted.hand_force_n;
+        self.theta[1..].copy_from_slice(&accepted.x[..n]);
+        for (link, hair) in self.chain.hairs().iter().enumerate() {
+            if let Some(hair) = hair {
+                self.beta[link] = hair.open_angle_rad;
+            }
+        }
+        for (h, &link) in accepted.hair_links.iter().enumerate() {
+            self.beta[link] = accepted.x[n + h];
+        }
+        self.contacts.clear();
+        self.contacts.extend(
+            accepted
+                .cands
+                .into_iter()
+                .filter(|c| c.normal_active || c.normal_force_n != 0.0),
+        );
+        self.contacts.sort_by(|a, b| {
+            (a.feature.link(), a.feature, a.wall).cmp(&(b.feature.link(), b.feature, b.wall))
+        });
+    }
+
+    /// The candidate contacts of a step to the base at `goal`: every point within the margin
+    /// of a wall with the posture carried to `goal`, and the contacts of the last step (their
+    /// forces and friction state as the start).
+    fn candidates(&self, goal: Vector2<f64>) -> Result<Vec<Candidate>, ContactError> {
+        let margin = self.settings.margin_m;
+        let n = self.chain.n();
+        let mut out: Vec<Candidate> = Vec::new();
+        for (w, wall) in self.walls.iter().enumerate() {
+            self.check_base(w, wall, &self.probe, goal)?;
+            for link in 1..=n {
+                let a = self.probe.start_of(link);
+                let b = self.probe.end_m[link];
+                let tip_gap = wall.signed_distance(&b).gap_m;
+                if tip_gap < margin {
+                    out.push(self.candidate(Feature::Vertex { link }, w, 1.0));
+                }
+                if let Some(sc) = wall.segment_contact_within(&a, &b, margin)
+                    && sc.s > 1e-6
+                    && sc.s < 1.0 - 1e-6
+                {
+                    out.push(self.candidate(Feature::Link { link }, w, sc.s));
+                }
+                if let Some(Some(hair)) = self.chain.hairs().get(link) {
+                    let tip = self.probe.hair_tip(hair, link, self.beta[link]);
+                    if wall.signed_distance(&tip).gap_m < margin {
+                        out.push(self.candidate(Feature::HairTip { link }, w, 0.0));
+                    }
+                }
+            }
+        }
+        for old in &self.contacts {
+            match out
+                .iter_mut()
+                .find(|c| c.feature == old.feature && c.wall == old.wall)
+            {
+                Some(c) => {
+                    c.normal_force_n = old.normal_force_n;
+                    c.shear_force_n = old.shear_force_n;
+                    c.law = old.law;
+                }
+                None => {
+                    let mut c = self.candidate(old.feature, old.wall, old.s);
+                    c.normal_force_n = old.normal_force_n;
+                    c.shear_force_n = old.shear_force_n;
+                    c.law = old.law;
+                    out.push(c);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// A fresh candidate: the material point at the start of the step, the surface's law
+    /// (a hair tip on a rough surface, open against its stop, starts anchored).
+    fn candidate(&self, feature: Feature, wall: usize, s: f64) -> Candidate {
+        let start = match feature {
+            Feature::Vertex { link } => self.start.end_m[link],
+            Feature::Link { link } => self.start.link_point(link, s),
+            Feature::HairTip { link } => {
+                self.start
+                    .hair_tip(hair_of(&self.chain, link), link, self.beta[link])
+            }
+        };
+        let w = &self.walls[wall];
+        let surface = w.surface_at(&w.signed_distance(&start));
+        let law = match (feature, surface) {
+            (
+                Feature::HairTip { link },
+                Surface::Rough {
+                    hold_shear_n,
+                    hold_tension_n,
+                    ..
+                },
+            ) if self.beta[link] >= hair_of(&self.chain, link).open_angle_rad - 1e-12 => {
+                FrictionLaw::Anchored {
+                    hold_shear_n,
+                    hold_tension_n,
+                }
+            }
+            _ => FrictionLaw::Coulomb { mu: surface.mu() },
+        };
+        Candidate::new(feature, wall, law, s, start)
+    }
+
+    /// Points inside a wall after a solve that are not candidates yet.
+    fn missed_contacts(
+        &mut self,
+        x: &[f64],
+        hair_links: &[usize],
+        cands: &[Candidate],
+        goal: Vector2<f64>,
+    ) -> Vec<Candidate> {
+        let n = self.chain.n();
+        let tol = self.settings.penetration_tolerance_m;
+        let theta = theta_of(&self.theta, x);
+        self.probe.update(&self.chain, goal, &theta);
+        let mut beta = self.beta.clone();
+        for (h, &l) in hair_links.iter().enumerate() {
+            beta[l] = x[n + h];
+        }
+        let known = |f: Feature, w: usize| cands.iter().any(|c| c.feature == f && c.wall == w);
+        let mut found = Vec::new();
+        for (w, wall) in self.walls.iter().enumerate() {
+            for link in 1..=n {
+                let a = self.probe.start_of(link);
+                let b = self.probe.end_m[link];
+                if wall.signed_distance(&b).gap_m < -tol && !known(Feature::Vertex { link }, w) {
+                    found.push((Feature::Vertex { link }, w, 1.0));
+                }
+                let sc = wall.segment_contact(&a, &b);
+                if sc.wall.gap_m < -tol
+                    && sc.s > 1e-6
+                    && sc.s < 1.0 - 1e-6
+                    && !known(Feature::Link { link }, w)
+                {
+                    found.push((Feature::Link { link }, w, sc.s));
+                }
+                if let Some(Some(hair)) = self.chain.hairs().get(link) {
+                    let tip = self.probe.hair_tip(hair, link, beta[link]);
+                    if wall.signed_distance(&tip).gap_m < -tol
+                        && !known(Feature::HairTip { link }, w)
+                    {
+                        found.push((Feature::HairTip { link }, w, 0.0));
+                    }
+                }
+            }
+        }
+        found
+            .into_iter()
+            .map(|(f, w, s)| self.candidate(f, w, s))
+            .collect()
+    }
+
+    /// The base link must stay out of every wall.
+    fn check_base(
+        &self,
+        w: usize,
+        wall: &Wall,
+        posture: &Posture,
+        base_m: Vector2<f64>,
+    ) -> Result<(), ContactError> {
+        let sc = wall.segment_contact(&posture.base_m, &posture.end_m[0]);
+        if sc.wall.gap_m < -self.settings.penetration_tolerance_m {
+            return Err(ContactError::BaseInsideWall {
+                wall: w,
+                depth_m: -sc.wall.gap_m,
+                base_x_m: base_m.x,
+                base_y_m: base_m.y,
+            });
+        }
+        Ok(())
+    }
+
+    /// The start posture must be outside every wall.
+    fn check_start(&mut self) -> Result<(), ContactError> {
+        let tol = self.settings.penetration_tolerance_m;
+        self.probe.update(&self.chain, self.base_m, &self.theta);
+        for (w, wall) in self.walls.iter().enumerate() {
+            self.check_base(w, wall, &self.probe, self.base_m)?;
+            for link in 1..=self.chain.n() {
+                let sc = wall.segment_contact(&self.probe.start_of(link), &self.probe.end_m[link]);
+                if sc.wall.gap_m < -tol {
+                    return Err(ContactError::StartInsideWall {
+                        wall: w,
+                        link,
+                        hair: "",
+                        depth_m: -sc.wall.gap_m,
+                    });
+                }
+                if let Some(Some(hair)) = self.chain.hairs().get(link) {
+                    let tip = self.probe.hair_tip(hair, link, self.beta[link]);
+                    let gap = wall.signed_distance(&tip).gap_m;
+                    if gap < -tol {
+                        return Err(ContactError::StartInsideWall {
+                            wall: w,
+                            link,
+                            hair: " (its hair tip)",
+                            depth_m: -gap,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `theta` with its flexible joints replaced by the first `n` coordinates of `x`.
+fn theta_of(theta: &[f64], x: &[f64]) -> Vec<f64> {
+    let mut out = theta.to_vec();
+    let n = out.len() - 1;
+    out[1..].copy_from_slice(&x[..n]);
+    out
+}
+
+fn finite(argument: &'static str, values: &[f64]) -> Result<(), ContactError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(ContactError::NotFinite {
+            argument,
+            index,
+            value: values[index],
+        }),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,678 @@
+//! One quasi-static step as a nonlinear complementarity problem, solved by a semismooth
+//! Newton method (the Alart-Curnier form of Coulomb contact).
+//!
+//! # Unknowns and equations
+//! `z = (x, N_1..N_c, T_1..T_c)`: the free coordinates `x` (flexible joint angles, then the
+//! angles of the hairs taking part), and per candidate contact its normal force `N_k` and
+//! shear force `T_k` (on the chain, along the wall's normal and tangent). With the
+//! generalized force `r(x, N, T) = grad U(x) - J_tip^T F - sum_k J_k^T (N_k n_k + T_k t_k)`
+//! (plus a proximal term when following a snap), the step's equations are, with
+//! `proj_[a,b]` the clamp and `c` a contact stiffness scale:
+//! - coordinates (box `lo <= x_a <= hi`): `x_a - proj_[lo,hi](x_a - r_a / s_a) = 0`, i.e.
+//!   `r_a = 0` inside the box, `r_a >= 0` at `lo`, `r_a <= 0` at `hi` (the KKT conditions of
+//!   the joint limits, with the stop's multiplier of the right sign);
+//! - normal: `N_k - proj_[N_min, inf)(N_k - c gap_k(x)) = 0`: `N >= N_min`, `gap >= 0`,
+//!   complementary (`N_min = 0`, or minus the tension hold of an anchored hair tip);
+//! - tangential: `T_k - proj_[-B_k, B_k](T_k - c u_k(x)) = 0` with `B_k = mu N_k` (Coulomb)
+//!   or the shear hold of an anchored hair, and `u_k = t_k . (X_k(x) - X_k^0)` the slip of
+//!   the contact's material point over the step: `u = 0` while `|T| < B` (stuck: no creep),
+//!   else `T = -B sign(u)`.
+//!
+//! Each of these is piecewise smooth; Newton's method on them with the Jacobian of the active
+//! piece is the semismooth Newton method (equivalently a primal-dual active-set method).
+//! The Jacobian is dense, `(m + 2c)^2` with `m` coordinates and `c` candidates (tens for the
+//! robot): an LU factorization costs microseconds. Globalization: a backtracking line search
+//! on `|Phi|^2 / 2` and a cap on the joint change per iteration; a solve that does not
+//! converge is reported, and the caller refines the step.
+//!
+//! Every residual is scaled to metres: joint rows by the mean link length `L` (`L r_a / s_a`
+//! or `L (x_a - bound)`), normal and shear rows are gaps and slips, or forces divided by `c`.
+
+// Joint `j` (1-based), its coordinate `j - 1` and the link ends `p_(j-1)` are indexed
+// together throughout: index loops say what they do here.
+#![allow(clippy::needless_range_loop)]
+
+use nalgebra::{DMatrix, DVector, Vector2};
+
+use super::feature::{Feature, FrictionLaw, Slip};
+use super::posture::{Posture, cross, perp};
+use crate::{Chain, Hair, Wall};
+
+/// A candidate contact during one step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Candidate {
+    pub feature: Feature,
+    pub wall: usize,
+    pub law: FrictionLaw,
+    /// For [`Feature::Link`]: the fraction along the link of the material point that was in
+    /// contact at the start of the step.
+    pub material_s: f64,
+    /// The material point's position at the start of the step.
+    pub start_m: Vector2<f64>,
+    pub normal_force_n: f64,
+    pub shear_force_n: f64,
+    // Filled by the evaluation:
+    pub s: f64,
+    pub point_m: Vector2<f64>,
+    pub material_m: Vector2<f64>,
+    pub gap_m: f64,
+    pub normal: Vector2<f64>,
+    pub tangent: Vector2<f64>,
+    pub slip_m: f64,
+    pub normal_active: bool,
+    pub slip: Slip,
+}
+
+impl Candidate {
+    pub fn new(
+        feature: Feature,
+        wall: usize,
+        law: FrictionLaw,
+        material_s: f64,
+        start_m: Vector2<f64>,
+    ) -> Candidate {
+        Candidate {
+            feature,
+            wall,
+            law,
+            material_s,
+            start_m,
+            normal_force_n: 0.0,
+            shear_force_n: 0.0,
+            s: material_s,
+            point_m: start_m,
+            material_m: start_m,
+            gap_m: f64::INFINITY,
+            normal: Vector2::zeros(),
+            tangent: Vector2::zeros(),
+            slip_m: 0.0,
+            normal_active: false,
+            slip: Slip::Stuck,
+        }
+    }
+}
+
+/// A proximal term `gamma/2 sum_a s_a (x_a - x_prev_a)^2`: one implicit step of the
+/// (friction-aware) gradient flow, used to follow a snap downhill.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Proximal<'a> {
+    pub gamma: f64,
+    pub x_prev: &'a [f64],
+}
+
+/// What one step is about.
+pub(crate) struct StepProblem<'a> {
+    pub chain: &'a Chain,
+    pub walls: &'a [Wall],
+    pub tip_force_n: Vector2<f64>,
+    pub base_m: Vector2<f64>,
+    /// Links whose hair angle is a coordinate, in coordinate order after the joints.
+    pub hair_links: &'a [usize],
+    /// Hair angles of every link (`n + 1`; links without a hair, or whose hair is not a
+    /// coordinate, keep theirs).
+    pub hair_beta_rad: &'a [f64],
+    pub proximal: Option<Proximal<'a>>,
+    /// A hand holding the tip near this point (ground frame) with a stiff spring: the force
+    /// `k_hand (target - p_n)` acts on the tip, `k_hand = 1000 c`.
+    pub hand_m: Option<Vector2<f64>>,
+    pub tolerance_m: f64,
+    pub max_iterations: usize,
+}
+
+/// How a solve ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct SsnOutcome {
+    pub converged: bool,
+    pub iterations: usize,
+    /// `max |Phi|`, metres.
+    pub residual_m: f64,
+    /// The hand's force on the tip, newtons (zero without a hand).
+    pub hand_force_n: Vector2<f64>,
+}
+
+/// Scratch space, reused from step to step.
+#[derive(Debug, Default)]
+pub(crate) struct Ssn {
+    pub posture: Posture,
+    theta: Vec<f64>,
+    beta: Vec<f64>,
+    r: Vec<f64>,
+    hess: DMatrix<f64>,
+    /// Per candidate, `m` columns: the Jacobian of its contact point.
+    jac: Vec<Vector2<f64>>,
+    /// Per candidate, `m` columns: the Jacobian of its material point.
+    jac_mat: Vec<Vector2<f64>>,
+    phi: DVector<f64>,
+    big: DMatrix<f64>,
+    scale: Vec<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    z: DVector<f64>,
+    z_trial: DVector<f64>,
+    trial: Vec<Candidate>,
+    length_m: f64,
+    c_n_per_m: f64,
+    hand: bool,
+}
+
+impl Ssn {
+    /// Sets up the coordinate scales and bounds for `problem` (`m = n + hairs`).
+    fn prepare(&mut self, p: &StepProblem<'_>) {
+        let chain = p.chain;
+        let n = chain.n();
+        let m = n + p.hair_links.len();
+        let k = chain.stiffness_nm_per_rad();
+        let k_max = k[1..].iter().copied().fold(0.0_f64, f64::max);
+        let k_mean = if n > 0 {
+            k[1..].iter().sum::<f64>() / n as f64
+        } else {
+            0.0
+        };
+        let lengths = chain.link_lengths_m();
+        self.length_m = lengths.iter().sum::<f64>() / lengths.len() as f64;
+        let k_ref = if k_mean > 0.0 { k_mean } else { 1e-3 };
+        self.c_n_per_m = k_ref / (self.length_m * self.length_m);
+        self.scale.clear();
+        self.lo.clear();
+        self.hi.clear();
+        for j in 1..=n {
+            self.scale.push(k[j].max(1e-3 * k_max).max(1e-12));
+            let lim = chain.joint_limits()[j];
+            self.lo.push(lim.cw_rad);
+            self.hi.push(lim.ccw_rad);
+        }
+        for &link in p.hair_links {
+            let hair = hair_of(chain, link);
+            let s = hair
+                .stiffness_nm_per_rad
+                .max(hair.preload_nm / hair.open_angle_rad)
+                .max(1e-9);
+            self.scale.push(s);
+            self.lo.push(0.0);
+            self.hi.push(hair.open_angle_rad);
+        }
+        self.r.resize(m, 0.0);
+        self.theta.resize(n + 1, 0.0);
+        self.theta[0] = chain.base_angle_rad();
+        self.beta.clear();
+        self.beta.extend_from_slice(p.hair_beta_rad);
+        self.hand = p.hand_m.is_some();
+    }
+
+    /// Solves the step: `x` (the coordinates) and the candidates' forces are the start and
+    /// receive the answer (the best point reached if it did not converge).
+    pub fn solve(
+        &mut self,
+        p: &StepProblem<'_>,
+        x: &mut [f64],
+        cands: &mut [Candidate],
+    ) -> SsnOutcome {
+        self.prepare(p);
+        let m = x.len();
+        let c = cands.len();
+        let dim = m + 2 * c;
+        self.z = DVector::zeros(dim);
+        for (a, &v) in x.iter().enumerate() {
+            self.z[a] = v.clamp(self.lo[a], self.hi[a]);
+        }
+        for (k, cand) in cands.iter().enumerate() {
+            self.z[m + k] = cand.normal_force_n;
+            self.z[m + c + k] = cand.shear_force_n;
+        }
+        let mut merit = self.evaluate(p, m, cands, true);
+        let mut outcome = SsnOutcome {
+            converged: false,
+            iterations: 0,
+            residual_m: self.phi.amax(),
+            hand_force_n: Vector2::zeros(),
+        };
+        // Levenberg-Marquardt damping of the Newton matrix, raised when a step fails (a
+        // redundant or momentarily infeasible set of stuck contacts makes the plain Newton
+        // matrix singular) and lowered again after successes. It changes the path, not the
+        // solution: the residual `Phi` itself is never regularized.
+        let mut damping = 0.0_f64;
+        while outcome.residual_m > p.tolerance_m && outcome.iterations < p.max_iterations {
+            outcome.iterations += 1;
+            let Some(dz) = self.newton_direction(dim, damping) else {
+                damping = next_damping(damping);
+                if damping > MAX_DAMPING {
+                    break;
+                }
+                continue;
+            };
+            // Cap the joint change per iteration (a trust region in angle).
+            let max_dx = (0..m).fold(0.0_f64, |a, i| a.max(dz[i].abs()));
+            let mut alpha = if max_dx > 0.25 { 0.25 / max_dx } else { 1.0 };
+            let mut accepted = false;
+            while alpha > 1e-6 {
+                self.z_trial.clone_from(&self.z);
+                self.z_trial.axpy(alpha, &dz, 1.0);
+                for a in 0..m {
+                    self.z_trial[a] = self.z_trial[a].clamp(self.lo[a], self.hi[a]);
+                }
+                self.trial.clear();
+                self.trial.extend_from_slice(cands);
+                std::mem::swap(&mut self.z, &mut self.z_trial);
+                let mut trial = std::mem::take(&mut self.trial);
+                let trial_merit = self.evaluate(p, m, &mut trial, false);
+                if trial_merit.is_finite() && trial_merit <= (1.0 - 2e-4 * alpha) * merit {
+                    cands.copy_from_slice(&trial);
+                    self.trial = trial;
+                    accepted = true;
+                    break;
+                }
+                self.trial = trial;
+                std::mem::swap(&mut self.z, &mut self.z_trial);
+                alpha *= 0.5;
+            }
+            if accepted {
+                damping = if damping > MIN_DAMPING {
+                    damping * 0.01
+                } else {
+                    0.0
+                };
+            } else {
+                // Rejected: evaluate again at the current point (the trials overwrote Phi).
+                merit = self.evaluate(p, m, cands, true);
+                damping = next_damping(damping);
+                if damping > MAX_DAMPING {
+                    break;
+                }
+                continue;
+            }
+            // The Jacobian at the accepted point.
+            merit = self.evaluate(p, m, cands, true);
+            outcome.residual_m = self.phi.amax();
+        }
+        outcome.converged = outcome.residual_m <= p.tolerance_m;
+        for (a, v) in x.iter_mut().enumerate() {
+            *v = self.z[a];
+        }
+        for (k, cand) in cands.iter_mut().enumerate() {
+            cand.normal_force_n = self.z[m + k];
+            cand.shear_force_n = self.z[m + c + k];
+        }
+        outcome.hand_force_n = self.hand_force_n(p);
+        outcome
+    }
+
+    /// The Newton direction `-J^-1 Phi`, with `J` damped by `damping`: `+damping L` on the
+    /// coordinate rows and `-damping / c` on the diagonal of the constraint rows that have
+    /// none (active normal, stuck and hand rows: the dual regularization of a saddle-point
+    /// system). Undamped, a singular `J` (e.g. two candidates at one point) gets a tiny dual
+    /// regularization.
+    fn newton_direction(&self, dim: usize, damping: f64) -> Option<DVector<f64>> {
+        let rhs = -&self.phi;
+        let m = self.r.len();
+        let finite = |dz: &DVector<f64>| dz.iter().all(|v| v.is_finite());
+        if damping == 0.0
+            && let Some(dz) = self.big.clone().lu().solve(&rhs).filter(finite)
+        {
+            return Some(dz);
+        }
+        let dual = damping.max(1e-9);
+        let mut reg = self.big.clone();
+        for i in 0..m {
+            reg[(i, i)] += damping * self.length_m;
+        }
+        for i in m..dim {
+            if reg[(i, i)] == 0.0 {
+                reg[(i, i)] = -dual / self.c_n_per_m;
+            }
+        }
+        reg.lu().solve(&rhs).filter(finite)
+    }
+
+    /// Evaluates `Phi(z)` into `self.phi` (and its Jacobian into `self.big` when asked);
+    /// returns the merit `|Phi|^2 / 2`.
+    fn evaluate(
+        &mut self,
+        p: &StepProblem<'_>,
+        m: usize,
+        cands: &mut [Candidate],
+        jacobian: bool,
+    ) -> f64 {
+        let chain = p.chain;
+        let n = chain.n();
+        let c = cands.len();
+        let dim = m + 2 * c;
+        for j in 1..=n {
+            self.theta[j] = self.z[j - 1];
+        }
+        for (h, &link) in p.hair_links.iter().enumerate() {
+            self.beta[link] = self.z[n + h];
+        }
+        self.posture.update(chain, p.base_m, &self.theta);
+
+        // The gradient of the potential (springs, proximal term, dead load).
+        let k = chain.stiffness_nm_per_rad();
+        let rest = chain.rest_angles_rad();
+        for j in 1..=n {
+            self.r[j - 1] = k[j] * (self.theta[j] - rest[j]);
+        }
+        for (h, &link) in p.hair_links.iter().enumerate() {
+            self.r[n + h] = hair_of(chain, link).spring_gradient_nm(self.beta[link]);
+        }
+        if let Some(prox) = p.proximal {
+            for a in 0..m {
+                self.r[a] += prox.gamma * self.scale[a] * (self.z[a] - prox.x_prev[a]);
+            }
+        }
+        let tip = self.posture.end_m[n];
+        let load = p.tip_force_n + self.hand_force_n(p);
+        if load != Vector2::zeros() {
+            for j in 1..=n {
+                self.r[j - 1] -= cross(tip - self.posture.end_m[j - 1], load);
+            }
+        }
+
+        // Contacts: geometry, Jacobians, forces.
+        if jacobian {
+            self.jac.resize(c * m, Vector2::zeros());
+            self.jac_mat.resize(c * m, Vector2::zeros());
+        }
+        for (k_idx, cand) in cands.iter_mut().enumerate() {
+            cand.normal_force_n = self.z[m + k_idx];
+            cand.shear_force_n = self.z[m + c + k_idx];
+            self.geometry(p, cand);
+            let force = cand.normal * cand.normal_force_n + cand.tangent * cand.shear_force_n;
+            let link = cand.feature.link();
+            for j in 1..=link {
+                self.r[j - 1] -= cross(cand.point_m - self.posture.end_m[j - 1], force);
+            }
+            if let Feature::HairTip { link } = cand.feature {
+                let v = n + hair_index(p.hair_links, link);
+                let rate = self
+                    .posture
+                    .hair_tip_rate(hair_of(chain, link), link, self.beta[link]);
+                self.r[v] -= rate.dot(&force);
+            }
+            if jacobian {
+                let cols = &mut self.jac[k_idx * m..(k_idx + 1) * m];
+                point_columns(
+                    &self.posture,
+                    chain,
+                    p.hair_links,
+                    cand,
+                    cand.point_m,
+                    &self.beta,
+                    cols,
+                );
+                let cols = &mut self.jac_mat[k_idx * m..(k_idx + 1) * m];
+                point_columns(
+                    &self.posture,
+                    chain,
+                    p.hair_links,
+                    cand,
+                    cand.material_m,
+                    &self.beta,
+                    cols,
+                );
+            }
+        }
+
+        // Phi and, if asked, its Jacobian.
+        let cn = self.c_n_per_m;
+        let len = self.length_m;
+        self.phi = DVector::zeros(dim);
+        if jacobian {
+            self.assemble_hessian(p, m, cands);
+            self.big = DMatrix::zeros(dim, dim);
+        }
+        for a in 0..m {
+            let y = self.z[a] - self.r[a] / self.scale[a];
+            let bound = if y <= self.lo[a] {
+                Some(self.lo[a])
+            } else if y >= self.hi[a] {
+                Some(self.hi[a])
+            } else {
+                None
+            };
+            match bound {
+                Some(b) => {
+                    self.phi[a] = len * (self.z[a] - b);
+                    if jacobian {
+                        self.big[(a, a)] = len;
+                    }
+                }
+                None => {
+                    let w = len / self.scale[a];
+                    self.phi[a] = w * self.r[a];
+                    if jacobian {
+                        for b in 0..m {
+                            self.big[(a, b)] = w * self.hess[(a, b)];
+                        }
+                        for (k_idx, cand) in cands.iter().enumerate() {
+                            let col = self.jac[k_idx * m + a];
+                            self.big[(a, m + k_idx)] = -w * col.dot(&cand.normal);
+                            self.big[(a, m + c + k_idx)] = -w * col.dot(&cand.tangent);
+                        }
+                    }
+                }
+            }
+        }
+        for (k_idx, cand) in cands.iter_mut().enumerate() {
+            let row_n = m + k_idx;
+            let row_t = m + c + k_idx;
+            let n_min = cand.law.min_normal_n();
+            let normal = cand.normal_force_n;
+            cand.normal_active = normal - cn * cand.gap_m > n_min;
+            if cand.normal_active {
+                self.phi[row_n] = cand.gap_m;
+                if jacobian {
+                    for b in 0..m {
+                        self.big[(row_n, b)] = self.jac[k_idx * m + b].dot(&cand.normal);
+                    }
+                }
+            } else {
+                self.phi[row_n] = (normal - n_min) / cn;
+                if jacobian {
+                    self.big[(row_n, row_n)] = 1.0 / cn;
+                }
+            }
+            let (bound, dbound) = cand.law.shear_bound(normal);
+            let shear = cand.shear_force_n;
+            let y = shear - cn * cand.slip_m;
+            let (value, slip) = if y >= bound {
+                (shear - bound, Slip::Backward)
+            } else if y <= -bound {
+                (shear + bound, Slip::Forward)
+            } else {
+                (f64::NAN, Slip::Stuck)
+            };
+            cand.slip = slip;
+            match slip {
+                Slip::Stuck => {
+                    self.phi[row_t] = cand.slip_m;
+                    if jacobian {
+                        for b in 0..m {
+                            self.big[(row_t, b)] = self.jac_mat[k_idx * m + b].dot(&cand.tangent);
+                        }
+                    }
+                }
+                Slip::Backward | Slip::Forward => {
+                    self.phi[row_t] = value / cn;
+                    if jacobian {
+                        let sign = if slip == Slip::Backward { -1.0 } else { 1.0 };
+                        self.big[(row_t, row_t)] = 1.0 / cn;
+                        self.big[(row_t, row_n)] = sign * dbound / cn;
+                    }
+                }
+            }
+        }
+        0.5 * self.phi.norm_squared()
+    }
+
+    /// The hand spring's force on the tip (zero without a hand); valid after the posture
+    /// is updated.
+    fn hand_force_n(&self, p: &StepProblem<'_>) -> Vector2<f64> {
+        match (p.hand_m, self.posture.end_m.last()) {
+            (Some(target), Some(tip)) => (target - tip) * HAND_STIFFNESS * self.c_n_per_m,
+            _ => Vector2::zeros(),
+        }
+    }
+
+    /// The contact point, material point, gap, normal, tangent and slip of `cand`.
+    fn geometry(&self, p: &StepProblem<'_>, cand: &mut Candidate) {
+        let wall = &p.walls[cand.wall];
+        let posture = &self.posture;
+        let point = match cand.feature {
+            Feature::Vertex { link } => {
+                let x = posture.end_m[link];
+                cand.s = 1.0;
+                cand.material_m = x;
+                (x, wall.signed_distance(&x))
+            }
+            Feature::Link { link } => {
+                let sc = wall.segment_contact(&posture.start_of(link), &posture.end_m[link]);
+                cand.s = sc.s;
+                cand.material_m = posture.link_point(link, cand.material_s);
+                (sc.point_m, sc.wall)
+            }
+            Feature::HairTip { link } => {
+                let hair = hair_of(p.chain, link);
+                let x = posture.hair_tip(hair, link, self.beta[link]);
+                cand.s = 1.0 - hair.pivot_from_distal_end_m / p.chain.link_lengths_m()[link];
+                cand.material_m = x;
+                (x, wall.signed_distance(&x))
+            }
+        };
+        cand.point_m = point.0;
+        cand.gap_m = point.1.gap_m;
+        cand.normal = point.1.normal;
+        cand.tangent = point.1.tangent;
+        cand.slip_m = cand.tangent.dot(&(cand.material_m - cand.start_m));
+    }
+
+    /// `hess = grad^2 U + proximal + sum_forces F . (-grad^2 X)`: the Hessian of the
+    /// Lagrangian in the coordinates (the walls' curvature is left out).
+    fn assemble_hessian(&mut self, p: &StepProblem<'_>, m: usize, cands: &[Candidate]) {
+        let chain = p.chain;
+        let n = chain.n();
+        self.hess = DMatrix::zeros(m, m);
+        let k = chain.stiffness_nm_per_rad();
+        for j in 1..=n {
+            self.hess[(j - 1, j - 1)] = k[j];
+        }
+        for (h, &link) in p.hair_links.iter().enumerate() {
+            self.hess[(n + h, n + h)] = hair_of(chain, link).stiffness_nm_per_rad;
+        }
+        if let Some(prox) = p.proximal {
+            for a in 0..m {
+                self.hess[(a, a)] += prox.gamma * self.scale[a];
+            }
+        }
+        let tip = self.posture.end_m[n];
+        let load = p.tip_force_n + self.hand_force_n(p);
+        if load != Vector2::zeros() {
+            add_point_curvature(&mut self.hess, &self.posture, n, tip, load);
+        }
+        if p.hand_m.is_some() {
+            // The hand spring's k J^T J.
+            let k_hand = HAND_STIFFNESS * self.c_n_per_m;
+            for a in 0..n {
+                let ca = self.posture.column(a + 1, tip);
+                for b in 0..n {
+                    let cb = self.posture.column(b + 1, tip);
+                    self.hess[(a, b)] += k_hand * ca.dot(&cb);
+                }
+            }
+        }
+        for cand in cands {
+            let force = cand.normal * cand.normal_force_n + cand.tangent * cand.shear_force_n;
+            let link = cand.feature.link();
+            add_point_curvature(&mut self.hess, &self.posture, link, cand.point_m, force);
+            if let Feature::HairTip { link } = cand.feature {
+                let hair = hair_of(chain, link);
+                let v = n + hair_index(p.hair_links, link);
+                let rate = self.posture.hair_tip_rate(hair, link, self.beta[link]);
+                let mixed = -force.dot(&perp(rate));
+                for a in 0..link {
+                    self.hess[(a, v)] += mixed;
+                    self.hess[(v, a)] += mixed;
+                }
+                let pivot = self.posture.hair_pivot(hair, link);
+                self.hess[(v, v)] += force.dot(&(cand.point_m - pivot));
+            }
+        }
+    }
+}
+
+/// The hand spring's stiffness in units of the contact scale `c`.
+const HAND_STIFFNESS: f64 = 1e3;
+
+/// The first damping tried after a failure, and the limits of the damping.
+const MIN_DAMPING: f64 = 1e-8;
+const MAX_DAMPING: f64 = 1e4;
+
+fn next_damping(damping: f64) -> f64 {
+    if damping < MIN_DAMPING {
+        MIN_DAMPING
+    } else {
+        damping * 100.0
+    }
+}
+
+/// Adds `-F . d^2X / dtheta_j dtheta_k = F . (X - p_(max(j,k)-1))` for a force `F` at a point
+/// `X` fixed to link `link`.
+fn add_point_curvature(
+    hess: &mut DMatrix<f64>,
+    posture: &Posture,
+    link: usize,
+    x_m: Vector2<f64>,
+    force: Vector2<f64>,
+) {
+    for a in 0..link {
+        let v = force.dot(&(x_m - posture.end_m[a]));
+        // Entries whose larger index is a: (a, b) and (b, a) for b <= a.
+        for b in 0..a {
+            hess[(a, b)] += v;
+            hess[(b, a)] += v;
+        }
+        hess[(a, a)] += v;
+    }
+}
+
+/// The Jacobian columns (`m` of them) of the point `x_m` of candidate `cand`.
+fn point_columns(
+    posture: &Posture,
+    chain: &Chain,
+    hair_links: &[usize],
+    cand: &Candidate,
+    x_m: Vector2<f64>,
+    beta: &[f64],
+    cols: &mut [Vector2<f64>],
+) {
+    cols.fill(Vector2::zeros());
+    let link = cand.feature.link();
+    for j in 1..=link {
+        cols[j - 1] = posture.column(j, x_m);
+    }
+    if let Feature::HairTip { link } = cand.feature {
+        let n = chain.n();
+        let hair = hair_of(chain, link);
+        cols[n + hair_index(hair_links, link)] = posture.hair_tip_rate(hair, link, beta[link]);
+    }
+}
+
+/// The hair on `link`: callers only ask for links that carry one.
+pub(crate) fn hair_of(chain: &Chain, link: usize) -> &Hair {
+    match chain.hairs().get(link) {
+        Some(Some(hair)) => hair,
+        // Candidates and hair coordinates are built from the chain's own hairs.
+        _ => unreachable_hair(link),
+    }
+}
+
+#[cold]
+fn unreachable_hair(link: usize) -> ! {
+    panic!("internal error: no hair on link {link}")
+}
+
+/// The position of `link` in `hair_links`.
+fn hair_index(hair_links: &[usize], link: usize) -> usize {
+    hair_links
+        .iter()
+        .position(|&l| l == link)
+        .unwrap_or_else(|| unreachable_hair(link))
+}

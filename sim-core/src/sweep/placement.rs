@@ -1,0 +1,278 @@
+//! Putting the antenna against the walls before a sweep (model.md 6: "provide a way to place
+//! the antenna in a chosen posture against the wall, release it, and then sweep; say what
+//! was done").
+
+use nalgebra::Vector2;
+
+use super::{SweepError, SweepScene};
+use crate::contact::{QuasiStatic, StepReport};
+use crate::{EquilibriumProblem, InitialGuess, SolveOptions, Wall, solve_equilibrium};
+
+/// How the antenna starts.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Placement {
+    /// The rest posture at the start position, as it is (it must be clear of the walls).
+    Rest,
+    /// Explicit joint angles `theta_1..theta_n` (radians) at the start position, settled
+    /// where they are.
+    Angles(Vec<f64>),
+    /// The base starts `distance_m` farther from wall `wall` (along the wall's normal at the
+    /// point nearest the tip) and moves onto its start position in `steps` equal steps: the
+    /// tip meets the wall and the antenna bends forward, as when a robot comes up to a wall
+    /// (the seed 3.3.1 start, "projecting in the direction of motion").
+    Approach {
+        /// The wall to approach.
+        wall: usize,
+        /// How far away the base starts, metres.
+        distance_m: f64,
+        /// In how many steps it comes.
+        steps: usize,
+    },
+    /// The tip is held on wall `wall` at the point `ahead_m` ahead of the base along the
+    /// direction of motion, the chain solved for that pin from `start` (a pinned
+    /// equilibrium: with a C start the antenna bends toward the wall and its distal part
+    /// lies back along it, the seed 4.2.1 start "bent backwards and in contact with the
+    /// wall"), then let go and settled with friction.
+    TipOnWall {
+        /// The wall.
+        wall: usize,
+        /// Where along the motion the tip is put, relative to the base pivot, metres.
+        ahead_m: f64,
+        /// The start of the pinned search.
+        start: InitialGuess,
+    },
+}
+
+/// Places the antenna; returns the simulation, what was done, and the settling's report.
+pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepReport), SweepError> {
+    let chain = scene.chain.clone();
+    let base = scene.base_start_m;
+    let wall_of = |wall: usize| -> Result<&Wall, SweepError> {
+        scene.walls.get(wall).ok_or_else(|| {
+            SweepError::Placement(format!(
+                "wall {wall} does not exist (the scene has {} wall(s))",
+                scene.walls.len()
+            ))
+        })
+    };
+    let new_sim = |base_m: Vector2<f64>, theta: &[f64]| {
+        let mut sim = QuasiStatic::new(
+            chain.clone(),
+            scene.walls.clone(),
+            base_m,
+            theta,
+            scene.settings,
+        )?;
+        sim.set_tip_force_n(scene.tip_force_n);
+        Ok::<_, SweepError>(sim)
+    };
+    match &scene.placement {
+        Placement::Rest => {
+            let mut sim = new_sim(base, &chain.rest_theta())?;
+            let report = settle(&mut sim)?;
+            Ok((sim, "rest posture at the start position".to_owned(), report))
+        }
+        Placement::Angles(angles) => {
+            if angles.len() != chain.n() {
+                return Err(SweepError::Placement(format!(
+                    "{} angles given, the chain has {} flexible joints",
+                    angles.len(),
+                    chain.n()
+                )));
+            }
+            let mut theta = vec![chain.base_angle_rad()];
+            theta.extend_from_slice(angles);
+            let mut sim = new_sim(base, &theta)?;
+            let report = settle(&mut sim)?;
+            Ok((
+                sim,
+                format!("given joint angles, settled{}", snapped(&report)),
+                report,
+            ))
+        }
+        Placement::Approach {
+            wall,
+            distance_m,
+            steps,
+        } => {
+            let w = wall_of(*wall)?;
+            if !(distance_m.is_finite() && *distance_m >= 0.0) || *steps == 0 {
+                return Err(SweepError::Placement(format!(
+                    "approach needs distance_m >= 0 and steps >= 1 (got {distance_m}, {steps})"
+                )));
+            }
+            let rest = chain.rest_theta();
+            let tip = base
+                + crate::tip_pose(&chain, &rest)
+                    .map_err(|e| SweepError::Placement(e.to_string()))?
+                    .position_m;
+            let away = w.signed_distance(&tip).normal;
+            let from = base + away * *distance_m;
+            let mut sim = new_sim(from, &rest).map_err(|e| {
+                SweepError::Placement(format!(
+                    "the base {distance_m} m back from wall {wall} still leaves the antenna in \
+                     a wall ({e}); start farther away"
+                ))
+            })?;
+            let mut total = settle(&mut sim)?;
+            for k in 1..=*steps {
+                let at = from + (base - from) * (k as f64 / *steps as f64);
+                let r = sim.step_to(at).map_err(|source| SweepError::Step {
+                    step: 0,
+                    t_s: 0.0,
+                    source,
+                })?;
+                accumulate(&mut total, &r);
+            }
+            let note = format!(
+                "approach: the base started {distance_m} m back from wall {wall} along its \
+                 normal ({:.4}, {:.4}) and came onto ({:.4}, {:.4}) m in {steps} steps; {} \
+                 contact(s){}",
+                away.x,
+                away.y,
+                base.x,
+                base.y,
+                sim.contacts().len(),
+                snapped(&total)
+            );
+            Ok((sim, note, total))
+        }
+        Placement::TipOnWall {
+            wall,
+            ahead_m,
+            start,
+        } => {
+            let w = wall_of(*wall)?;
+            let direction = scene.motion.velocity_m_per_s;
+            let along = if direction == Vector2::zeros() {
+                Vector2::new(1.0, 0.0)
+            } else {
+                direction.normalize()
+            };
+            let pin = point_ahead(w, base, along, *ahead_m);
+            let problem = EquilibriumProblem::new(&chain).with_tip_pin_m(pin - base);
+            let eq = solve_equilibrium(&problem, start, &SolveOptions::default())?;
+            if !eq.converged {
+                return Err(SweepError::Placement(format!(
+                    "the pinned equilibrium with the tip at ({:.4}, {:.4}) m did not converge \
+                     (KKT residual {:e})",
+                    pin.x, pin.y, eq.kkt_residual
+                )));
+            }
+            // The pinned posture ignores the walls: hold the tip there and bring the held
+            // antenna onto the walls from where it is clear of them.
+            let away = w.signed_distance(&pin).normal;
+            let depth = deepest_penetration(&chain, &scene.walls, base, &eq.theta_rad);
+            let clear_m = if depth > 0.0 { depth + 1e-3 } else { 0.0 };
+            let from = base + away * clear_m;
+            let mut sim = new_sim(from, &eq.theta_rad).map_err(|e| {
+                SweepError::Placement(format!(
+                    "with the tip pinned at ({:.4}, {:.4}) m and the base {clear_m:.4} m back \
+                     from wall {wall}, the chain ({start:?} start) is still in a wall: {e}; \
+                     try another ahead_m or start",
+                    pin.x, pin.y
+                ))
+            })?;
+            sim.hold_tip(Some(pin - base));
+            let mut total = settle(&mut sim)?;
+            let steps = ((clear_m / 2e-4).ceil() as usize).max(1);
+            for k in 1..=steps {
+                let at = from + (base - from) * (k as f64 / steps as f64);
+                let r = sim.step_to(at).map_err(|source| SweepError::Step {
+                    step: 0,
+                    t_s: 0.0,
+                    source,
+                })?;
+                accumulate(&mut total, &r);
+            }
+            let held_n = sim.hand_force_n();
+            sim.hold_tip(None);
+            let report = settle(&mut sim)?;
+            accumulate(&mut total, &report);
+            let flip = super::distal_flip(&sim, along.y.atan2(along.x));
+            let note = format!(
+                "tip placed on wall {wall} at ({:.4}, {:.4}) m ({ahead_m} m ahead of the base): \
+                 the pinned equilibrium from a {start:?} start ({} iterations), held by the tip \
+                 and brought {clear_m:.4} m onto the wall in {steps} steps (the hand held it with \
+                 ({:.4}, {:.4}) N), let go and settled with friction{}; {} contact(s), distal \
+                 segment at {:.1} deg to the wall",
+                pin.x,
+                pin.y,
+                eq.iterations,
+                held_n.x,
+                held_n.y,
+                snapped(&report),
+                sim.contacts().len(),
+                flip.map_or(f64::NAN, |f| f.angle_to_wall_rad.to_degrees()),
+            );
+            Ok((sim, note, total))
+        }
+    }
+}
+
+/// The deepest penetration of any link of the posture into any wall (0 if clear), metres.
+fn deepest_penetration(
+    chain: &crate::Chain,
+    walls: &[Wall],
+    base: Vector2<f64>,
+    theta: &[f64],
+) -> f64 {
+    let Ok(poses) = crate::frame_poses(chain, theta, crate::Frame::GROUND) else {
+        return 0.0;
+    };
+    let mut deepest = 0.0_f64;
+    let mut at = base;
+    for link in 0..=chain.n() {
+        let Some(end) = poses.position_m(crate::Frame::link(link)) else {
+            continue;
+        };
+        let end = base + end;
+        for wall in walls {
+            deepest = deepest.max(-wall.segment_contact(&at, &end).wall.gap_m);
+        }
+        at = end;
+    }
+    deepest
+}
+
+/// Settles the placed posture (a step of length zero).
+fn settle(sim: &mut QuasiStatic) -> Result<StepReport, SweepError> {
+    sim.settle().map_err(|source| SweepError::Step {
+        step: 0,
+        t_s: 0.0,
+        source,
+    })
+}
+
+fn accumulate(total: &mut StepReport, r: &StepReport) {
+    total.substeps += r.substeps;
+    total.snapped |= r.snapped;
+    total.snap_steps += r.snap_steps;
+    total.iterations += r.iterations;
+    total.resolves += r.resolves;
+    total.residual_m = r.residual_m;
+}
+
+fn snapped(report: &StepReport) -> &'static str {
+    if report.snapped {
+        " (it snapped to rest)"
+    } else {
+        ""
+    }
+}
+
+/// The point of `wall` whose position along `along` is `ahead_m` from `base`: the nearest
+/// wall point to a probe moved along `along` until it is (a few fixed-point corrections).
+fn point_ahead(wall: &Wall, base: Vector2<f64>, along: Vector2<f64>, ahead_m: f64) -> Vector2<f64> {
+    let mut probe = base + along * ahead_m;
+    let mut point = wall.signed_distance(&probe).closest_m;
+    for _ in 0..50 {
+        let error = ahead_m - (point - base).dot(&along);
+        if error.abs() < 1e-13 {
+            break;
+        }
+        probe += along * error;
+        point = wall.signed_distance(&probe).closest_m;
+    }
+    point
+}
