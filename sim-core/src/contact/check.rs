@@ -134,8 +134,8 @@ impl QuasiStatic {
         }
         // Non-penetration of every link and hair tip.
         for wall in self.walls() {
-            for link in 0..=n {
-                let sc = wall.segment_contact(&start_of(link), &ends[link]);
+            for (link, end) in ends.iter().enumerate() {
+                let sc = wall.segment_contact(&start_of(link), end);
                 out.penetration_m = out.penetration_m.max(-sc.wall.gap_m);
             }
             for h in &hairs {
