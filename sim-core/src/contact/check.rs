@@ -27,6 +27,10 @@ pub struct EquilibriumCheck {
     pub separation_m: f64,
 }
 
+/// Forces below this are zero for the complementarity check (rounding of forces of order
+/// 0.01-1 N).
+const FORCE_ZERO_N: f64 = 1e-12;
+
 impl EquilibriumCheck {
     /// Whether every residual is within its tolerance (torques in N m, lengths in m,
     /// forces in N).
@@ -157,7 +161,7 @@ impl QuasiStatic {
                 .max(min_n - c.normal_force_n)
                 .max(c.shear_force_n.abs() - bound);
             if let Some(x) = point_of(c)
-                && c.normal_force_n != 0.0
+                && c.force_n().norm() > FORCE_ZERO_N
             {
                 let gap = self.walls()[c.wall].signed_distance(&x).gap_m;
                 out.separation_m = out.separation_m.max(gap.abs());

@@ -47,10 +47,10 @@ pub enum FrictionLaw {
         /// Friction coefficient.
         mu: f64,
     },
-    /// A hair tip anchored in a rough surface: the tip sticks and holds up to
-    /// `hold_shear_n` along the wall and `hold_tension_n` away from it (`N >= -hold`); loaded
-    /// beyond the shear hold it slides at that force, pulled beyond the tension hold it
-    /// comes off.
+    /// A hair tip anchored in a rough surface: the tip is held on the wall and sticks, up to
+    /// `hold_shear_n` along the wall (loaded beyond it, it slides at that force) and
+    /// `hold_tension_n` away from it (pulled harder, it lets go: the step is solved again
+    /// with the tip as a Coulomb contact, free to lift off).
     Anchored {
         /// Shear holding strength, newtons.
         hold_shear_n: f64,
@@ -60,11 +60,13 @@ pub enum FrictionLaw {
 }
 
 impl FrictionLaw {
-    /// The smallest normal force allowed (negative: tension).
+    /// The smallest normal force of the complementarity condition: `0` for Coulomb; an
+    /// anchored tip is held to the wall (bilateral, `-inf`), and is let go by the step
+    /// driver when its tension exceeds the hold.
     pub(crate) fn min_normal_n(&self) -> f64 {
         match *self {
             FrictionLaw::Coulomb { .. } => 0.0,
-            FrictionLaw::Anchored { hold_tension_n, .. } => -hold_tension_n,
+            FrictionLaw::Anchored { .. } => f64::NEG_INFINITY,
         }
     }
 

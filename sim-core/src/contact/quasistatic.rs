@@ -220,6 +220,67 @@ impl QuasiStatic {
         }));
     }
 
+    /// Whether the current state is a strict local minimum of the step's potential: the
+    /// Hessian of the Lagrangian (springs, the contact forces' and the tip load's curvature)
+    /// is positive definite on the tangent space of the active constraints (joints on a
+    /// limit held, contacts carrying a force kept touching, stuck ones kept in place). The
+    /// walls' own curvature is not part of it.
+    pub fn is_stable(&mut self) -> bool {
+        self.stability_margin() > 0.0
+    }
+
+    /// The smallest eigenvalue of that reduced Hessian divided by the largest joint
+    /// stiffness (dimensionless; `> 0` stable). `+inf` when nothing can move.
+    pub fn stability_margin(&mut self) -> f64 {
+        let n = self.chain.n();
+        let mut hair_links: Vec<usize> = self
+            .contacts
+            .iter()
+            .filter(|c| c.feature.is_hair())
+            .map(|c| c.feature.link())
+            .collect();
+        hair_links.sort_unstable();
+        hair_links.dedup();
+        let mut x: Vec<f64> = self.theta[1..].to_vec();
+        x.extend(hair_links.iter().map(|&l| self.beta[l]));
+        let mut cands: Vec<Candidate> = self
+            .contacts
+            .iter()
+            .map(|c| Candidate {
+                start_m: c.material_m,
+                material_s: c.s,
+                ..*c
+            })
+            .collect();
+        let problem = StepProblem {
+            chain: &self.chain,
+            walls: &self.walls,
+            tip_force_n: self.tip_force_n,
+            base_m: self.base_m,
+            hair_links: &hair_links,
+            hair_beta_rad: &self.beta,
+            proximal: None,
+            hand_m: self.hand_offset_m.map(|o| self.base_m + o),
+            tolerance_m: self.settings.tolerance_m,
+            max_iterations: 1,
+        };
+        let reduced = self.ssn.tangent_hessian(&problem, &x, &mut cands);
+        if reduced.nrows() == 0 {
+            return f64::INFINITY;
+        }
+        let k_max = self.chain.stiffness_nm_per_rad()[1..=n]
+            .iter()
+            .copied()
+            .fold(f64::MIN_POSITIVE, f64::max);
+        let min = reduced
+            .symmetric_eigen()
+            .eigenvalues
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        min / k_max
+    }
+
     /// Replaces the posture (joint angles), dropping every contact: for placing the antenna
     /// by hand before a sweep. The same checks as [`Self::new`].
     ///
@@ -326,7 +387,8 @@ impl QuasiStatic {
         for _ in 0..self.settings.max_snap_steps {
             report.snap_steps += 1;
             let x_prev = self.coordinates();
-            match self.attempt(goal, Some((gamma, &x_prev)), report) {
+            let r = self.attempt(goal, Some((gamma, &x_prev)), report);
+            match r {
                 Ok(accepted) => {
                     let moved = accepted
                         .x
@@ -436,7 +498,9 @@ impl QuasiStatic {
                 let surface = self.walls[cand.wall]
                     .surface_at(&self.walls[cand.wall].signed_distance(&cand.point_m));
                 match (cand.law, surface) {
-                    (FrictionLaw::Anchored { .. }, _) if !on_stop => {
+                    (FrictionLaw::Anchored { hold_tension_n, .. }, _)
+                        if !on_stop || cand.normal_force_n < -hold_tension_n =>
+                    {
                         cand.law = FrictionLaw::Coulomb { mu: surface.mu() };
                         demoted.push(k);
                         changed = true;
@@ -454,19 +518,15 @@ impl QuasiStatic {
                         && !demoted.contains(&k)
                         && !promoted.contains(&k) =>
                     {
-                        let force =
-                            cand.normal * cand.normal_force_n + cand.tangent * cand.shear_force_n;
-                        self.probe
-                            .update(&self.chain, goal, &theta_of(&self.theta, &x));
-                        let rate = self.probe.hair_tip_rate(hair, link, beta);
-                        if rate.dot(&force) > 0.0 {
-                            cand.law = FrictionLaw::Anchored {
-                                hold_shear_n,
-                                hold_tension_n,
-                            };
-                            promoted.push(k);
-                            changed = true;
-                        }
+                        // Touching a rough zone open against its stop: the asperities hook
+                        // the tip. The anchored solve decides whether the load presses the
+                        // hair against its stop (it stays) or folds it (it is let go again).
+                        cand.law = FrictionLaw::Anchored {
+                            hold_shear_n,
+                            hold_tension_n,
+                        };
+                        promoted.push(k);
+                        changed = true;
                     }
                     _ => {}
                 }
@@ -572,8 +632,8 @@ impl QuasiStatic {
         Ok(out)
     }
 
-    /// A fresh candidate: the material point at the start of the step, the surface's law
-    /// (a hair tip on a rough surface, open against its stop, starts anchored).
+    /// A fresh candidate: the material point at the start of the step and the surface's
+    /// Coulomb law (a hair tip anchors only once it touches, see [`Self::attempt`]).
     fn candidate(&self, feature: Feature, wall: usize, s: f64) -> Candidate {
         let start = match feature {
             Feature::Vertex { link } => self.start.end_m[link],
@@ -585,22 +645,7 @@ impl QuasiStatic {
         };
         let w = &self.walls[wall];
         let surface = w.surface_at(&w.signed_distance(&start));
-        let law = match (feature, surface) {
-            (
-                Feature::HairTip { link },
-                Surface::Rough {
-                    hold_shear_n,
-                    hold_tension_n,
-                    ..
-                },
-            ) if self.beta[link] >= hair_of(&self.chain, link).open_angle_rad - 1e-12 => {
-                FrictionLaw::Anchored {
-                    hold_shear_n,
-                    hold_tension_n,
-                }
-            }
-            _ => FrictionLaw::Coulomb { mu: surface.mu() },
-        };
+        let law = FrictionLaw::Coulomb { mu: surface.mu() };
         Candidate::new(feature, wall, law, s, start)
     }
 

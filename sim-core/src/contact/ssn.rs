@@ -231,7 +231,13 @@ impl Ssn {
         // matrix singular) and lowered again after successes. It changes the path, not the
         // solution: the residual `Phi` itself is never regularized.
         let mut damping = 0.0_f64;
+        // A non-monotone line search (Grippo-Lampariello-Lucidi): a step is accepted against
+        // the largest merit of the last few iterations, so that the active sets can settle
+        // where a constraint is degenerate (a contact at the moment of touching: N = 0 and
+        // gap = 0), where the min-based merit has a kink.
+        let mut recent = [merit; NONMONOTONE_MEMORY];
         while outcome.residual_m > p.tolerance_m && outcome.iterations < p.max_iterations {
+            let reference = recent.iter().copied().fold(merit, f64::max);
             outcome.iterations += 1;
             let Some(dz) = self.newton_direction(dim, damping) else {
                 damping = next_damping(damping);
@@ -255,7 +261,7 @@ impl Ssn {
                 std::mem::swap(&mut self.z, &mut self.z_trial);
                 let mut trial = std::mem::take(&mut self.trial);
                 let trial_merit = self.evaluate(p, m, &mut trial, false);
-                if trial_merit.is_finite() && trial_merit <= (1.0 - 2e-4 * alpha) * merit {
+                if trial_merit.is_finite() && trial_merit <= (1.0 - 2e-4 * alpha) * reference {
                     cands.copy_from_slice(&trial);
                     self.trial = trial;
                     accepted = true;
@@ -282,6 +288,7 @@ impl Ssn {
             }
             // The Jacobian at the accepted point.
             merit = self.evaluate(p, m, cands, true);
+            recent[outcome.iterations % NONMONOTONE_MEMORY] = merit;
             outcome.residual_m = self.phi.amax();
         }
         outcome.converged = outcome.residual_m <= p.tolerance_m;
@@ -297,20 +304,17 @@ impl Ssn {
     }
 
     /// The Newton direction `-J^-1 Phi`, with `J` damped by `damping`: `+damping L` on the
-    /// coordinate rows and `-damping / c` on the diagonal of the constraint rows that have
-    /// none (active normal, stuck and hand rows: the dual regularization of a saddle-point
-    /// system). Undamped, a singular `J` (e.g. two candidates at one point) gets a tiny dual
-    /// regularization.
+    /// coordinate rows and `-max(damping, 1e-10) / c` on the diagonal of the constraint rows
+    /// that have none (active normal and stuck rows: the dual regularization of a
+    /// saddle-point system).
     fn newton_direction(&self, dim: usize, damping: f64) -> Option<DVector<f64>> {
         let rhs = -&self.phi;
         let m = self.r.len();
         let finite = |dz: &DVector<f64>| dz.iter().all(|v| v.is_finite());
-        if damping == 0.0
-            && let Some(dz) = self.big.clone().lu().solve(&rhs).filter(finite)
-        {
-            return Some(dz);
-        }
-        let dual = damping.max(1e-9);
+        // Always a tiny dual regularization: two stuck contacts on one rigid link (a link's
+        // end and its hair on its stop) make identical rows, and the split of their forces is
+        // then the least-norm one instead of an arbitrary one.
+        let dual = damping.max(DUAL_REGULARIZATION);
         let mut reg = self.big.clone();
         for i in 0..m {
             reg[(i, i)] += damping * self.length_m;
@@ -503,6 +507,79 @@ impl Ssn {
         0.5 * self.phi.norm_squared()
     }
 
+    /// The Hessian of the Lagrangian at `x` with the candidates' forces, reduced to the
+    /// tangent space of the active constraints: coordinates strictly inside their range,
+    /// moved so that every contact carrying a force keeps touching (and a stuck one does not
+    /// slide). Returns `Z^T H Z` for an orthonormal basis `Z` of that space (`0 x 0` when
+    /// nothing can move).
+    pub fn tangent_hessian(
+        &mut self,
+        p: &StepProblem<'_>,
+        x: &[f64],
+        cands: &mut [Candidate],
+    ) -> DMatrix<f64> {
+        self.prepare(p);
+        let m = x.len();
+        let c = cands.len();
+        self.z = DVector::zeros(m + 2 * c);
+        for (a, &v) in x.iter().enumerate() {
+            self.z[a] = v;
+        }
+        for (k, cand) in cands.iter().enumerate() {
+            self.z[m + k] = cand.normal_force_n;
+            self.z[m + c + k] = cand.shear_force_n;
+        }
+        self.evaluate(p, m, cands, true);
+        let free: Vec<usize> = (0..m)
+            .filter(|&a| x[a] > self.lo[a] + 1e-12 && x[a] < self.hi[a] - 1e-12)
+            .collect();
+        let f = free.len();
+        let mut rows: Vec<Vec<f64>> = Vec::new();
+        for (k, cand) in cands.iter().enumerate() {
+            if !(cand.normal_active && cand.normal_force_n != 0.0) {
+                continue;
+            }
+            rows.push(
+                free.iter()
+                    .map(|&a| self.jac[k * m + a].dot(&cand.normal))
+                    .collect(),
+            );
+            if cand.slip == Slip::Stuck {
+                rows.push(
+                    free.iter()
+                        .map(|&a| self.jac_mat[k * m + a].dot(&cand.tangent))
+                        .collect(),
+                );
+            }
+        }
+        // The null space of the constraint rows: eigenvectors of A^T A with (relatively)
+        // zero eigenvalue.
+        let mut ata = DMatrix::<f64>::zeros(f, f);
+        for row in &rows {
+            for i in 0..f {
+                for j in 0..f {
+                    ata[(i, j)] += row[i] * row[j];
+                }
+            }
+        }
+        let eig = ata.symmetric_eigen();
+        let top = eig.eigenvalues.iter().copied().fold(0.0_f64, f64::max);
+        let null: Vec<usize> = (0..f)
+            .filter(|&i| eig.eigenvalues[i] <= 1e-10 * top.max(f64::MIN_POSITIVE))
+            .collect();
+        let mut basis = DMatrix::<f64>::zeros(f, null.len());
+        for (col, &i) in null.iter().enumerate() {
+            basis.set_column(col, &eig.eigenvectors.column(i));
+        }
+        let mut h = DMatrix::<f64>::zeros(f, f);
+        for (i, &a) in free.iter().enumerate() {
+            for (j, &b) in free.iter().enumerate() {
+                h[(i, j)] = 0.5 * (self.hess[(a, b)] + self.hess[(b, a)]);
+            }
+        }
+        basis.transpose() * h * basis
+    }
+
     /// The hand spring's force on the tip (zero without a hand); valid after the posture
     /// is updated.
     fn hand_force_n(&self, p: &StepProblem<'_>) -> Vector2<f64> {
@@ -598,6 +675,12 @@ impl Ssn {
     }
 }
 
+/// The least dual regularization of the Newton matrix (relative to `1 / c`).
+const DUAL_REGULARIZATION: f64 = 1e-10;
+
+/// How many past merits the non-monotone line search compares against.
+const NONMONOTONE_MEMORY: usize = 6;
+
 /// The hand spring's stiffness in units of the contact scale `c`.
 const HAND_STIFFNESS: f64 = 1e3;
 
@@ -675,4 +758,152 @@ fn hair_index(hair_links: &[usize], link: usize) -> usize {
         .iter()
         .position(|&l| l == link)
         .unwrap_or_else(|| unreachable_hair(link))
+}
+
+#[cfg(test)]
+mod tests {
+    //! The semismooth Jacobian against central differences of `Phi`, piece by piece.
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::{Line, SolidSide, Surface, SurfaceMap};
+
+    fn chain() -> Chain {
+        Chain::builder(4)
+            .link_length_m(0.04)
+            .base_angle_rad(0.5)
+            .stiffnesses_nm_per_rad(vec![0.05, 0.03, 0.02, 0.01])
+            .hair(4, Hair::seed(0.04))
+            .hair(3, Hair::seed(0.04))
+            .build()
+            .unwrap()
+    }
+
+    /// Compares `big` with central differences of `phi` at `z`, for every column.
+    fn check_jacobian(p: &StepProblem<'_>, m: usize, cands: &mut [Candidate], z: &DVector<f64>) {
+        let mut ssn = Ssn::default();
+        ssn.prepare(p);
+        ssn.z = z.clone();
+        ssn.evaluate(p, m, cands, true);
+        let big = ssn.big.clone();
+        let flags: Vec<(bool, Slip)> = cands.iter().map(|c| (c.normal_active, c.slip)).collect();
+        let dim = z.len();
+        for col in 0..dim {
+            let h = 1e-7;
+            let mut plus = z.clone();
+            plus[col] += h;
+            let mut minus = z.clone();
+            minus[col] -= h;
+            let mut cp = cands.to_vec();
+            ssn.z = plus;
+            ssn.evaluate(p, m, &mut cp, false);
+            let fp = ssn.phi.clone();
+            let same_plus: Vec<(bool, Slip)> =
+                cp.iter().map(|c| (c.normal_active, c.slip)).collect();
+            let mut cm = cands.to_vec();
+            ssn.z = minus;
+            ssn.evaluate(p, m, &mut cm, false);
+            let fm = ssn.phi.clone();
+            let same_minus: Vec<(bool, Slip)> =
+                cm.iter().map(|c| (c.normal_active, c.slip)).collect();
+            assert_eq!(flags, same_plus, "column {col} crosses a kink");
+            assert_eq!(flags, same_minus, "column {col} crosses a kink");
+            for row in 0..dim {
+                let fd = (fp[row] - fm[row]) / (2.0 * h);
+                let an = big[(row, col)];
+                assert!(
+                    (fd - an).abs() <= 1e-5 * (1.0 + an.abs().max(fd.abs())),
+                    "d phi[{row}] / d z[{col}]: analytic {an}, differences {fd}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn jacobian_matches_differences_for_vertex_link_and_hair_contacts() {
+        let chain = chain();
+        let wall = Wall::new(
+            Line::new(Vector2::new(0.0, 0.12), 0.1, SolidSide::Left).unwrap(),
+            SurfaceMap::uniform(Surface::Rough {
+                mu: 0.3,
+                hold_shear_n: 0.5,
+                hold_tension_n: 0.2,
+            })
+            .unwrap(),
+        );
+        let walls = [wall];
+        let hair_links = [3, 4];
+        let beta = vec![0.0, 0.0, 0.0, 0.6, 0.5];
+        for (law_tip, law_hair, normal_n, shear_n) in [
+            (
+                FrictionLaw::Coulomb { mu: 0.3 },
+                FrictionLaw::Coulomb { mu: 0.3 },
+                0.2,
+                0.01,
+            ),
+            (
+                FrictionLaw::Coulomb { mu: 0.3 },
+                FrictionLaw::Coulomb { mu: 0.3 },
+                0.2,
+                0.5,
+            ),
+            (
+                FrictionLaw::Coulomb { mu: 0.3 },
+                FrictionLaw::Anchored {
+                    hold_shear_n: 0.5,
+                    hold_tension_n: 0.2,
+                },
+                -0.1,
+                0.05,
+            ),
+        ] {
+            let p = StepProblem {
+                chain: &chain,
+                walls: &walls,
+                tip_force_n: Vector2::new(0.01, -0.02),
+                base_m: Vector2::new(0.001, 0.0),
+                hair_links: &hair_links,
+                hair_beta_rad: &beta,
+                proximal: None,
+                hand_m: Some(Vector2::new(0.1, 0.1)),
+                tolerance_m: 1e-12,
+                max_iterations: 10,
+            };
+            let x = [0.2, 0.3, 0.25, 0.4, 0.6, 0.5];
+            let m = x.len();
+            let mut cands = vec![
+                Candidate::new(
+                    Feature::Vertex { link: 4 },
+                    0,
+                    law_tip,
+                    1.0,
+                    Vector2::new(0.1, 0.1),
+                ),
+                Candidate::new(
+                    Feature::HairTip { link: 4 },
+                    0,
+                    law_hair,
+                    0.0,
+                    Vector2::new(0.09, 0.11),
+                ),
+                Candidate::new(
+                    Feature::Vertex { link: 2 },
+                    0,
+                    law_tip,
+                    1.0,
+                    Vector2::new(0.05, 0.05),
+                ),
+            ];
+            let c = cands.len();
+            let mut z = DVector::zeros(m + 2 * c);
+            for (a, v) in x.iter().enumerate() {
+                z[a] = *v;
+            }
+            for k in 0..c {
+                z[m + k] = normal_n * (k as f64 + 1.0);
+                z[m + c + k] = shear_n * (k as f64 + 1.0);
+            }
+            check_jacobian(&p, m, &mut cands, &z);
+        }
+    }
 }
