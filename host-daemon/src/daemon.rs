@@ -47,8 +47,8 @@ use crate::acquisition::{
 use crate::clock::{Schedule, TrialClock};
 use crate::config::{Config, SimFaultKind, TrialConfig};
 use crate::net::{
-    ControlCommand, ControlHandler, ControlToken, SegmentSample as NetSample, SegmentStatus,
-    ServerOptions, StageTarget, StreamMessage, StreamServer,
+    ControlCommand, ControlHandler, ControlToken, RigInfo, RigWall, SegmentSample as NetSample,
+    SegmentStatus, ServerOptions, StageTarget, StreamMessage, StreamServer,
 };
 use crate::poll::{PollError, Poller, SegmentHealth};
 use crate::record::{
@@ -535,6 +535,7 @@ impl Daemon {
             });
             let server_options = ServerOptions {
                 segment_addresses: addresses.clone(),
+                rig: Some(rig_info(&config)),
                 ..ServerOptions::default()
             };
             match StreamServer::bind_with(
@@ -660,6 +661,40 @@ impl Daemon {
             log,
             trial: trial_state,
         })
+    }
+}
+
+/// The rig's geometry for the stream's `hello` (docs/stream-protocol.md): the antenna and
+/// wall of `[sim.antenna]` and `[sim.wall]`, the stage's soft limits and the poll rate.
+pub fn rig_info(config: &Config) -> RigInfo {
+    let antenna = &config.sim.antenna;
+    let link_lengths_m = vec![antenna.link_length_m; antenna.links + 1];
+    let stiffness_n_m_per_rad = antenna
+        .profile()
+        .and_then(|p| {
+            p.stiffness_n_m_per_rad(
+                &link_lengths_m,
+                antenna.k_min_n_m_per_rad,
+                antenna.k_max_n_m_per_rad,
+            )
+            .ok()
+        })
+        .unwrap_or_default();
+    RigInfo {
+        poll_hz: config.bus.poll_hz,
+        link_lengths_m,
+        base_mount_angle_deg: antenna.base_angle_deg,
+        stiffness_profile: antenna.stiffness_profile.clone(),
+        k_min_n_m_per_rad: antenna.k_min_n_m_per_rad,
+        k_max_n_m_per_rad: antenna.k_max_n_m_per_rad,
+        stiffness_n_m_per_rad,
+        wall: RigWall {
+            distance_m: config.sim.wall.distance_m,
+            angle_deg: config.sim.wall.angle_deg,
+            stiffness_n_per_m: config.sim.wall.stiffness_n_per_m,
+        },
+        stage_min_m: config.stage.min_mm * 1e-3,
+        stage_max_m: config.stage.max_mm * 1e-3,
     }
 }
 

@@ -19,6 +19,11 @@ pub enum StreamMessage {
         segment_count: usize,
         /// Their 7-bit I2C addresses, base to tip.
         segment_addresses: Vec<u8>,
+        /// The antenna and the wall the daemon models, for clients that draw the chain or
+        /// predict its posture (added in 0.1 without a version change; absent from older
+        /// daemons' lines, read as `None`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rig: Option<RigInfo>,
     },
     /// One poll of every segment, with the stage and base at that instant.
     Samples {
@@ -51,6 +56,50 @@ pub enum StreamMessage {
     },
     /// The answer to one control request, sent only to the client that made it.
     Reply(ControlReply),
+}
+
+/// The rig's geometry as configured (`[sim.antenna]`, `[sim.wall]`, `[stage]`, `bus.poll_hz`),
+/// sent in [`StreamMessage::Hello`]. On the simulated rig it is exactly what the segments
+/// sense; with hardware it is the model of the antenna and wall a client predicts with.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RigInfo {
+    /// Polls per second (`bus.poll_hz`).
+    pub poll_hz: f64,
+    /// Every rigid link, the base link first: one more entry than there are segments, metres.
+    pub link_lengths_m: Vec<f64>,
+    /// The base link's angle from the stage's track with the servo at 0, degrees
+    /// (counter-clockwise); the chain's base angle is this plus `base_angle_deg` of each
+    /// sample.
+    pub base_mount_angle_deg: f64,
+    /// The stiffness profile's name (`sim.antenna.stiffness_profile`).
+    pub stiffness_profile: String,
+    /// The profile's smallest joint stiffness, N m/rad.
+    pub k_min_n_m_per_rad: f64,
+    /// The profile's largest joint stiffness, N m/rad.
+    pub k_max_n_m_per_rad: f64,
+    /// Each flexible joint's stiffness, base to tip (one per segment), N m/rad; empty if the
+    /// profile could not be evaluated.
+    pub stiffness_n_m_per_rad: Vec<f64>,
+    /// The flat wall beside the stage's track.
+    pub wall: RigWall,
+    /// The stage's soft limits, metres from home.
+    pub stage_min_m: f64,
+    /// See [`RigInfo::stage_min_m`].
+    pub stage_max_m: f64,
+}
+
+/// A flat wall as a line in the track frame (x along the stage's track, origin at home, y
+/// towards the wall): the points `p` with `(p - (0, distance_m)) . (sin a, cos a) = 0`,
+/// `a = angle_deg`; the solid side is where that product is positive.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RigWall {
+    /// Distance from the track at its origin, metres.
+    pub distance_m: f64,
+    /// Angle to the track, degrees (positive: the wall comes closer as the stage moves
+    /// forward).
+    pub angle_deg: f64,
+    /// Penalty stiffness of the simulated contact, N/m.
+    pub stiffness_n_per_m: f64,
 }
 
 /// One segment in one poll. A failed read has `error` set and no angle or contact.
@@ -156,6 +205,34 @@ mod tests {
             r#"{"type":"reply","id":3,"ok":false,"message":"no","error":"bad_token"}"#
         );
         assert_eq!(serde_json::from_str::<StreamMessage>(&text).unwrap(), m);
+    }
+
+    /// The two `hello` examples in docs/stream-protocol.md, byte for byte: without `rig` (as
+    /// older daemons send it, read as `None`) and with it.
+    #[test]
+    fn documented_hello_lines_with_and_without_rig() {
+        let doc = include_str!("../../../docs/stream-protocol.md");
+        let lines: Vec<&str> = doc
+            .lines()
+            .filter(|l| l.starts_with(r#"{"type":"hello""#))
+            .collect();
+        assert_eq!(lines.len(), 2, "{lines:?}");
+        for line in &lines {
+            let message: StreamMessage = serde_json::from_str(line).unwrap();
+            assert_eq!(serde_json::to_string(&message).unwrap(), *line);
+        }
+        let rigs: Vec<Option<RigInfo>> = lines
+            .iter()
+            .map(|l| match serde_json::from_str(l).unwrap() {
+                StreamMessage::Hello { rig, .. } => rig,
+                other => panic!("not hello: {other:?}"),
+            })
+            .collect();
+        assert!(rigs[0].is_none());
+        let rig = rigs[1].as_ref().unwrap();
+        assert_eq!(rig.link_lengths_m.len(), 4);
+        assert_eq!(rig.stiffness_n_m_per_rad.len(), 3);
+        assert_eq!(rig.wall.angle_deg, 30.0);
     }
 
     /// The `samples` example in docs/stream-protocol.md, byte for byte; a line from a daemon

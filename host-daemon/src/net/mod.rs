@@ -36,7 +36,8 @@ pub use control::{
 pub use fake_handler::RecordingHandler;
 pub use framing::{LineRead, MAX_LINE_BYTES, encode_line, read_line_capped};
 pub use message::{
-    ControlReply, ErrorCode, PROTOCOL_VERSION, SegmentSample, SegmentStatus, StreamMessage,
+    ControlReply, ErrorCode, PROTOCOL_VERSION, RigInfo, RigWall, SegmentSample, SegmentStatus,
+    StreamMessage,
 };
 pub use server::{DEFAULT_BIND, ServerError, ServerOptions, StreamServer};
 pub use token::{ControlToken, EmptyToken};

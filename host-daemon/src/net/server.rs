@@ -36,6 +36,8 @@ pub struct ServerOptions {
     pub segment_addresses: Vec<u8>,
     /// Sent in [`StreamMessage::Hello`], e.g. `"antennad 0.1.0"`.
     pub daemon: String,
+    /// Sent in [`StreamMessage::Hello`]: the rig's geometry, if known.
+    pub rig: Option<super::RigInfo>,
 }
 
 impl Default for ServerOptions {
@@ -46,6 +48,7 @@ impl Default for ServerOptions {
             max_clients: 32,
             segment_addresses: Vec::new(),
             daemon: format!("antennad {}", env!("CARGO_PKG_VERSION")),
+            rig: None,
         }
     }
 }
@@ -383,6 +386,7 @@ fn start_client(stream: TcpStream, ctx: &ClientContext) -> io::Result<Client> {
         daemon: ctx.options.daemon.clone(),
         segment_count: ctx.options.segment_addresses.len(),
         segment_addresses: ctx.options.segment_addresses.clone(),
+        rig: ctx.options.rig.clone(),
     };
     if let Ok(line) = encode_line(&hello) {
         // The queue is empty and has room for at least one message.
