@@ -1,0 +1,695 @@
+//! [`MonitorApp`]: the whole monitor, laid out from the panels, for eframe and for tests.
+//!
+//! A source feeds it: [`LiveClient`] (antennad's stream) or a [`RecordedTrial`] (an MCAP
+//! file). Every frame it reads the source's [`History`] under the view's window, draws the
+//! chain at the view's cursor with the prediction for the same base pose, and carries out the
+//! user's view, export and control actions.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use egui::{Color32, RichText};
+use host_daemon::net::SegmentStatus;
+
+use crate::client::{ClientOptions, Command, ConnectionState, LiveClient, ReplyRecord};
+use crate::error::MonitorError;
+use crate::export::{FigureInput, export_csv, export_figure};
+use crate::frame::{ChainFrame, SegmentState};
+use crate::history::{Health, History};
+use crate::panels::{
+    ChainPanel, ControlsPanel, HealthPanel, JointAnglesPanel, StageInfo, StagePanel,
+    TimelineAction, TimelinePanel, TouchRasterPanel,
+};
+use crate::prediction::{BasePose, PredictionWorker, predictor_for};
+use crate::recording::{RecordedTrial, open_trial};
+use crate::rig::RigGeometry;
+use crate::view::ViewState;
+
+/// How the app starts.
+#[derive(Debug, Clone)]
+pub struct AppOptions {
+    /// Connect to antennad at this `host:port`.
+    pub connect: Option<String>,
+    /// The control token (empty: watch only).
+    pub token: String,
+    /// Open this recorded trial instead.
+    pub trial: Option<PathBuf>,
+    /// The live history window, seconds.
+    pub history_s: f64,
+    /// Where exports are written.
+    pub export_dir: PathBuf,
+}
+
+impl Default for AppOptions {
+    /// Nothing open, no token, 60 s of history, exports to the working directory.
+    fn default() -> Self {
+        Self {
+            connect: None,
+            token: String::new(),
+            trial: None,
+            history_s: 60.0,
+            export_dir: PathBuf::from("."),
+        }
+    }
+}
+
+/// One export written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExportRecord {
+    /// The file.
+    pub path: PathBuf,
+    /// CSV rows written (figures: `None`).
+    pub rows: Option<usize>,
+    /// The range exported, seconds.
+    pub t0_s: f64,
+    /// See `t0_s`.
+    pub t1_s: f64,
+}
+
+enum Source {
+    Idle,
+    Live(LiveClient),
+    Trial(Box<RecordedTrial>),
+}
+
+struct PredictionSlot {
+    key: String,
+    worker: Result<PredictionWorker, String>,
+}
+
+/// The monitor (see the module documentation).
+pub struct MonitorApp {
+    source: Source,
+    view: ViewState,
+    history_s: f64,
+    panels: Panels,
+    prediction: Option<PredictionSlot>,
+    address: String,
+    trial_path: String,
+    export_dir: PathBuf,
+    exports: Vec<ExportRecord>,
+    message: Option<(String, bool)>,
+    refusal: Option<String>,
+}
+
+struct Panels {
+    chain: ChainPanel,
+    angles: JointAnglesPanel,
+    raster: TouchRasterPanel,
+    health: HealthPanel,
+    stage: StagePanel,
+    controls: ControlsPanel,
+    timeline: TimelinePanel,
+}
+
+/// What one frame reads from the source.
+struct DataRef<'a> {
+    history: &'a History,
+    rig: Option<&'a RigGeometry>,
+    addresses: &'a [u8],
+    counters: Option<&'a [SegmentStatus]>,
+    trial: Option<String>,
+    note: Option<String>,
+    replies: &'a [ReplyRecord],
+    connected: bool,
+    live: bool,
+}
+
+/// What a frame asks of the source after it is drawn.
+#[derive(Default)]
+struct Deferred {
+    commands: Vec<Command>,
+    history_s: Option<f64>,
+}
+
+impl MonitorApp {
+    /// The app of `options`: connects or opens at once (a trial that does not open leaves
+    /// the app idle with the error shown).
+    pub fn new(options: AppOptions) -> Self {
+        let mut app = Self {
+            source: Source::Idle,
+            view: ViewState::new(10.0_f64.min(options.history_s)),
+            history_s: options.history_s,
+            panels: Panels {
+                chain: ChainPanel::default(),
+                angles: JointAnglesPanel::default(),
+                raster: TouchRasterPanel,
+                health: HealthPanel,
+                stage: StagePanel,
+                controls: ControlsPanel::new(options.token),
+                timeline: TimelinePanel::new(options.history_s),
+            },
+            prediction: None,
+            address: options
+                .connect
+                .clone()
+                .unwrap_or_else(|| "127.0.0.1:7878".to_owned()),
+            trial_path: options
+                .trial
+                .as_ref()
+                .map_or_else(String::new, |p| p.display().to_string()),
+            export_dir: options.export_dir,
+            exports: Vec::new(),
+            message: None,
+            refusal: None,
+        };
+        if let Some(path) = &options.trial {
+            app.open(path);
+        } else if let Some(address) = &options.connect {
+            app.connect(address.clone());
+        }
+        app
+    }
+
+    /// Connects to antennad at `address` (replacing the current source).
+    pub fn connect(&mut self, address: String) {
+        let mut options = ClientOptions::new(address.clone());
+        options.history_s = self.history_s;
+        match LiveClient::connect(options) {
+            Ok(client) => {
+                self.source = Source::Live(client);
+                self.view = ViewState::new(self.view.window_s());
+                // The bar shows the connection's state from now on.
+                self.message = None;
+            }
+            Err(e) => self.message = Some((e.to_string(), true)),
+        }
+    }
+
+    /// Opens the recorded trial at `path` (replacing the current source).
+    pub fn open(&mut self, path: &Path) {
+        match open_trial(path) {
+            Ok(trial) => {
+                let span = trial
+                    .history
+                    .first_t_s()
+                    .zip(trial.history.latest_t_s())
+                    .map_or(1.0, |(a, b)| (b - a).max(0.01));
+                // The whole trial in view, the chain at its start.
+                self.view = ViewState::new(span);
+                if let Some(first) = trial.history.first_t_s() {
+                    self.view.show_range(first, first + span, first);
+                }
+                let mut note = format!(
+                    "opened {} ({} polls, {:.2} s)",
+                    path.display(),
+                    trial.history.len(),
+                    span
+                );
+                if let Some(why) = &trial.geometry_note {
+                    note.push_str(&format!("; geometry assumed: {why}"));
+                }
+                if let Some(cut) = &trial.truncated {
+                    note.push_str(&format!("; the file was cut short: {cut}"));
+                }
+                self.message = Some((note, false));
+                self.source = Source::Trial(Box::new(trial));
+            }
+            Err(e) => self.message = Some((e.to_string(), true)),
+        }
+    }
+
+    /// The view (window, cursor, following).
+    pub fn view(&self) -> &ViewState {
+        &self.view
+    }
+
+    /// The live client, if the source is antennad.
+    pub fn live(&self) -> Option<&LiveClient> {
+        match &self.source {
+            Source::Live(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// The recorded trial, if one is open.
+    pub fn trial(&self) -> Option<&RecordedTrial> {
+        match &self.source {
+            Source::Trial(t) => Some(t),
+            _ => None,
+        }
+    }
+
+    /// The exports written so far, oldest first.
+    pub fn exports(&self) -> &[ExportRecord] {
+        &self.exports
+    }
+
+    /// The status line: the last thing that happened and whether it was an error.
+    pub fn message(&self) -> Option<(&str, bool)> {
+        self.message.as_ref().map(|(m, e)| (m.as_str(), *e))
+    }
+
+    /// Waits (at most `timeout`) until the live history spans `history_s` seconds and the
+    /// prediction for the newest pose is in: for a screenshot that shows the chain from the
+    /// first frame. Returns whether that happened.
+    pub fn wait_for_data(&mut self, history_s: f64, timeout: Duration) -> bool {
+        let deadline = Instant::now() + timeout;
+        while Instant::now() < deadline {
+            let measured = match &self.source {
+                Source::Live(client) => {
+                    let state = client.lock();
+                    let span = state
+                        .history
+                        .first_t_s()
+                        .zip(state.history.latest_t_s())
+                        .map(|(a, b)| b - a);
+                    match (&state.rig, span) {
+                        (Some(rig), Some(span)) if span >= history_s => state
+                            .history
+                            .len()
+                            .checked_sub(1)
+                            .and_then(|i| rig.frame_at(&state.history, i).ok())
+                            .map(|f| (f, rig.clone())),
+                        _ => None,
+                    }
+                }
+                Source::Trial(_) => return true,
+                Source::Idle => return false,
+            };
+            if let Some((frame, rig)) = measured {
+                let (_, note) = self.predicted(&rig, &frame);
+                let current = self
+                    .prediction
+                    .as_mut()
+                    .and_then(|p| p.worker.as_mut().ok())
+                    .is_some_and(PredictionWorker::is_current);
+                if current || note.is_some_and(|n| !n.contains("solving")) {
+                    return true;
+                }
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        false
+    }
+
+    /// The prediction for `measured`'s base pose against `rig`'s wall, as a frame, or why
+    /// there is none.
+    fn predicted(
+        &mut self,
+        rig: &RigGeometry,
+        measured: &ChainFrame,
+    ) -> (Option<ChainFrame>, Option<String>) {
+        let key = format!("{}#{}", rig.source, rig.segment_count());
+        if self.prediction.as_ref().is_none_or(|p| p.key != key) {
+            let worker = predictor_for(rig)
+                .and_then(PredictionWorker::start)
+                .map_err(|e| e.to_string());
+            self.prediction = Some(PredictionSlot { key, worker });
+        }
+        let Some(slot) = self.prediction.as_mut() else {
+            return (None, None);
+        };
+        let worker = match &mut slot.worker {
+            Ok(w) => w,
+            Err(e) => return (None, Some(e.clone())),
+        };
+        let Some(stage_position_m) = measured.stage_position_m else {
+            return (None, Some("the stage position is unknown".to_owned()));
+        };
+        worker.request(BasePose {
+            stage_position_m,
+            servo_angle_rad: measured.base_angle_rad - rig.base_mount_angle_rad,
+        });
+        match worker.latest() {
+            Some(Ok(p)) => {
+                let states = p
+                    .touched
+                    .iter()
+                    .map(|&t| SegmentState {
+                        touch_bits: if t { 0x0F } else { 0 },
+                        ..SegmentState::QUIET
+                    })
+                    .collect();
+                let frame = rig.frame(
+                    measured.t_s,
+                    &p.joint_angles_rad,
+                    states,
+                    Some(p.pose.stage_position_m),
+                    Some(p.pose.servo_angle_rad),
+                );
+                match frame {
+                    Ok(f) => (Some(f), None),
+                    Err(e) => (None, Some(e.to_string())),
+                }
+            }
+            Some(Err(e)) => (None, Some(e.clone())),
+            None => (None, Some("solving...".to_owned())),
+        }
+    }
+
+    /// Draws the whole app into `ui` (eframe's root `Ui`, or a test harness's).
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        self.source_bar(ui);
+        let mut source = std::mem::replace(&mut self.source, Source::Idle);
+        let deferred = match &mut source {
+            Source::Live(client) => {
+                let state = client.lock();
+                let data = DataRef {
+                    history: &state.history,
+                    rig: state.rig.as_ref(),
+                    addresses: &state.segment_addresses,
+                    counters: state.status.as_ref().map(|s| s.segments.as_slice()),
+                    trial: state.status.as_ref().and_then(|s| s.trial.clone()),
+                    note: state.status.as_ref().and_then(|s| s.note.clone()),
+                    replies: &state.replies,
+                    connected: matches!(state.connection, ConnectionState::Connected { .. }),
+                    live: true,
+                };
+                self.draw(ui, &data)
+            }
+            Source::Trial(trial) => {
+                let note = trial
+                    .log
+                    .iter()
+                    .rev()
+                    .find(|l| {
+                        self.view
+                            .cursor_s(trial.history.latest_t_s())
+                            .is_some_and(|c| l.t_s <= c)
+                    })
+                    .map(|l| format!("{:.2} s: {}", l.t_s, l.text));
+                let data = DataRef {
+                    history: &trial.history,
+                    rig: Some(&trial.rig),
+                    addresses: &trial.segment_addresses,
+                    counters: None,
+                    trial: Some(trial.name.clone()),
+                    note,
+                    replies: &[],
+                    connected: false,
+                    live: false,
+                };
+                self.draw(ui, &data)
+            }
+            Source::Idle => {
+                egui::CentralPanel::default().show(ui, |ui| {
+                    ui.label("Connect to antennad or open a recorded trial (.mcap) above.");
+                });
+                Deferred::default()
+            }
+        };
+        if let Source::Live(client) = &mut source {
+            if let Some(s) = deferred.history_s {
+                self.history_s = s;
+                client.set_history_s(s);
+            }
+            for command in &deferred.commands {
+                match client.send(command, &self.panels.controls.token) {
+                    Ok(_) => self.refusal = None,
+                    Err(e) => self.refusal = Some(e.to_string()),
+                }
+            }
+            if self.view.is_following() {
+                ui.ctx().request_repaint_after(Duration::from_millis(16));
+            } else {
+                ui.ctx().request_repaint_after(Duration::from_millis(100));
+            }
+        }
+        self.source = source;
+    }
+
+    fn source_bar(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::top("source_bar")
+            .frame(unfilled(egui::Frame::side_top_panel(ui.style())))
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let label = ui.label("antennad");
+                    ui.add(egui::TextEdit::singleline(&mut self.address).desired_width(140.0))
+                        .labelled_by(label.id);
+                    if ui.button("Connect").clicked() {
+                        let address = self.address.clone();
+                        self.connect(address);
+                    }
+                    ui.separator();
+                    let label = ui.label("trial .mcap");
+                    ui.add(egui::TextEdit::singleline(&mut self.trial_path).desired_width(220.0))
+                        .labelled_by(label.id);
+                    if ui.button("Open").clicked() {
+                        let path = PathBuf::from(self.trial_path.trim());
+                        self.open(&path);
+                    }
+                    ui.separator();
+                    match &self.source {
+                        Source::Live(client) => {
+                            let state = client.lock();
+                            let (text, colour) = match &state.connection {
+                                ConnectionState::Connected { daemon } => (
+                                    format!("connected to {daemon} at {}", client.address()),
+                                    Color32::from_rgb(0, 150, 0),
+                                ),
+                                ConnectionState::Connecting { attempt } => (
+                                    format!(
+                                        "connecting to {} (attempt {attempt})",
+                                        client.address()
+                                    ),
+                                    Color32::from_rgb(200, 140, 0),
+                                ),
+                                ConnectionState::Disconnected { error, retry_at } => (
+                                    format!(
+                                        "DISCONNECTED: {error}; reconnecting in {:.1} s",
+                                        retry_at
+                                            .saturating_duration_since(Instant::now())
+                                            .as_secs_f64()
+                                    ),
+                                    Color32::RED,
+                                ),
+                            };
+                            ui.label(RichText::new(text).color(colour).strong());
+                            if state.lagged_dropped > 0 {
+                                ui.label(format!(
+                                    "{} messages dropped (lagged)",
+                                    state.lagged_dropped
+                                ));
+                            }
+                            ui.label(format!(
+                                "{} samples held, {} received",
+                                state.history.len(),
+                                state.history.total_pushed()
+                            ));
+                        }
+                        Source::Trial(t) => {
+                            ui.label(format!("trial {} ({})", t.name, t.path.display()));
+                        }
+                        Source::Idle => {
+                            ui.label("no source");
+                        }
+                    }
+                });
+                if let Some((message, error)) = &self.message {
+                    let colour = if *error {
+                        Color32::RED
+                    } else {
+                        ui.visuals().weak_text_color()
+                    };
+                    ui.label(RichText::new(message).color(colour).small());
+                }
+            });
+    }
+
+    fn draw(&mut self, ui: &mut egui::Ui, data: &DataRef<'_>) -> Deferred {
+        let mut deferred = Deferred::default();
+        let history = data.history;
+        let latest = history.latest_t_s();
+        let span = history.first_t_s().zip(latest);
+        let cursor_index = self.view.cursor_s(latest).and_then(|c| history.index_at(c));
+        let measured = match (data.rig, cursor_index) {
+            (Some(rig), Some(i)) => rig.frame_at(history, i).ok(),
+            _ => None,
+        };
+        let (predicted, prediction_note) = match (data.rig, &measured) {
+            (Some(rig), Some(m)) => self.predicted(rig, m),
+            _ => (None, None),
+        };
+        let model = self
+            .prediction
+            .as_ref()
+            .and_then(|p| p.worker.as_ref().ok())
+            .map_or("", PredictionWorker::name);
+
+        let actions = egui::Panel::top("timeline_bar")
+            .frame(unfilled(egui::Frame::side_top_panel(ui.style())))
+            .show(ui, |ui| {
+                self.panels.timeline.ui(ui, &self.view, span, data.live)
+            })
+            .inner;
+        let max_window_s = if data.live {
+            self.history_s
+        } else {
+            span.map_or(1.0, |(a, b)| (b - a).max(0.01))
+        };
+        for action in actions {
+            match action {
+                TimelineAction::Pause => self.view.pause(latest),
+                TimelineAction::Follow => self.view.follow_latest(),
+                TimelineAction::Zoom(f) => self.view.zoom(f, max_window_s),
+                TimelineAction::SetHistory(s) => deferred.history_s = Some(s),
+                TimelineAction::Scrub(t) => self.view.scrub(t, latest),
+                TimelineAction::ExportCsv
+                | TimelineAction::ExportPng
+                | TimelineAction::ExportSvg => {
+                    let result = self.export(action, data, measured.as_ref(), predicted.as_ref());
+                    self.message = Some(match result {
+                        Ok(r) => (
+                            format!(
+                                "exported {:.3} s to {:.3} s to {}{}",
+                                r.t0_s,
+                                r.t1_s,
+                                r.path.display(),
+                                r.rows.map_or_else(String::new, |n| format!(" ({n} rows)"))
+                            ),
+                            false,
+                        ),
+                        Err(e) => (e.to_string(), true),
+                    });
+                }
+            }
+        }
+
+        egui::Panel::left("side_panel")
+            .frame(unfilled(egui::Frame::side_top_panel(ui.style())))
+            .resizable(true)
+            .default_size(340.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    if data.live {
+                        ui.heading("Controls");
+                        deferred.commands = self.panels.controls.ui(
+                            ui,
+                            data.connected,
+                            data.replies,
+                            self.refusal.as_deref(),
+                        );
+                        ui.separator();
+                    }
+                    ui.heading("Stage and servo");
+                    let sample = cursor_index.and_then(|i| history.sample(i));
+                    let info = StageInfo {
+                        stage_position_m: sample.as_ref().and_then(|s| s.stage_position_m),
+                        stage_range_m: data.rig.and_then(|r| r.stage_range_m),
+                        servo_angle_deg: sample
+                            .as_ref()
+                            .and_then(|s| s.servo_angle_rad)
+                            .map(f64::to_degrees),
+                        mount_angle_deg: data
+                            .rig
+                            .map_or(0.0, |r| r.base_mount_angle_rad.to_degrees()),
+                        trial: data.trial.clone(),
+                        note: data.note.clone(),
+                    };
+                    self.panels.stage.ui(ui, &info);
+                    ui.separator();
+                    ui.heading("Segment health");
+                    let now: Vec<Health> = sample
+                        .as_ref()
+                        .map(|s| s.segments.iter().map(|r| r.health).collect())
+                        .unwrap_or_default();
+                    self.panels
+                        .health
+                        .ui(ui, data.addresses, &now, data.counters);
+                    if let Some(rig) = data.rig {
+                        ui.separator();
+                        ui.label(RichText::new(format!("geometry: {}", rig.source)).small());
+                    }
+                });
+            });
+
+        egui::CentralPanel::default()
+            .frame(unfilled(egui::Frame::central_panel(ui.style())))
+            .show(ui, |ui| {
+                let width = ui.available_width();
+                let height = ui.available_height();
+                ui.allocate_ui(egui::vec2(width, height * 0.5), |ui| {
+                    self.panels.chain.ui(
+                        ui,
+                        measured.as_ref(),
+                        predicted.as_ref(),
+                        model,
+                        prediction_note.as_deref(),
+                    );
+                });
+                ui.allocate_ui(egui::vec2(width, height * 0.3), |ui| {
+                    self.panels
+                        .angles
+                        .ui(ui, history, &mut self.view, max_window_s);
+                });
+                let window = self.view.window(latest);
+                let cursor = self.view.cursor_s(latest);
+                self.panels.raster.ui(ui, history, window, cursor);
+            });
+        deferred
+    }
+
+    fn export(
+        &mut self,
+        action: TimelineAction,
+        data: &DataRef<'_>,
+        measured: Option<&ChainFrame>,
+        predicted: Option<&ChainFrame>,
+    ) -> Result<ExportRecord, MonitorError> {
+        let (t0_s, t1_s) =
+            self.view
+                .window(data.history.latest_t_s())
+                .ok_or(MonitorError::NothingToExport {
+                    t0_s: 0.0,
+                    t1_s: 0.0,
+                })?;
+        let kind = if data.live {
+            "live".to_owned()
+        } else {
+            data.trial.clone().unwrap_or_else(|| "trial".to_owned())
+        };
+        let stem = format!("antenna-{kind}-{t0_s:.3}-{t1_s:.3}");
+        let (path, rows) = match action {
+            TimelineAction::ExportCsv => {
+                let path = self.export_dir.join(format!("{stem}.csv"));
+                let rows = export_csv(data.history, t0_s, t1_s, &path)?;
+                (path, Some(rows))
+            }
+            _ => {
+                let extension = if action == TimelineAction::ExportSvg {
+                    "svg"
+                } else {
+                    "png"
+                };
+                let path = self.export_dir.join(format!("{stem}.{extension}"));
+                let joints = self.panels.angles.joints(data.history.segment_count());
+                let input = FigureInput {
+                    history: data.history,
+                    t0_s,
+                    t1_s,
+                    joints: &joints,
+                    measured,
+                    predicted: predicted.filter(|_| self.panels.chain.show_prediction),
+                };
+                export_figure(&input, &path)?;
+                (path, None)
+            }
+        };
+        let record = ExportRecord {
+            path,
+            rows,
+            t0_s,
+            t1_s,
+        };
+        self.exports.push(record.clone());
+        Ok(record)
+    }
+}
+
+/// A panel frame without its fill: the window is cleared to the panel colour
+/// ([`eframe::App::clear_color`]), so painting every panel's background again would only
+/// cost time (under software rendering, each full-window layer costs milliseconds).
+fn unfilled(frame: egui::Frame) -> egui::Frame {
+    frame.fill(Color32::TRANSPARENT)
+}
+
+impl eframe::App for MonitorApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        MonitorApp::ui(self, ui);
+    }
+
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        visuals.panel_fill.to_normalized_gamma_f32()
+    }
+}

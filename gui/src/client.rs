@@ -1,0 +1,626 @@
+//! [`LiveClient`]: antennad's stream over TCP (`docs/stream-protocol.md`), on its own thread.
+//!
+//! The reader thread connects, reads the newline-delimited JSON, appends every `samples`
+//! line to the shared [`History`] (bounded: the user's history window times the poll rate),
+//! keeps the latest `status`, counts `lagged` drops and files `reply` lines. When the daemon
+//! goes away it says so in [`ConnectionState::Disconnected`] and reconnects with exponential
+//! backoff. The UI thread only locks [`LiveState`] for as long as it reads it and hands
+//! control requests to a channel that the reader thread writes out: nothing here waits on the
+//! network from the UI thread.
+//!
+//! The stream carries one `contact` flag per segment, not the four touch bits (a recording
+//! has them): a contact is stored as all four bits set.
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader, ErrorKind, Write};
+use std::net::{TcpStream, ToSocketAddrs};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use host_daemon::net::{SegmentSample, SegmentStatus, StreamMessage};
+
+use crate::error::MonitorError;
+use crate::history::{Health, History, Sample, SegmentReading};
+use crate::rig::RigGeometry;
+
+/// Replies kept for the controls panel.
+const REPLIES_KEPT: usize = 64;
+/// How long a read waits before the thread looks at its stop flag and its outgoing queue.
+const READ_POLL: Duration = Duration::from_millis(20);
+
+/// How to connect.
+#[derive(Debug, Clone)]
+pub struct ClientOptions {
+    /// `host:port` of antennad's stream.
+    pub address: String,
+    /// The history window, seconds (samples older than this are dropped).
+    pub history_s: f64,
+    /// How long one connection attempt may take.
+    pub connect_timeout: Duration,
+    /// The first wait before reconnecting; it doubles on every failure...
+    pub backoff_min: Duration,
+    /// ...up to this.
+    pub backoff_max: Duration,
+}
+
+impl ClientOptions {
+    /// Defaults for `address`: a 60 s history, 1 s connect timeout, reconnecting after
+    /// 0.25 s, 0.5 s, ... up to 4 s.
+    pub fn new(address: impl Into<String>) -> Self {
+        Self {
+            address: address.into(),
+            history_s: 60.0,
+            connect_timeout: Duration::from_secs(1),
+            backoff_min: Duration::from_millis(250),
+            backoff_max: Duration::from_secs(4),
+        }
+    }
+}
+
+/// Where the connection stands.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ConnectionState {
+    /// Trying to connect (attempt number since the last success).
+    Connecting {
+        /// Attempts since the last connection.
+        attempt: u32,
+    },
+    /// Connected; `hello` received.
+    Connected {
+        /// The daemon's name and version.
+        daemon: String,
+    },
+    /// Not connected: why, and when the next attempt is.
+    Disconnected {
+        /// What went wrong.
+        error: String,
+        /// When the next attempt starts.
+        retry_at: Instant,
+    },
+}
+
+/// The daemon's latest `status` line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DaemonStatus {
+    /// Its time, seconds since the daemon started.
+    pub t_s: f64,
+    /// The trial being recorded.
+    pub trial: Option<String>,
+    /// Health counters per segment since the daemon started.
+    pub segments: Vec<SegmentStatus>,
+    /// What is wrong now and what last happened.
+    pub note: Option<String>,
+}
+
+/// A control command (`docs/stream-protocol.md`, "Client to server").
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    /// Start the configured trial of this name.
+    StartTrial {
+        /// The trial's name.
+        name: String,
+    },
+    /// End the running trial.
+    StopTrial,
+    /// Move the stage to an absolute position.
+    MoveStage {
+        /// Target, metres from home.
+        position_m: f64,
+    },
+    /// Set the base servo's angle.
+    SetBaseAngle {
+        /// Servo angle, degrees.
+        angle_deg: f64,
+    },
+    /// Stop the stage, hold the servo, end any trial.
+    StopAll,
+}
+
+impl Command {
+    /// The protocol's `cmd`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Command::StartTrial { .. } => "start_trial",
+            Command::StopTrial => "stop_trial",
+            Command::MoveStage { .. } => "move_stage",
+            Command::SetBaseAngle { .. } => "set_base_angle",
+            Command::StopAll => "stop_all",
+        }
+    }
+
+    /// The request line (without the newline).
+    pub fn request_line(&self, id: u64, token: &str) -> String {
+        let mut request = serde_json::json!({"id": id, "token": token, "cmd": self.name()});
+        match self {
+            Command::StartTrial { name } => request["name"] = name.as_str().into(),
+            Command::MoveStage { position_m } => request["position_m"] = (*position_m).into(),
+            Command::SetBaseAngle { angle_deg } => request["angle_deg"] = (*angle_deg).into(),
+            Command::StopTrial | Command::StopAll => {}
+        }
+        request.to_string()
+    }
+}
+
+/// One request and its answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplyRecord {
+    /// The request's id.
+    pub id: Option<u64>,
+    /// The command, if the id was ours.
+    pub command: Option<String>,
+    /// Whether the daemon carried it out.
+    pub ok: bool,
+    /// What the daemon said.
+    pub message: String,
+    /// The machine-readable reason on failure (`bad_token`, `rejected`, ...).
+    pub error: Option<String>,
+}
+
+/// What the reader thread shares with the UI.
+#[derive(Debug)]
+pub struct LiveState {
+    /// The connection.
+    pub connection: ConnectionState,
+    /// Samples received, bounded by the history window.
+    pub history: History,
+    /// The rig's geometry from `hello` (a stand-in if it sends none).
+    pub rig: Option<RigGeometry>,
+    /// The segments' addresses from `hello`.
+    pub segment_addresses: Vec<u8>,
+    /// The latest `status`.
+    pub status: Option<DaemonStatus>,
+    /// Messages the daemon dropped for us (from `lagged`), since we started.
+    pub lagged_dropped: u64,
+    /// Replies, oldest first (the last few dozen).
+    pub replies: Vec<ReplyRecord>,
+    /// Successful connections so far.
+    pub connections: u32,
+    /// Lines that did not parse (protocol errors), and the last one's error.
+    pub bad_lines: (u64, Option<String>),
+    history_s: f64,
+    pending: BTreeMap<u64, &'static str>,
+}
+
+impl LiveState {
+    /// The history window, seconds.
+    pub fn history_s(&self) -> f64 {
+        self.history_s
+    }
+
+    fn capacity(&self) -> usize {
+        let hz = self.rig.as_ref().map_or(1000.0, |r| r.poll_hz);
+        (self.history_s * hz).ceil().max(1.0) as usize
+    }
+}
+
+/// The stream client (see the module documentation).
+#[derive(Debug)]
+pub struct LiveClient {
+    address: String,
+    shared: Arc<Mutex<LiveState>>,
+    outgoing: Sender<String>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    next_id: u64,
+}
+
+impl LiveClient {
+    /// Starts the reader thread; returns at once (the connection is made on that thread).
+    pub fn connect(options: ClientOptions) -> Result<Self, MonitorError> {
+        let state = LiveState {
+            connection: ConnectionState::Connecting { attempt: 1 },
+            history: History::new(0, 1),
+            rig: None,
+            segment_addresses: Vec::new(),
+            status: None,
+            lagged_dropped: 0,
+            replies: Vec::new(),
+            connections: 0,
+            bad_lines: (0, None),
+            history_s: options.history_s,
+            pending: BTreeMap::new(),
+        };
+        let shared = Arc::new(Mutex::new(state));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (outgoing, requests) = channel();
+        let address = options.address.clone();
+        let thread = {
+            let shared = Arc::clone(&shared);
+            let stop = Arc::clone(&stop);
+            std::thread::Builder::new()
+                .name("monitor-stream".to_owned())
+                .spawn(move || reader_loop(&options, &shared, &stop, &requests))
+                .map_err(|e| MonitorError::Control(format!("starting the stream thread: {e}")))?
+        };
+        Ok(Self {
+            address,
+            shared,
+            outgoing,
+            stop,
+            thread: Some(thread),
+            next_id: 1,
+        })
+    }
+
+    /// The daemon's address.
+    pub fn address(&self) -> &str {
+        &self.address
+    }
+
+    /// The shared state, locked (briefly, please: the reader thread waits meanwhile).
+    pub fn lock(&self) -> MutexGuard<'_, LiveState> {
+        self.shared
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// Changes the history window (keeps the newest samples that fit).
+    pub fn set_history_s(&self, history_s: f64) {
+        let mut state = self.lock();
+        state.history_s = history_s.max(0.001);
+        let capacity = state.capacity();
+        state.history.set_capacity(capacity);
+    }
+
+    /// Sends a control command with `token`; returns its request id. Refused here, with
+    /// nothing sent, without a token or a connection.
+    pub fn send(&mut self, command: &Command, token: &str) -> Result<u64, MonitorError> {
+        if token.is_empty() {
+            return Err(MonitorError::Control(format!(
+                "{}: no token; control commands need the daemon's token (antennad prints it \
+                 at start)",
+                command.name()
+            )));
+        }
+        let id = self.next_id;
+        {
+            let mut state = self
+                .shared
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            if !matches!(state.connection, ConnectionState::Connected { .. }) {
+                return Err(MonitorError::Control(format!(
+                    "{}: not connected to {}",
+                    command.name(),
+                    self.address
+                )));
+            }
+            state.pending.insert(id, command.name());
+        }
+        self.next_id += 1;
+        self.outgoing
+            .send(command.request_line(id, token))
+            .map_err(|_| MonitorError::Control("the stream thread has stopped".to_owned()))?;
+        Ok(id)
+    }
+}
+
+impl Drop for LiveClient {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+fn reader_loop(
+    options: &ClientOptions,
+    shared: &Mutex<LiveState>,
+    stop: &AtomicBool,
+    requests: &Receiver<String>,
+) {
+    let lock = || {
+        shared
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    };
+    let mut backoff = options.backoff_min;
+    let mut attempt = 1;
+    while !stop.load(Ordering::Relaxed) {
+        lock().connection = ConnectionState::Connecting { attempt };
+        let error = match open(&options.address, options.connect_timeout) {
+            Ok(stream) => {
+                attempt = 1;
+                backoff = options.backoff_min;
+                serve(stream, shared, stop, requests)
+            }
+            Err(e) => e,
+        };
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        // Requests written to a dead connection get no reply: say so.
+        while requests.try_recv().is_ok() {}
+        {
+            let mut state = lock();
+            let lost: Vec<(u64, &'static str)> =
+                std::mem::take(&mut state.pending).into_iter().collect();
+            for (id, command) in lost {
+                push_reply(
+                    &mut state,
+                    ReplyRecord {
+                        id: Some(id),
+                        command: Some(command.to_owned()),
+                        ok: false,
+                        message: "no reply: the connection was lost".to_owned(),
+                        error: None,
+                    },
+                );
+            }
+            state.connection = ConnectionState::Disconnected {
+                error: format!("{}: {error}", options.address),
+                retry_at: Instant::now() + backoff,
+            };
+        }
+        let until = Instant::now() + backoff;
+        while Instant::now() < until && !stop.load(Ordering::Relaxed) {
+            std::thread::sleep(Duration::from_millis(10).min(until - Instant::now()));
+        }
+        backoff = (backoff * 2).min(options.backoff_max);
+        attempt += 1;
+    }
+}
+
+fn open(address: &str, timeout: Duration) -> Result<TcpStream, String> {
+    let addrs: Vec<_> = address
+        .to_socket_addrs()
+        .map_err(|e| format!("cannot resolve the address: {e}"))?
+        .collect();
+    let mut last = "the address resolves to nothing".to_owned();
+    for addr in addrs {
+        match TcpStream::connect_timeout(&addr, timeout) {
+            Ok(stream) => return Ok(stream),
+            Err(e) => last = format!("cannot connect: {e}"),
+        }
+    }
+    Err(last)
+}
+
+/// Reads one connection until it fails or `stop`; returns why it ended.
+fn serve(
+    stream: TcpStream,
+    shared: &Mutex<LiveState>,
+    stop: &AtomicBool,
+    requests: &Receiver<String>,
+) -> String {
+    let lock = || {
+        shared
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    };
+    if let Err(e) = stream.set_read_timeout(Some(READ_POLL)) {
+        return format!("configuring the socket: {e}");
+    }
+    let _ = stream.set_nodelay(true);
+    let mut writer = match stream.try_clone() {
+        Ok(w) => w,
+        Err(e) => return format!("configuring the socket: {e}"),
+    };
+    let _ = writer.set_write_timeout(Some(Duration::from_secs(2)));
+    let mut reader = BufReader::with_capacity(1 << 16, stream);
+    let mut line = Vec::with_capacity(4096);
+    let mut greeted = false;
+    loop {
+        if stop.load(Ordering::Relaxed) {
+            return "stopped".to_owned();
+        }
+        if greeted {
+            while let Ok(request) = requests.try_recv() {
+                if let Err(e) = writer
+                    .write_all(request.as_bytes())
+                    .and_then(|()| writer.write_all(b"\n"))
+                {
+                    return format!("sending a control request: {e}");
+                }
+            }
+        }
+        match reader.read_until(b'\n', &mut line) {
+            Ok(0) => return "the daemon closed the connection".to_owned(),
+            Ok(_) if line.last() == Some(&b'\n') => {
+                let result = serde_json::from_slice::<StreamMessage>(&line);
+                line.clear();
+                match result {
+                    Ok(message) => {
+                        let mut state = lock();
+                        if let Err(e) = on_message(&mut state, message, &mut greeted) {
+                            return e;
+                        }
+                    }
+                    Err(e) => {
+                        let mut state = lock();
+                        state.bad_lines.0 += 1;
+                        state.bad_lines.1 = Some(e.to_string());
+                    }
+                }
+            }
+            // A partial line: the rest comes with the next read.
+            Ok(_) => {}
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return format!("reading the stream: {e}"),
+        }
+    }
+}
+
+fn on_message(
+    state: &mut LiveState,
+    message: StreamMessage,
+    greeted: &mut bool,
+) -> Result<(), String> {
+    match message {
+        StreamMessage::Hello {
+            daemon,
+            segment_count,
+            segment_addresses,
+            rig,
+            ..
+        } => {
+            let geometry = match rig {
+                Some(rig) => RigGeometry::from_rig_info(&rig, format!("{daemon} hello")),
+                None => RigGeometry::fallback(segment_count),
+            }
+            .or_else(|_| RigGeometry::fallback(segment_count))
+            .map_err(|e| format!("the daemon's hello: {e}"))?;
+            if geometry.segment_count() != segment_count {
+                return Err(format!(
+                    "the daemon's hello: {segment_count} segments but a rig of {} links after \
+                     the base link",
+                    geometry.segment_count()
+                ));
+            }
+            if state.history.segment_count() != segment_count {
+                state.history = History::new(segment_count, 1);
+            }
+            state.rig = Some(geometry);
+            let capacity = state.capacity();
+            state.history.set_capacity(capacity);
+            state.segment_addresses = segment_addresses;
+            state.connections += 1;
+            state.connection = ConnectionState::Connected { daemon };
+            *greeted = true;
+        }
+        StreamMessage::Samples {
+            seq,
+            t_ns,
+            segments,
+            stage_position_m,
+            base_angle_deg,
+        } => {
+            if !*greeted {
+                return Err("samples before hello: not an antennad stream".to_owned());
+            }
+            let sample = Sample {
+                seq: Some(seq),
+                t_s: t_ns as f64 * 1e-9,
+                segments: segments.iter().map(reading).collect(),
+                stage_position_m,
+                servo_angle_rad: base_angle_deg.map(f64::to_radians),
+            };
+            if state
+                .history
+                .latest_t_s()
+                .is_some_and(|latest| sample.t_s < latest)
+            {
+                // A new daemon (its clock restarted): start the history afresh.
+                let capacity = state.history.capacity();
+                state.history = History::new(state.history.segment_count(), capacity);
+            }
+            state
+                .history
+                .push(&sample)
+                .map_err(|e| format!("samples line {seq}: {e}"))?;
+        }
+        StreamMessage::Status {
+            t_ns,
+            trial,
+            segments,
+            note,
+        } => {
+            state.status = Some(DaemonStatus {
+                t_s: t_ns as f64 * 1e-9,
+                trial,
+                segments,
+                note,
+            });
+        }
+        StreamMessage::Lagged { dropped } => state.lagged_dropped += dropped,
+        StreamMessage::Reply(reply) => {
+            let command = reply
+                .id
+                .and_then(|id| state.pending.remove(&id))
+                .map(str::to_owned);
+            let error = reply.error.map(|e| {
+                serde_json::to_value(e)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_owned))
+                    .unwrap_or_else(|| format!("{e:?}"))
+            });
+            push_reply(
+                state,
+                ReplyRecord {
+                    id: reply.id,
+                    command,
+                    ok: reply.ok,
+                    message: reply.message,
+                    error,
+                },
+            );
+        }
+    }
+    Ok(())
+}
+
+fn push_reply(state: &mut LiveState, record: ReplyRecord) {
+    if state.replies.len() >= REPLIES_KEPT {
+        state.replies.remove(0);
+    }
+    state.replies.push(record);
+}
+
+fn reading(s: &SegmentSample) -> SegmentReading {
+    let health = match s.error.as_deref() {
+        None if s.stale => Health::Stale,
+        None => Health::Ok,
+        Some("nack") => Health::Nack,
+        Some("pec") => Health::Pec,
+        Some(_) => Health::Bus,
+    };
+    SegmentReading {
+        angle_rad: s.angle_rad,
+        touch_bits: s.contact.map(|c| if c { 0x0F } else { 0 }),
+        health,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn request_lines_follow_the_protocol() {
+        let line = Command::MoveStage { position_m: 0.1 }.request_line(3, "s3cret");
+        let v: serde_json::Value = serde_json::from_str(&line).unwrap();
+        assert_eq!(v["cmd"], "move_stage");
+        assert_eq!(v["position_m"], 0.1);
+        assert_eq!(v["token"], "s3cret");
+        assert_eq!(v["id"], 3);
+        let line = Command::StartTrial {
+            name: "wall-sweep".to_owned(),
+        }
+        .request_line(4, "t");
+        assert!(line.contains(r#""name":"wall-sweep""#), "{line}");
+    }
+
+    #[test]
+    fn unreachable_daemon_is_reported_and_retried() {
+        // A port nobody listens on: bind, note it, close.
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let mut options = ClientOptions::new(format!("127.0.0.1:{port}"));
+        options.backoff_min = Duration::from_millis(20);
+        options.backoff_max = Duration::from_millis(40);
+        let mut client = LiveClient::connect(options).unwrap();
+        let deadline = Instant::now() + Duration::from_secs(5);
+        loop {
+            let state = client.lock();
+            if let ConnectionState::Disconnected { error, .. } = &state.connection {
+                assert!(error.contains("cannot connect"), "{error}");
+                break;
+            }
+            drop(state);
+            assert!(Instant::now() < deadline);
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let err = client.send(&Command::StopAll, "t").unwrap_err().to_string();
+        assert!(err.contains("not connected"), "{err}");
+        let err = client.send(&Command::StopAll, "").unwrap_err().to_string();
+        assert!(err.contains("no token"), "{err}");
+    }
+}

@@ -1,0 +1,71 @@
+//! [`MonitorError`]: what went wrong in the monitor's library, and where.
+
+use std::path::PathBuf;
+
+/// Errors of the monitor's library; each names what failed and where.
+#[derive(Debug, thiserror::Error)]
+pub enum MonitorError {
+    /// A sample did not have the history's number of segments.
+    #[error("a sample with {found} segments does not fit a history of {expected} segments")]
+    SegmentCount {
+        /// Segments the history holds per sample.
+        expected: usize,
+        /// Segments in the sample.
+        found: usize,
+    },
+    /// A sample older than the newest one held, or with a time that is not finite.
+    #[error("a sample at t = {t_s} s arrived after one at t = {latest_t_s} s")]
+    TimeOrder {
+        /// The refused sample's time, seconds.
+        t_s: f64,
+        /// The newest held sample's time, seconds.
+        latest_t_s: f64,
+    },
+    /// The rig's geometry is unusable.
+    #[error("rig geometry: {0}")]
+    Geometry(String),
+    /// Reading a trial recording failed.
+    #[error("{}: {source}", path.display())]
+    Recording {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: host_daemon::record::RecordError,
+    },
+    /// A recording holds no segment poll.
+    #[error("{}: the recording holds no segment poll", path.display())]
+    EmptyRecording {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Writing an export failed.
+    #[error("writing {}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// Drawing an exported figure failed.
+    #[error("drawing {}: {message}", path.display())]
+    Draw {
+        /// The file.
+        path: PathBuf,
+        /// The plotting backend's message.
+        message: String,
+    },
+    /// Nothing to export in the visible range.
+    #[error("nothing to export: no sample between {t0_s:.3} s and {t1_s:.3} s")]
+    NothingToExport {
+        /// The range's start, seconds.
+        t0_s: f64,
+        /// The range's end, seconds.
+        t1_s: f64,
+    },
+    /// The posture prediction failed.
+    #[error("prediction: {0}")]
+    Prediction(String),
+    /// A control command was not sent.
+    #[error("control: {0}")]
+    Control(String),
+}

@@ -1,0 +1,173 @@
+//! [`ChainFrame`]: one instant of the chain, whatever its source.
+//!
+//! The chain panel draws only this type, so live data from antennad, a recorded MCAP trial
+//! and a simulated sweep all feed it the same way: joint positions in the ground (track)
+//! frame, touch bits and health per segment, hair tips, walls as polylines, and the base and
+//! stage position. Positions are metres in the track frame: x along the stage's track from
+//! home, y towards the wall, the antenna's base attachment at `(stage_position_m, 0)`.
+
+use crate::history::Health;
+
+/// A point in the track frame, metres: `[x, y]`.
+pub type PointM = [f64; 2];
+
+/// One segment's state in a frame. Segment `k` (1-based, base to tip) measures joint `k` and
+/// rides on link `k`, the link it lights up when touched.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SegmentState {
+    /// Touch bits (bit i: switch i closed), 0..=15; 0 for a failed read.
+    pub touch_bits: u8,
+    /// The reading's health: an unhealthy segment is drawn as such.
+    pub health: Health,
+    /// Whether the joint angle drawn is this instant's (false: the last valid one was held,
+    /// or none was known and 0 was drawn).
+    pub angle_current: bool,
+}
+
+impl SegmentState {
+    /// A healthy, untouched segment.
+    pub const QUIET: SegmentState = SegmentState {
+        touch_bits: 0,
+        health: Health::Ok,
+        angle_current: true,
+    };
+
+    /// Whether any touch switch is closed.
+    pub fn touched(&self) -> bool {
+        self.touch_bits != 0
+    }
+}
+
+/// A hair drawn from its root on a link to its tip.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HairDrawing {
+    /// The link carrying it (1-based).
+    pub link: usize,
+    /// Its root, track frame, metres.
+    pub root_m: PointM,
+    /// Its tip, track frame, metres.
+    pub tip_m: PointM,
+}
+
+/// One instant of the chain (see the module documentation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChainFrame {
+    /// The instant, seconds on the source's clock.
+    pub t_s: f64,
+    /// The base attachment, then the distal end of every link, base link first: `n + 2`
+    /// points for `n` segments (sim-core's frames `C_G`, `C_0`, ..., `C_n`).
+    pub joints_m: Vec<PointM>,
+    /// One per segment, base to tip.
+    pub segments: Vec<SegmentState>,
+    /// Hairs, if the antenna has any.
+    pub hairs: Vec<HairDrawing>,
+    /// Walls, each a polyline.
+    pub walls_m: Vec<Vec<PointM>>,
+    /// The base attachment (the same as `joints_m[0]`).
+    pub base_m: PointM,
+    /// The stage's position, metres, if known.
+    pub stage_position_m: Option<f64>,
+    /// The base link's angle from the track (mounting angle plus servo), radians.
+    pub base_angle_rad: f64,
+    /// The stage's soft limits, metres, if known (drawn as the track).
+    pub stage_range_m: Option<(f64, f64)>,
+}
+
+/// How far a second frame's joints are from a first's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameDifference {
+    /// Distance between corresponding points of `joints_m`, metres.
+    pub per_point_m: Vec<f64>,
+    /// The largest of them, metres.
+    pub max_m: f64,
+    /// The tips' distance, metres.
+    pub tip_m: f64,
+}
+
+impl ChainFrame {
+    /// Segments in the frame.
+    pub fn segment_count(&self) -> usize {
+        self.segments.len()
+    }
+
+    /// The tip (the last joint point).
+    pub fn tip_m(&self) -> Option<PointM> {
+        self.joints_m.last().copied()
+    }
+
+    /// Link `k`'s end points (0: the base link), if it exists.
+    pub fn link_m(&self, k: usize) -> Option<(PointM, PointM)> {
+        Some((*self.joints_m.get(k)?, *self.joints_m.get(k + 1)?))
+    }
+
+    /// The smallest box holding the chain, the base and the stage's track, as
+    /// `(min, max)`; walls are not included (they are drawn clipped to it).
+    pub fn bounds_m(&self) -> (PointM, PointM) {
+        let mut min = self.base_m;
+        let mut max = self.base_m;
+        let mut grow = |p: &PointM| {
+            min = [min[0].min(p[0]), min[1].min(p[1])];
+            max = [max[0].max(p[0]), max[1].max(p[1])];
+        };
+        self.joints_m.iter().for_each(&mut grow);
+        self.hairs.iter().for_each(|h| grow(&h.tip_m));
+        if let Some((lo, hi)) = self.stage_range_m {
+            grow(&[lo, 0.0]);
+            grow(&[hi, 0.0]);
+        }
+        (min, max)
+    }
+
+    /// How far `other`'s joints are from this frame's, point by point; `None` if the two
+    /// have different numbers of points.
+    pub fn difference(&self, other: &ChainFrame) -> Option<FrameDifference> {
+        if self.joints_m.len() != other.joints_m.len() || self.joints_m.is_empty() {
+            return None;
+        }
+        let per_point_m: Vec<f64> = self
+            .joints_m
+            .iter()
+            .zip(&other.joints_m)
+            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+            .collect();
+        let max_m = per_point_m.iter().copied().fold(0.0, f64::max);
+        let tip_m = per_point_m.last().copied().unwrap_or(0.0);
+        Some(FrameDifference {
+            per_point_m,
+            max_m,
+            tip_m,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(points: Vec<PointM>) -> ChainFrame {
+        ChainFrame {
+            t_s: 0.0,
+            segments: vec![SegmentState::QUIET; points.len().saturating_sub(2)],
+            base_m: points[0],
+            joints_m: points,
+            hairs: Vec::new(),
+            walls_m: Vec::new(),
+            stage_position_m: None,
+            base_angle_rad: 0.0,
+            stage_range_m: Some((0.0, 0.3)),
+        }
+    }
+
+    #[test]
+    fn difference_and_bounds() {
+        let a = frame(vec![[0.0, 0.0], [0.04, 0.0], [0.08, 0.0]]);
+        let b = frame(vec![[0.0, 0.0], [0.04, 0.0], [0.08, 0.03]]);
+        let d = a.difference(&b).unwrap();
+        assert_eq!(d.per_point_m, vec![0.0, 0.0, 0.03]);
+        assert_eq!((d.max_m, d.tip_m), (0.03, 0.03));
+        assert!(a.difference(&frame(vec![[0.0, 0.0], [1.0, 0.0]])).is_none());
+        assert_eq!(b.bounds_m(), ([0.0, 0.0], [0.3, 0.03]));
+        assert_eq!(a.link_m(1), Some(([0.04, 0.0], [0.08, 0.0])));
+        assert_eq!(a.link_m(2), None);
+    }
+}

@@ -1,0 +1,92 @@
+//! `antenna-monitor`: the desktop monitor (see the library's documentation).
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use antenna_monitor::{AppOptions, MonitorApp};
+use anyhow::{Context, Result, bail};
+use clap::Parser;
+
+/// The egui desktop monitor for antennad's live chain and recorded trials.
+#[derive(Debug, Parser)]
+#[command(
+    version,
+    after_help = "Examples:\n  antenna-monitor --connect 127.0.0.1:7878\n  \
+                  antenna-monitor --connect 127.0.0.1:7878 --token \"$ANTENNA_TOKEN\"\n  \
+                  antenna-monitor --trial data/wall-sweep.mcap"
+)]
+struct Args {
+    /// antennad's stream, host:port (the default when no trial is given: 127.0.0.1:7878).
+    #[arg(long, value_name = "ADDR")]
+    connect: Option<String>,
+    /// The control token antennad printed at start (watching needs none). Without it, the
+    /// environment variable ANTENNA_TOKEN is used if set.
+    #[arg(long)]
+    token: Option<String>,
+    /// Open a recorded trial (MCAP) to scrub instead of connecting.
+    #[arg(long, value_name = "FILE", conflicts_with = "connect")]
+    trial: Option<PathBuf>,
+    /// Seconds of live history kept (the plots' longest window).
+    #[arg(long, default_value_t = 60.0)]
+    history_s: f64,
+    /// Where exports (CSV, PNG, SVG) are written.
+    #[arg(long, default_value = ".")]
+    export_dir: PathBuf,
+    /// Before opening the window, wait until the live history spans this many seconds and
+    /// the first prediction is in (at most 10 s longer): for screenshots.
+    #[arg(long, value_name = "S")]
+    wait_for_history_s: Option<f64>,
+    /// Window size in points, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x800")]
+    size: String,
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    if !(args.history_s.is_finite() && args.history_s > 0.0) {
+        bail!("--history-s must be positive, got {}", args.history_s);
+    }
+    let (width, height) = args
+        .size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<f32>().ok()?, h.parse::<f32>().ok()?)))
+        .with_context(|| format!("--size {:?}: expected WIDTHxHEIGHT", args.size))?;
+    let connect = match (&args.connect, &args.trial) {
+        (None, None) => Some("127.0.0.1:7878".to_owned()),
+        (c, _) => c.clone(),
+    };
+    let mut app = MonitorApp::new(AppOptions {
+        connect,
+        token: args
+            .token
+            .or_else(|| std::env::var("ANTENNA_TOKEN").ok())
+            .unwrap_or_default(),
+        trial: args.trial,
+        history_s: args.history_s,
+        export_dir: args.export_dir,
+    });
+    if let Some((message, true)) = app.message() {
+        bail!("{message}");
+    }
+    if let Some(s) = args.wait_for_history_s
+        && !app.wait_for_data(s, Duration::from_secs_f64(s.max(0.0) + 10.0))
+    {
+        eprintln!(
+            "antenna-monitor: no data within {} s; opening anyway",
+            s + 10.0
+        );
+    }
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title("antenna-monitor")
+            .with_inner_size([width, height]),
+        renderer: eframe::Renderer::Glow,
+        ..Default::default()
+    };
+    eframe::run_native(
+        "antenna-monitor",
+        options,
+        Box::new(move |_cc| Ok(Box::new(app))),
+    )
+    .map_err(|e| anyhow::anyhow!("the window failed: {e}"))
+}

@@ -1,0 +1,288 @@
+//! The posture sim-core predicts for a base pose and the wall, behind one trait.
+//!
+//! The chain panel overlays the measured chain with [`Prediction`]s and draws their
+//! difference; it knows only [`Predictor`]. [`predictor_for`] is the one place that chooses
+//! the model: today [`TipPenaltyPredictor`], the simulated rig's own physics
+//! (`host_daemon::sim_rig::SimPhysics`: sim-core's equilibrium solver with a tip-only penalty
+//! contact against the flat wall, warm-started from the previous posture). When sim-core's
+//! quasi-static contact solver with friction lands, a second implementation of [`Predictor`]
+//! and a change to [`predictor_for`] switch every panel over.
+//!
+//! Solving can take milliseconds for long chains, so the UI asks a [`PredictionWorker`]: a
+//! thread that always solves the latest requested pose and never makes the UI wait. It uses
+//! at most a third of a core (it rests twice as long as its last solve took, and at least
+//! until 33 ms have passed since that solve started).
+
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use host_daemon::config::{AntennaConfig, Config, WallConfig};
+use host_daemon::sim_rig::SimPhysics;
+
+use crate::error::MonitorError;
+use crate::rig::RigGeometry;
+
+/// The shortest time between the starts of two solves.
+const MIN_SOLVE_INTERVAL: Duration = Duration::from_millis(33);
+
+/// Where the antenna's base is: the stage position and the servo angle (the base link's
+/// angle is the mounting angle plus the servo angle).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BasePose {
+    /// Stage carriage position, metres.
+    pub stage_position_m: f64,
+    /// Servo angle, radians.
+    pub servo_angle_rad: f64,
+}
+
+/// A predicted posture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prediction {
+    /// The pose it was predicted for.
+    pub pose: BasePose,
+    /// Joint angles, one per segment, base to tip, radians.
+    pub joint_angles_rad: Vec<f64>,
+    /// Whether each segment's touch switches would close.
+    pub touched: Vec<bool>,
+    /// The wall's force on the tip, newtons.
+    pub tip_force_n: f64,
+}
+
+/// Predicts the chain's posture for a base pose against the rig's wall.
+pub trait Predictor: Send + std::fmt::Debug {
+    /// The model's name, for the legend.
+    fn name(&self) -> &'static str;
+
+    /// The posture for `pose`. Implementations may warm-start from the previous call.
+    fn predict(&mut self, pose: BasePose) -> Result<Prediction, MonitorError>;
+}
+
+/// The predictor the monitor uses for `rig`: the one switch point between models.
+pub fn predictor_for(rig: &RigGeometry) -> Result<Box<dyn Predictor>, MonitorError> {
+    Ok(Box::new(TipPenaltyPredictor::new(rig)?))
+}
+
+/// sim-core's equilibrium with a tip-only penalty contact, exactly the simulated rig's
+/// physics (`host_daemon::sim_rig::SimPhysics`).
+#[derive(Debug)]
+pub struct TipPenaltyPredictor {
+    physics: SimPhysics,
+    mount_rad: f64,
+}
+
+impl TipPenaltyPredictor {
+    /// The predictor for `rig`, which needs a wall, a stiffness profile and equal link
+    /// lengths (what the simulated rig supports).
+    pub fn new(rig: &RigGeometry) -> Result<Self, MonitorError> {
+        let wall = rig
+            .wall
+            .ok_or_else(|| MonitorError::Prediction("the source gives no wall".to_owned()))?;
+        let stiffness = rig.stiffness.as_ref().ok_or_else(|| {
+            MonitorError::Prediction("the source gives no joint stiffness".to_owned())
+        })?;
+        let link_length_m = rig.link_lengths_m[0];
+        if rig
+            .link_lengths_m
+            .iter()
+            .any(|&l| (l - link_length_m).abs() > 1e-12)
+        {
+            return Err(MonitorError::Prediction(
+                "the tip-penalty model needs equal link lengths".to_owned(),
+            ));
+        }
+        let mut config = Config::default();
+        config.sim.antenna = AntennaConfig {
+            links: rig.segment_count(),
+            link_length_m,
+            stiffness_profile: stiffness.profile.clone(),
+            k_min_n_m_per_rad: stiffness.k_min_n_m_per_rad,
+            k_max_n_m_per_rad: stiffness.k_max_n_m_per_rad,
+            base_angle_deg: rig.base_mount_angle_rad.to_degrees(),
+        };
+        config.sim.wall = WallConfig {
+            distance_m: wall.distance_m,
+            angle_deg: wall.angle_rad.to_degrees(),
+            stiffness_n_per_m: wall.stiffness_n_per_m,
+        };
+        let physics =
+            SimPhysics::new(&config).map_err(|e| MonitorError::Prediction(format!("{e:#}")))?;
+        Ok(Self {
+            physics,
+            mount_rad: rig.base_mount_angle_rad,
+        })
+    }
+}
+
+impl Predictor for TipPenaltyPredictor {
+    fn name(&self) -> &'static str {
+        "sim-core, tip penalty contact"
+    }
+
+    fn predict(&mut self, pose: BasePose) -> Result<Prediction, MonitorError> {
+        let state = self
+            .physics
+            .update(pose.stage_position_m, self.mount_rad + pose.servo_angle_rad)
+            .map_err(|e| MonitorError::Prediction(format!("{e:#}")))?;
+        Ok(Prediction {
+            pose,
+            touched: state.touch.iter().map(|t| t.any()).collect(),
+            joint_angles_rad: state.joint_angles_rad,
+            tip_force_n: state.tip_force_n,
+        })
+    }
+}
+
+#[derive(Debug, Default)]
+struct Slot {
+    request: Option<BasePose>,
+    result: Option<Result<Prediction, String>>,
+    stop: bool,
+}
+
+/// A thread that solves the latest requested pose (see the module documentation).
+#[derive(Debug)]
+pub struct PredictionWorker {
+    name: &'static str,
+    shared: Arc<(Mutex<Slot>, Condvar)>,
+    last_requested: Option<BasePose>,
+    latest: Option<Result<Prediction, String>>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl PredictionWorker {
+    /// Starts the thread around `predictor`.
+    pub fn start(mut predictor: Box<dyn Predictor>) -> Result<Self, MonitorError> {
+        let name = predictor.name();
+        let shared = Arc::new((Mutex::new(Slot::default()), Condvar::new()));
+        let worker_shared = Arc::clone(&shared);
+        let thread = std::thread::Builder::new()
+            .name("monitor-prediction".to_owned())
+            .spawn(move || {
+                let (lock, ready) = &*worker_shared;
+                loop {
+                    let pose = {
+                        let Ok(mut slot) = lock.lock() else { return };
+                        loop {
+                            if slot.stop {
+                                return;
+                            }
+                            if let Some(pose) = slot.request.take() {
+                                break pose;
+                            }
+                            slot = match ready.wait(slot) {
+                                Ok(s) => s,
+                                Err(_) => return,
+                            };
+                        }
+                    };
+                    let started = Instant::now();
+                    let result = predictor.predict(pose).map_err(|e| e.to_string());
+                    let took = started.elapsed();
+                    if let Ok(mut slot) = lock.lock() {
+                        slot.result = Some(result);
+                    } else {
+                        return;
+                    }
+                    // At most a third of a core, and at most 30 solves a second: the UI and
+                    // the stream come first (a long chain's prediction then lags a little).
+                    std::thread::sleep((took * 2).max(MIN_SOLVE_INTERVAL.saturating_sub(took)));
+                }
+            })
+            .map_err(|e| MonitorError::Prediction(format!("starting its thread: {e}")))?;
+        Ok(Self {
+            name,
+            shared,
+            last_requested: None,
+            latest: None,
+            thread: Some(thread),
+        })
+    }
+
+    /// The model's name.
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
+    /// Asks for `pose` (ignored if it is the pose last asked for); never waits.
+    pub fn request(&mut self, pose: BasePose) {
+        if self.last_requested == Some(pose) {
+            return;
+        }
+        self.last_requested = Some(pose);
+        let (lock, ready) = &*self.shared;
+        if let Ok(mut slot) = lock.lock() {
+            slot.request = Some(pose);
+            ready.notify_one();
+        }
+    }
+
+    /// The newest finished prediction (or its error), without waiting.
+    pub fn latest(&mut self) -> Option<&Result<Prediction, String>> {
+        if let Ok(mut slot) = self.shared.0.lock()
+            && let Some(result) = slot.result.take()
+        {
+            self.latest = Some(result);
+        }
+        self.latest.as_ref()
+    }
+
+    /// Whether the newest finished prediction is for the pose last asked for.
+    pub fn is_current(&mut self) -> bool {
+        let requested = self.last_requested;
+        matches!(self.latest(), Some(Ok(p)) if Some(p.pose) == requested)
+    }
+}
+
+impl Drop for PredictionWorker {
+    fn drop(&mut self) {
+        if let Ok(mut slot) = self.shared.0.lock() {
+            slot.stop = true;
+        }
+        self.shared.1.notify_all();
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn predicts_a_bend_against_the_wall_in_the_background() {
+        let rig = RigGeometry::from_config(&Config::default(), "test").unwrap();
+        let mut worker = PredictionWorker::start(predictor_for(&rig).unwrap()).unwrap();
+        let free = BasePose {
+            stage_position_m: 0.0,
+            servo_angle_rad: 0.0,
+        };
+        let pressed = BasePose {
+            stage_position_m: 0.15,
+            servo_angle_rad: 0.0,
+        };
+        for pose in [free, pressed] {
+            worker.request(pose);
+            let deadline = Instant::now() + Duration::from_secs(10);
+            while !worker.is_current() {
+                assert!(Instant::now() < deadline, "no prediction for {pose:?}");
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }
+        let Some(Ok(p)) = worker.latest() else {
+            panic!("no prediction")
+        };
+        assert_eq!(p.pose, pressed);
+        assert!(p.tip_force_n > 0.0);
+        assert!(p.touched[8]);
+        assert!(p.joint_angles_rad.iter().all(|a| a.abs() > 0.01));
+    }
+
+    #[test]
+    fn refuses_a_rig_without_a_wall() {
+        let rig = RigGeometry::fallback(3).unwrap();
+        let err = predictor_for(&rig).unwrap_err().to_string();
+        assert!(err.contains("no wall"), "{err}");
+    }
+}

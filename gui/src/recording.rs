@@ -1,0 +1,177 @@
+//! A recorded trial (MCAP, written by antennad) as a [`History`] to scrub, read with
+//! `host_daemon::record::TrialReader` (the one MCAP reader of the project).
+//!
+//! Every `/antenna/segments` poll becomes a [`Sample`], with the latest stage and servo
+//! samples at or before it (they are recorded at their own, lower rates). The geometry comes
+//! from the configuration kept in the recording's metadata, mapped as the daemon maps it for
+//! its stream; a recording without one (or with one that does not parse) gets a stand-in and
+//! says so in [`RecordedTrial::geometry_note`].
+
+use std::path::{Path, PathBuf};
+
+use host_daemon::config::Config;
+use host_daemon::record::{LogMessage, SegmentSample, TrialReader};
+
+use crate::error::MonitorError;
+use crate::history::{Health, History, Sample, SegmentReading};
+use crate::rig::RigGeometry;
+
+/// A trial read from its MCAP file.
+#[derive(Debug, Clone)]
+pub struct RecordedTrial {
+    /// The file.
+    pub path: PathBuf,
+    /// The trial's name (from its metadata, else the file's stem).
+    pub name: String,
+    /// Every poll, in order.
+    pub history: History,
+    /// The rig's geometry.
+    pub rig: RigGeometry,
+    /// Why the geometry is a stand-in, if it is.
+    pub geometry_note: Option<String>,
+    /// The daemon's log during the trial.
+    pub log: Vec<LogMessage>,
+    /// Set if the file was cut short (a crash): where reading stopped.
+    pub truncated: Option<String>,
+    /// The segments' addresses, base to tip.
+    pub segment_addresses: Vec<u8>,
+}
+
+/// Reads the trial at `path`.
+pub fn open_trial(path: &Path) -> Result<RecordedTrial, MonitorError> {
+    let trial = TrialReader::read(path).map_err(|source| MonitorError::Recording {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let first = trial
+        .segments
+        .first()
+        .ok_or_else(|| MonitorError::EmptyRecording {
+            path: path.to_path_buf(),
+        })?;
+    let segment_count = first.segments.len();
+    let segment_addresses = first.segments.iter().map(|s| s.address).collect();
+    let (rig, geometry_note) = geometry(trial.metadata.as_ref().map(|m| m.config.as_str()))
+        .and_then(|rig| {
+            if rig.segment_count() == segment_count {
+                Ok((rig, None))
+            } else {
+                Err(format!(
+                    "its configuration describes {} segments, the polls hold {segment_count}",
+                    rig.segment_count()
+                ))
+            }
+        })
+        .or_else(|why| RigGeometry::fallback(segment_count).map(|rig| (rig, Some(why))))?;
+    let mut history = History::new(segment_count, trial.segments.len());
+    let (mut stage, mut servo) = (0, 0);
+    for poll in &trial.segments {
+        while stage < trial.stage.len() && trial.stage[stage].t_s <= poll.t_s {
+            stage += 1;
+        }
+        while servo < trial.servo.len() && trial.servo[servo].t_s <= poll.t_s {
+            servo += 1;
+        }
+        let sample = Sample {
+            seq: poll.seq,
+            t_s: poll.t_s,
+            segments: poll.segments.iter().map(reading).collect(),
+            stage_position_m: stage.checked_sub(1).map(|k| trial.stage[k].position_m),
+            servo_angle_rad: servo.checked_sub(1).map(|k| trial.servo[k].base_angle_rad),
+        };
+        history.push(&sample).map_err(|e| {
+            MonitorError::Geometry(format!("{}: poll at {} s: {e}", path.display(), poll.t_s))
+        })?;
+    }
+    let name = trial.metadata.as_ref().map_or_else(
+        || {
+            path.file_stem()
+                .map_or_else(String::new, |s| s.to_string_lossy().into_owned())
+        },
+        |m| m.trial.clone(),
+    );
+    Ok(RecordedTrial {
+        path: path.to_path_buf(),
+        name,
+        history,
+        rig,
+        geometry_note,
+        log: trial.log,
+        truncated: trial.truncated,
+        segment_addresses,
+    })
+}
+
+fn geometry(config_text: Option<&str>) -> Result<RigGeometry, String> {
+    let text = config_text.ok_or("the recording has no metadata")?;
+    let config = Config::from_toml_str(text, "the recording's configuration")
+        .map_err(|e| format!("its configuration does not parse: {e}"))?;
+    RigGeometry::from_config(&config, "the recording's configuration").map_err(|e| e.to_string())
+}
+
+fn reading(s: &SegmentSample) -> SegmentReading {
+    let health = if s.ok {
+        if s.stale { Health::Stale } else { Health::Ok }
+    } else if s.nack {
+        Health::Nack
+    } else if s.pec_error {
+        Health::Pec
+    } else {
+        Health::Bus
+    };
+    SegmentReading {
+        angle_rad: s.angle_rad,
+        touch_bits: s.touch,
+        health,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use host_daemon::record::{
+        StageMessage, TrialRecorder, synthetic_metadata, synthetic_segments,
+    };
+
+    #[test]
+    fn reads_polls_stage_and_geometry_back() {
+        let path =
+            std::env::temp_dir().join(format!("monitor-recording-{}.mcap", std::process::id()));
+        let mut metadata = synthetic_metadata("unit");
+        metadata.config = String::new();
+        let mut recorder = TrialRecorder::create(&path, &metadata).unwrap();
+        for i in 0..300 {
+            let segments = synthetic_segments(i, 9);
+            if i % 10 == 0 {
+                recorder
+                    .record_stage(&StageMessage {
+                        t_s: segments.t_s,
+                        position_m: i as f64 * 1e-4,
+                    })
+                    .unwrap();
+            }
+            recorder.record_segments(&segments).unwrap();
+        }
+        recorder.finish().unwrap();
+        let trial = open_trial(&path).unwrap();
+        std::fs::remove_file(&path).ok();
+        assert_eq!(trial.history.len(), 300);
+        assert_eq!(trial.history.segment_count(), 9);
+        assert_eq!(trial.rig.segment_count(), 9);
+        // An empty configuration is the built-in default: the simulated rig with its wall.
+        assert!(trial.rig.wall.is_some(), "{:?}", trial.geometry_note);
+        let last = trial.history.sample(299).unwrap();
+        assert!((last.stage_position_m.unwrap() - 0.029).abs() < 1e-6);
+        assert!(trial.truncated.is_none());
+    }
+
+    #[test]
+    fn names_the_file_that_is_not_mcap() {
+        let path =
+            std::env::temp_dir().join(format!("monitor-notmcap-{}.mcap", std::process::id()));
+        std::fs::write(&path, b"hello").unwrap();
+        let err = open_trial(&path).unwrap_err().to_string();
+        std::fs::remove_file(&path).ok();
+        assert!(err.contains("monitor-notmcap"), "{err}");
+    }
+}

@@ -1,0 +1,92 @@
+//! Offline: a trial recorded by a real antennad on the simulated rig, opened in the monitor
+//! through its source bar and scrubbed; the chain at the scrubbed instant is the recorded
+//! one, with the touches the recording holds.
+#![allow(clippy::unwrap_used)]
+
+mod support;
+
+use std::time::Duration;
+
+use antenna_monitor::{AppOptions, MonitorApp};
+use egui::accesskit::Role;
+use egui_kittest::kittest::Queryable;
+use host_daemon::daemon::{Daemon, DaemonOptions};
+use support::{config, harness, temp_dir};
+
+#[test]
+fn open_a_recorded_trial_and_scrub_it() {
+    let dir = temp_dir("trial");
+    let daemon = Daemon::start(
+        config(&dir),
+        DaemonOptions {
+            first_trial: Some(None),
+            first_trial_duration: Some(Duration::from_millis(2500)),
+            exit_after_trial: true,
+            serve: false,
+            ..DaemonOptions::default()
+        },
+    )
+    .unwrap();
+    let summary = daemon.wait().unwrap();
+    let path = summary.trials[0].path.clone().unwrap();
+
+    let mut harness = harness(MonitorApp::new(AppOptions {
+        export_dir: dir.clone(),
+        ..AppOptions::default()
+    }));
+    harness.step();
+    let field = harness.get_by_role_and_label(Role::TextInput, "trial .mcap");
+    field.focus();
+    harness.step();
+    harness
+        .get_by_role_and_label(Role::TextInput, "trial .mcap")
+        .type_text(&path.display().to_string());
+    harness.step();
+    harness.get_by_label("Open").click();
+    harness.step();
+    harness.step();
+    let trial = harness.state().trial().expect("the trial opened");
+    assert_eq!(trial.name, "wall-sweep");
+    let polls = trial.history.len();
+    assert!((2400..=2501).contains(&polls), "{polls} polls");
+    assert!(trial.rig.wall.is_some());
+    let (start_s, end_s) = (
+        trial.history.first_t_s(),
+        trial.history.latest_t_s().unwrap(),
+    );
+    harness.get_by_label_contains("trial wall-sweep");
+    // Opened at its start, the whole trial in view.
+    assert_eq!(harness.state().view().cursor_s(Some(end_s)), start_s);
+    let (t0, t1) = harness.state().view().window(Some(end_s)).unwrap();
+    assert!(
+        (t0 - start_s.unwrap()).abs() < 1e-9 && (t1 - end_s).abs() < 1e-9,
+        "window {t0}..{t1}, trial {start_s:?}..{end_s}"
+    );
+
+    // Scrub to the end: the stage has carried the tip against the wall.
+    harness
+        .get_by_role_and_label(Role::Slider, "scrub, s")
+        .set_value_accesskit(end_s - 0.01);
+    harness.step();
+    let cursor = harness.state().view().cursor_s(Some(end_s)).unwrap();
+    assert!((cursor - (end_s - 0.01)).abs() < 1e-3, "cursor {cursor}");
+    let trial = harness.state().trial().unwrap();
+    let index = trial.history.index_at(cursor).unwrap();
+    let frame = trial.rig.frame_at(&trial.history, index).unwrap();
+    let sample = trial.history.sample(index).unwrap();
+    assert!(
+        frame.segments[8].touched(),
+        "the tip is not touching at {cursor} s"
+    );
+    assert_eq!(frame.stage_position_m, sample.stage_position_m);
+    assert!(sample.stage_position_m.unwrap() > 0.05);
+    // Scrub back to the start: the free, straight antenna.
+    harness
+        .get_by_role_and_label(Role::Slider, "scrub, s")
+        .set_value_accesskit(0.0);
+    harness.step();
+    let trial = harness.state().trial().unwrap();
+    let frame = trial.rig.frame_at(&trial.history, 0).unwrap();
+    assert!(frame.segments.iter().all(|s| !s.touched()));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,90 @@
+//! Test support: a real antennad in-process on the simulated rig, and the monitor in an
+//! egui_kittest harness (no renderer: clicks and queries go through AccessKit).
+#![allow(clippy::unwrap_used, dead_code)]
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use antenna_monitor::{AppOptions, MonitorApp};
+use egui_kittest::Harness;
+use host_daemon::config::Config;
+use host_daemon::daemon::{Daemon, DaemonHandle, DaemonOptions};
+
+/// The control token the test daemons use (test constant, not the crate's).
+pub const TOKEN: &str = "monitor-test-token";
+
+/// A fresh temporary directory for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("antenna-monitor-{name}-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The simulated rig's configuration, listening on a free loopback port with [`TOKEN`].
+pub fn config(dir: &std::path::Path) -> Config {
+    let mut config = Config::default();
+    config.server.listen = "127.0.0.1:0".to_owned();
+    config.server.token = Some(TOKEN.to_owned());
+    config.data_dir = dir.to_path_buf();
+    config
+}
+
+/// Starts antennad (no trial: polling and streaming run, the stage waits for commands).
+pub fn start_daemon(config: Config) -> DaemonHandle {
+    Daemon::start(config, DaemonOptions::default()).unwrap()
+}
+
+/// The monitor connected to `daemon` (token as given), in a 1280 x 800 harness.
+pub fn monitor(
+    daemon: &DaemonHandle,
+    token: &str,
+    export_dir: PathBuf,
+) -> Harness<'static, MonitorApp> {
+    let app = MonitorApp::new(AppOptions {
+        connect: Some(daemon.local_addr().unwrap().to_string()),
+        token: token.to_owned(),
+        trial: None,
+        history_s: 30.0,
+        export_dir,
+    });
+    harness(app)
+}
+
+/// `app` in a 1280 x 800 harness.
+pub fn harness(app: MonitorApp) -> Harness<'static, MonitorApp> {
+    Harness::builder()
+        .with_size(egui::vec2(1280.0, 800.0))
+        .build_ui_state(|ui, app: &mut MonitorApp| app.ui(ui), app)
+}
+
+/// Steps the harness (every 10 ms of real time) until `done` holds; panics after `timeout_s`
+/// naming `what`.
+pub fn step_until(
+    harness: &mut Harness<'_, MonitorApp>,
+    what: &str,
+    timeout_s: f64,
+    mut done: impl FnMut(&mut Harness<'_, MonitorApp>) -> bool,
+) {
+    let deadline = Instant::now() + Duration::from_secs_f64(timeout_s);
+    loop {
+        harness.step();
+        if done(harness) {
+            return;
+        }
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Steps until the monitor is connected and holds at least `seconds` of samples.
+pub fn wait_for_history(harness: &mut Harness<'_, MonitorApp>, seconds: f64) {
+    step_until(harness, &format!("{seconds} s of samples"), 20.0, |h| {
+        let state = h.state().live().unwrap().lock();
+        state
+            .history
+            .first_t_s()
+            .zip(state.history.latest_t_s())
+            .is_some_and(|(a, b)| b - a >= seconds)
+    });
+}
