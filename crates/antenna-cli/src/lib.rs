@@ -1,17 +1,23 @@
 //! The `antenna` command's library: scene files ([`scene`], errors in [`error`]), their
-//! equilibria ([`solve`]), Nitinol wire designs ([`design`]) and stiffness identification
-//! from recordings ([`recording`], [`identify`]).
+//! equilibria ([`solve`], and [`solve_walls`] for scenes with walls), sweeps along walls
+//! ([`sweep`]), studies of many sweeps ([`study`]), Nitinol wire designs ([`design`]),
+//! stiffness identification from recordings ([`recording`], [`identify`]) and the export of
+//! recorded trials ([`export`]).
 //!
-//! The binary (`src/main.rs`) parses the command line, prints and picks the exit status;
+//! The binary (`src/bin/antenna/`) parses the command line, prints and picks the exit status;
 //! everything it computes is here so that it can be tested and documented.
 
 pub mod design;
 pub mod error;
 pub mod export;
 pub mod identify;
+pub mod progress;
 pub mod recording;
 pub mod scene;
 pub mod solve;
+pub mod solve_walls;
+pub mod study;
+pub mod sweep;
 
 pub use error::{Location, SceneError, SceneErrorKind};
-pub use scene::{Scene, SceneLocations, SolverSettings, Start, StiffnessSpec};
+pub use scene::{HairSpec, Scene, SceneLocations, SolverSettings, Start, StiffnessSpec};

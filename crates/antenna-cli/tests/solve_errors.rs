@@ -61,11 +61,11 @@ fn unknown_key_names_key_line_column_and_allowed_keys() {
         "{err}"
     );
 
-    let (path, err) = bad_input("unknown_table.toml", &format!("{GOOD}\n[walls]\nx = 1\n"));
+    let (path, err) = bad_input("unknown_table.toml", &format!("{GOOD}\n[wall]\nx = 1\n"));
     assert!(
         err.contains(&format!(
-            "{path}:12:2: unknown key `walls` in the top level; allowed: antenna, base, \
-             tip_load, tip_pin, solver"
+            "{path}:12:2: unknown key `wall` in the top level; allowed: antenna, base, \
+             tip_load, tip_pin, solver, walls, sweep, start, contact"
         )),
         "{err}"
     );

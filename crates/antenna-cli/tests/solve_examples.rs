@@ -1,7 +1,8 @@
 //! `antenna solve` on every `examples/*.toml`: each converges (exit 0) and `--json` prints
 //! exactly the fields of scene-format.md with the right lengths and consistent values; the
 //! pinned examples reach the C and S shapes they name, and `--all-minima` lists at least two
-//! stable equilibria sorted by energy.
+//! stable equilibria sorted by energy. A scene with walls reports its placed and settled
+//! posture: step 0 of its sweep, with the tip's force on the walls.
 #![allow(clippy::unwrap_used)]
 
 mod common;
@@ -85,6 +86,9 @@ fn check_report(v: &Value, scene: &Scene, label: &str) {
         );
     }
     match scene.tip_pin_m {
+        // A scene with walls: the tip's force on the walls (checked in
+        // `wall_scenes_report_the_settled_posture`).
+        None if scene.has_walls() => {}
         Some(pin) => {
             assert!(
                 (tip[0] - pin.x).abs() < 1e-8 && (tip[1] - pin.y).abs() < 1e-8,
@@ -104,7 +108,11 @@ fn check_report(v: &Value, scene: &Scene, label: &str) {
     );
     assert!(v["iterations"].as_u64().is_some(), "{label}: iterations");
     let residual = v["residual"].as_f64().unwrap();
-    let tolerance = scene.solver.tolerance.unwrap_or(1e-10);
+    let tolerance = if scene.has_walls() {
+        scene.contact.tolerance_m
+    } else {
+        scene.solver.tolerance.unwrap_or(1e-10)
+    };
     assert!(residual <= tolerance, "{label}: residual {residual}");
     assert_eq!(v["converged"], Value::Bool(true), "{label}");
     assert!(v["stable"].is_boolean(), "{label}");
@@ -210,4 +218,50 @@ fn all_minima_lists_stable_equilibria_lowest_energy_first() {
         "{}",
         stdout(&human)
     );
+}
+
+#[test]
+fn wall_scenes_report_the_settled_posture() {
+    let mut walls = 0;
+    for path in example_scenes() {
+        let scene = Scene::from_path(&path).unwrap();
+        if !scene.has_walls() {
+            continue;
+        }
+        walls += 1;
+        let label = path.display().to_string();
+        let v = solve_json(&label);
+        // The posture is step 0 of the sweep, and the tip's force is minus the walls' force
+        // on the tip (the distal end of link n) when the tip touches.
+        let out = run(&["sweep", &label, "--jsonl", "--duration-s", "0"]);
+        assert_eq!(out.status.code(), Some(0), "{label}: {}", stderr(&out));
+        let text = stdout(&out);
+        let step0: Value = serde_json::from_str(text.lines().nth(1).unwrap()).unwrap();
+        assert_eq!(step0["step"], 0);
+        assert_eq!(v["theta_rad"], step0["theta_rad"], "{label}");
+        assert_eq!(v["joints_m"], step0["joints_m"], "{label}");
+        let n = scene.n() as u64;
+        let mut on_tip = [0.0, 0.0];
+        for c in step0["contacts"].as_array().unwrap() {
+            if c["link"] == n && c["kind"] == "vertex" {
+                let f = point(&c["force_n"]);
+                on_tip = [on_tip[0] + f[0], on_tip[1] + f[1]];
+            }
+        }
+        let force = point(&v["tip_force_n"]);
+        assert!(
+            (force[0] + on_tip[0]).abs() < 1e-12 && (force[1] + on_tip[1]).abs() < 1e-12,
+            "{label}: tip force {force:?}, walls on the tip {on_tip:?}"
+        );
+        let human = stdout(&run(&["solve", &label]));
+        assert!(
+            human.contains("placement: ") && human.contains("contacts: "),
+            "{human}"
+        );
+    }
+    assert!(walls >= 7, "{walls} example scenes with walls");
+    // --all-minima is for scenes without walls.
+    let out = run(&["solve", &example("sweep_line_wall.toml"), "--all-minima"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("--all-minima searches the equilibria of scenes without walls"));
 }

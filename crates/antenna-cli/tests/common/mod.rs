@@ -70,3 +70,33 @@ pub fn scratch(name: &str, text: &str) -> String {
     std::fs::write(&path, text).unwrap();
     path.display().to_string()
 }
+
+/// A short version of the seed's 4.2.1 sweep (`examples/sweep_line_wall.toml`): 20 steps.
+/// Line numbers matter to the error tests: `[[walls]]` is line 11, `[sweep]` line 17,
+/// `[start]` line 22.
+pub const WALL_SCENE: &str = r#"[antenna]
+links = 9
+link_length_m = 0.04
+base_angle_deg = 30.0
+
+[antenna.stiffness]
+profile = "linear"
+min_n_m_per_rad = 0.004
+max_n_m_per_rad = 0.082
+
+[[walls]]
+shape = "line"
+point_m = [0.0, 0.2]
+angle_deg = -8.0
+solid = "left"
+
+[sweep]
+velocity_m_per_s = [0.0167, 0.0]
+duration_s = 0.2
+step_s = 0.01
+
+[start]
+placement = "tip-on-wall"
+ahead_m = 0.0
+shape = "C"
+"#;

@@ -1,10 +1,16 @@
-//! `antenna`: solve scene files, design Nitinol wires for a stiffness profile, identify joint
-//! stiffness from a free-oscillation recording. See the README section "Scene files and the
-//! `antenna` command" and `shared/spec/scene-format.md`.
+//! `antenna`: solve scene files, sweep them along their walls, run studies of many sweeps,
+//! design Nitinol wires for a stiffness profile, identify joint stiffness from a
+//! free-oscillation recording, export recorded trials. See the README section "Scene files
+//! and the `antenna` command" and `shared/spec/scene-format.md`.
 //!
-//! Exit status: 0 success; 1 the solver did not converge (`solve`; the JSON is still printed)
-//! or the recording did not yield an identification (`identify`); 2 bad input (a message on
-//! stderr that says what and where, nothing on stdout); 3 the solver broke down numerically.
+//! Exit status: 0 success; 1 the solver did not converge (`solve`; the JSON is still printed
+//! for a scene without walls), a sweep step failed (`sweep`), a study run failed (`study`;
+//! every row is still written) or the recording did not yield an identification
+//! (`identify`); 2 bad input (a message on stderr that says what and where, nothing on
+//! stdout); 3 the solver broke down numerically.
+
+mod study;
+mod sweep;
 
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
@@ -15,6 +21,8 @@ use antenna_cli::identify::{DEFAULT_WIRE_CONSTANT, identify_report, identify_sum
 use antenna_cli::recording::Recording;
 use antenna_cli::scene::{Scene, Start};
 use antenna_cli::solve::{SolveError, all_minima_of_scene, solve_scene, summary};
+use antenna_cli::solve_walls::{solve_wall_scene, wall_summary};
+use antenna_cli::sweep::SweepFailure;
 use anyhow::{Context as _, anyhow};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use sim_core::{
@@ -34,6 +42,8 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     Solve(SolveArgs),
+    Sweep(sweep::SweepArgs),
+    Study(study::StudyArgs),
     Design(DesignArgs),
     Identify(IdentifyArgs),
     Export(ExportArgs),
@@ -185,13 +195,23 @@ enum DampingArg {
 }
 
 /// How a command failed, which decides the exit status.
-enum Failure {
+pub(crate) enum Failure {
     /// 1: an answer exists but is not a success (already printed when there is one).
     NoSuccess(Option<anyhow::Error>),
     /// 2: bad input.
     BadInput(anyhow::Error),
     /// 3: the solver broke down.
     Breakdown(anyhow::Error),
+}
+
+impl From<SweepFailure> for Failure {
+    fn from(e: SweepFailure) -> Self {
+        match e {
+            SweepFailure::BadInput(_) => Failure::BadInput(anyhow::Error::new(e)),
+            SweepFailure::NoConvergence(_) => Failure::NoSuccess(Some(anyhow::Error::new(e))),
+            SweepFailure::Breakdown(_) => Failure::Breakdown(anyhow::Error::new(e)),
+        }
+    }
 }
 
 impl From<anyhow::Error> for Failure {
@@ -204,6 +224,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Solve(args) => run_solve(&args),
+        Command::Sweep(args) => sweep::run(&args),
+        Command::Study(args) => study::run(&args),
         Command::Design(args) => run_design(&args),
         Command::Identify(args) => run_identify(&args),
         Command::Export(args) => run_export(&args),
@@ -227,7 +249,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn print_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> {
+pub(crate) fn print_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(value).context("writing JSON")?;
     println!("{text}");
     Ok(())
@@ -272,6 +294,9 @@ fn solve_failure(scene: &Scene, path: &Path, e: SolveError) -> Failure {
 
 fn run_solve(args: &SolveArgs) -> Result<(), Failure> {
     let scene = Scene::from_path(&args.scene).map_err(anyhow::Error::new)?;
+    if scene.has_walls() {
+        return run_solve_walls(args, &scene);
+    }
     if args.all_minima {
         let search = MinimaSearch {
             random_starts: args.random_starts,
@@ -333,6 +358,40 @@ fn run_solve(args: &SolveArgs) -> Result<(), Failure> {
             args.scene.display(),
             report.iterations,
             report.residual
+        ))))
+    }
+}
+
+/// `antenna solve` on a scene with walls: the placed and settled posture.
+fn run_solve_walls(args: &SolveArgs, scene: &Scene) -> Result<(), Failure> {
+    if args.all_minima {
+        return bail_input(format!(
+            "{}: --all-minima searches the equilibria of scenes without walls; this scene has \
+             [[walls]] (its equilibrium is the posture [start] places and settles)",
+            args.scene.display()
+        ));
+    }
+    let eq = solve_wall_scene(scene)?;
+    if args.json {
+        print_json(&eq.report)?;
+    } else {
+        println!(
+            "{}: {} links ({} flexible joints) against {} wall(s)",
+            args.scene.display(),
+            scene.n() + 1,
+            scene.n(),
+            scene.walls.len()
+        );
+        print!("{}", wall_summary(scene, &eq));
+    }
+    if eq.report.converged {
+        Ok(())
+    } else {
+        Err(Failure::NoSuccess(Some(anyhow!(
+            "{}: the settled posture's residual {:e} m exceeds [contact] tolerance_m = {:e}",
+            args.scene.display(),
+            eq.report.residual,
+            scene.contact.tolerance_m
         ))))
     }
 }
@@ -477,6 +536,6 @@ fn run_export(args: &ExportArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn bail_input<T>(message: String) -> Result<T, Failure> {
+pub(crate) fn bail_input<T>(message: String) -> Result<T, Failure> {
     Err(Failure::BadInput(anyhow!(message)))
 }

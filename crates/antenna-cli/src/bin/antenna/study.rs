@@ -1,0 +1,133 @@
+//! `antenna study STUDY.toml`: a grid of sweeps, one result row per grid point.
+
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use antenna_cli::study::{RunOptions, Shard, Study, StudyFormat, StudyRow, run_study};
+use anyhow::{Context as _, anyhow};
+use clap::{Args, ValueEnum};
+
+use crate::Failure;
+
+/// Run a grid of sweeps: a base scene and axes (stiffness profiles, base angles, wall
+/// distances, hair layouts, surfaces), one result row per grid point.
+///
+/// The grid is the product of the study file's axes, the last varying fastest; each row
+/// carries its grid index, its axis values and the sweep's metrics (see the README for the
+/// file format and the columns). Sweeps run in parallel; rows come out in grid order.
+///
+/// Exit status: 0 every sweep ran; 1 some failed (their rows say why; every row is still
+/// written); 2 bad input (what and where, nothing on stdout).
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:
+  antenna study examples/studies/profiles.toml
+  antenna study examples/studies/profiles.toml --format jsonl --jobs 2 -o rows.jsonl
+  antenna study examples/studies/profiles.toml --shard 3/8 -o rows-3.csv    # array job 3 of 8")]
+pub(crate) struct StudyArgs {
+    /// The study file (TOML: `[study]` scene and `[axes]`; see the README).
+    study: PathBuf,
+    /// Run only shard I of N (1-based; the grid points whose index is I - 1 modulo N): the N
+    /// shards together run the grid, each point once.
+    #[arg(long, value_name = "I/N", value_parser = clap::value_parser!(Shard))]
+    shard: Option<Shard>,
+    /// Sweeps run at once (default: the number of cores).
+    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    jobs: Option<u64>,
+    /// How the rows are written.
+    #[arg(long, value_enum, default_value_t = FormatArg::Csv)]
+    format: FormatArg,
+    /// Write the rows to this file instead of stdout.
+    #[arg(long, short = 'o', value_name = "FILE")]
+    output: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum FormatArg {
+    /// Comma-separated values with a header line.
+    Csv,
+    /// One JSON object per line.
+    Jsonl,
+}
+
+pub(crate) fn run(args: &StudyArgs) -> Result<(), Failure> {
+    let study = Study::from_path(&args.study).map_err(anyhow::Error::new)?;
+    let shard = args.shard.unwrap_or(Shard::ALL);
+    let jobs = match args.jobs {
+        Some(j) => usize::try_from(j).unwrap_or(usize::MAX),
+        None => std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
+    };
+    let format = match args.format {
+        FormatArg::Csv => StudyFormat::Csv,
+        FormatArg::Jsonl => StudyFormat::Jsonl,
+    };
+    let mut out: Box<dyn std::io::Write> = match &args.output {
+        Some(path) => Box::new(std::io::BufWriter::new(
+            std::fs::File::create(path)
+                .with_context(|| format!("{}: cannot create the output", path.display()))?,
+        )),
+        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+    };
+    let runs = shard.indices(study.len()).count();
+    eprintln!(
+        "{}: {} grid points ({}), shard {shard}: {runs} sweep(s) on {} thread(s)",
+        args.study.display(),
+        study.len(),
+        axis_summary(&study),
+        jobs.min(runs.max(1))
+    );
+    let started = Instant::now();
+    if format == StudyFormat::Csv {
+        writeln!(out, "{}", StudyRow::csv_header()).context("writing the rows")?;
+    }
+    let options = RunOptions {
+        shard,
+        jobs,
+        progress: true,
+    };
+    let counts = run_study(&study, &options, &mut |row: &StudyRow| {
+        let line = match format {
+            StudyFormat::Csv => row.csv_line(),
+            StudyFormat::Jsonl => row.json_line(),
+        };
+        writeln!(out, "{line}").and_then(|()| out.flush())
+    })
+    .context("writing the rows")?;
+    out.flush().context("writing the rows")?;
+    eprintln!(
+        "{} sweep(s) in {:.1} s, {} failed",
+        counts.runs,
+        started.elapsed().as_secs_f64(),
+        counts.failed
+    );
+    if counts.failed > 0 {
+        return Err(Failure::NoSuccess(Some(anyhow!(
+            "{}: {} of {} sweep(s) failed (their rows say why)",
+            args.study.display(),
+            counts.failed,
+            counts.runs
+        ))));
+    }
+    Ok(())
+}
+
+/// `2 profiles x 3 base angles x ...`.
+fn axis_summary(study: &Study) -> String {
+    let a = &study.axes;
+    let parts: Vec<String> = [
+        (a.profiles.len(), "profiles"),
+        (a.base_angles_deg.len(), "base angles"),
+        (a.wall_distances_m.len(), "wall distances"),
+        (a.hairs.len(), "hair layouts"),
+        (a.surfaces.len(), "surfaces"),
+    ]
+    .into_iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} {what}"))
+    .collect();
+    if parts.is_empty() {
+        "no axes: the base scene once".to_string()
+    } else {
+        parts.join(" x ")
+    }
+}

@@ -1,0 +1,565 @@
+//! Scene files: the TOML description of one antenna, its base, and what acts on it
+//! (`shared/spec/scene-format.md`), parsed with serde and validated into a [`Scene`]; and our
+//! own tables for sweeps along walls: `[antenna.hairs]`, `[[walls]]` with
+//! `[[walls.zones]]`, `[sweep]`, `[start]` and `[contact]` (documented in the README's scene
+//! table). [`Scene::sweep_scene`] turns a scene into sim-core's [`SweepScene`](sim_core::sweep::SweepScene).
+//!
+//! Every error names the file, the key and, where the parser knows it, the line and column;
+//! see [`SceneError`]. Unknown keys are errors that list the keys allowed in their table.
+//!
+//! One file per table: [`keys`] (what each table allows), `antenna.rs` (`[antenna]`,
+//! `[antenna.stiffness]`), [`hairs`], [`walls`] with [`surface`], [`motion`] (`[sweep]`),
+//! [`start`], [`contact`], `solver.rs` (`[solver]`), `sweep_scene.rs` (the conversion) and
+//! `source.rs` (located errors).
+//!
+//! ```
+//! use antenna_cli::scene::{Scene, Start};
+//!
+//! let text = r#"
+//! [antenna]
+//! links = 9
+//! link_length_m = 0.04
+//! base_angle_deg = 30.0
+//! joint_limits_deg = [-90.0, 90.0]
+//!
+//! [antenna.stiffness]
+//! profile = "fast-exponential"
+//! min_n_m_per_rad = 0.004
+//! max_n_m_per_rad = 0.082
+//!
+//! [tip_pin]
+//! position_m = [0.26, 0.10]
+//!
+//! [solver]
+//! initial = "C"
+//! "#;
+//! let scene = Scene::parse(text, "scene.toml").unwrap();
+//! assert_eq!(scene.chain.n(), 8); // 9 links = base link + 8 flexible joints
+//! assert_eq!(scene.solver.initial, Start::C);
+//!
+//! let error = Scene::parse("[antenna]\nlinks = 9\nfoo = 1\n", "scene.toml").unwrap_err();
+//! assert!(error.to_string().starts_with("scene.toml:3:1: unknown key `foo` in [antenna]; allowed: links,"));
+//! ```
+//!
+//! A scene with a wall, swept:
+//!
+//! ```
+//! use antenna_cli::scene::Scene;
+//! use sim_core::sweep::Placement;
+//!
+//! let text = r#"
+//! [antenna]
+//! links = 9
+//! link_length_m = 0.04
+//! base_angle_deg = 30.0
+//! [antenna.stiffness]
+//! profile = "linear"
+//! min_n_m_per_rad = 0.004
+//! max_n_m_per_rad = 0.082
+//!
+//! [[walls]]
+//! shape = "line"
+//! point_m = [0.0, 0.2]
+//! angle_deg = -8.0
+//! solid = "left"
+//!
+//! [sweep]
+//! velocity_m_per_s = [0.0167, 0.0]
+//! duration_s = 0.1
+//!
+//! [start]
+//! placement = "tip-on-wall"
+//! "#;
+//! let scene = Scene::parse(text, "wall.toml").unwrap();
+//! let sweep = scene.sweep_scene().unwrap();
+//! assert_eq!(sweep.walls.len(), 1);
+//! assert_eq!(sweep.motion.steps(), 10);
+//! assert!(matches!(sweep.placement, Placement::TipOnWall { wall: 0, .. }));
+//! ```
+
+mod antenna;
+pub mod contact;
+pub mod hairs;
+pub mod keys;
+pub mod motion;
+mod solver;
+pub(crate) mod source;
+pub mod start;
+pub mod surface;
+mod sweep_scene;
+pub mod walls;
+
+use std::path::Path;
+
+use nalgebra::Vector2;
+use serde::Deserialize;
+use sim_core::contact::ContactSettings;
+use sim_core::sweep::{Motion, Placement};
+use sim_core::{Chain, StiffnessProfile, Wall};
+use toml::Spanned;
+
+use crate::error::{Location, SceneError, SceneErrorKind};
+use antenna::RawAntenna;
+use contact::RawContact;
+pub use hairs::HairSpec;
+pub use keys::*;
+use motion::RawSweep;
+use solver::RawSolver;
+use source::{Source, point};
+use start::RawStart;
+use walls::RawWall;
+
+/// Joint limits used when `joint_limits_deg` is absent, degrees.
+pub const DEFAULT_JOINT_LIMITS_DEG: [f64; 2] = [-90.0, 90.0];
+/// Most links a scene may have.
+pub const MAX_LINKS: usize = 100_000;
+
+/// The names `initial` accepts (besides a list of angles), and `[start] shape`.
+pub const START_NAMES: &[&str] = &["straight", "C", "S", "mirror-C", "mirror-S"];
+
+/// Where the solver starts (`[solver] initial`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Start {
+    /// `"straight"`: every flexible joint at its rest angle (clamped into its limits).
+    Straight,
+    /// `"C"`: every flexible joint bent the same way.
+    C,
+    /// `"S"`: the first half bent one way, the rest the other.
+    S,
+    /// `"mirror-C"`: the C start with every flexible joint's sign flipped.
+    MirrorC,
+    /// `"mirror-S"`: the S start with every flexible joint's sign flipped.
+    MirrorS,
+    /// A list of `n` flexible joint angles (`theta_1..theta_n`), converted to radians.
+    AnglesRad(Vec<f64>),
+}
+
+/// How the joint stiffnesses were given.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StiffnessSpec {
+    /// A named profile normalized to `[min, max]` over the joints.
+    Profile {
+        /// The profile.
+        profile: StiffnessProfile,
+        /// `min_n_m_per_rad`.
+        min_n_m_per_rad: f64,
+        /// `max_n_m_per_rad`.
+        max_n_m_per_rad: f64,
+    },
+    /// `values_n_m_per_rad`, one per flexible joint.
+    Values,
+}
+
+/// The `[solver]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverSettings {
+    /// `tolerance` on the KKT residual (`None`: the solver's default).
+    pub tolerance: Option<f64>,
+    /// `max_iterations` (`None`: the solver's default).
+    pub max_iterations: Option<usize>,
+    /// `initial` (default [`Start::Straight`]).
+    pub initial: Start,
+}
+
+/// A validated scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// The chain: `links - 1` flexible joints, lengths, base angle, limits, stiffness, rest
+    /// angles, hairs (sim-core works relative to the base attachment point).
+    pub chain: Chain,
+    /// How the stiffness was given (the values are in `chain`).
+    pub stiffness: StiffnessSpec,
+    /// `[base] position_m`: the attachment point in the ground frame, m (for a sweep: where
+    /// the base pivot starts).
+    pub base_position_m: Vector2<f64>,
+    /// `[tip_load] force_n`: dead load at the tip, ground frame, N (zero when absent).
+    pub tip_force_n: Vector2<f64>,
+    /// `[tip_pin] position_m`: the pin in the ground frame (not relative to the base), m.
+    pub tip_pin_m: Option<Vector2<f64>>,
+    /// `[solver]`.
+    pub solver: SolverSettings,
+    /// `[antenna.hairs]`: how the chain's hairs were given (`None`: no hairs).
+    pub hairs: Option<HairSpec>,
+    /// `[[walls]]` in file order (wall 0 first).
+    pub walls: Vec<Wall>,
+    /// `[sweep]` ([`Motion::default`] where silent).
+    pub motion: Motion,
+    /// `[start]` ([`Placement::Rest`] without the table).
+    pub placement: Placement,
+    /// `[contact]` ([`ContactSettings::default`] where silent).
+    pub contact: ContactSettings,
+    /// Where some keys are in the file, for errors found only when solving.
+    pub locations: SceneLocations,
+}
+
+/// Where keys whose trouble shows only when solving sit in the file.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SceneLocations {
+    /// The file name as given (for errors found after parsing).
+    pub path: String,
+    /// `[tip_pin] position_m` (an unreachable pin).
+    pub tip_pin_position_m: Option<Location>,
+    /// `[solver] initial`.
+    pub solver_initial: Option<Location>,
+    /// `[start]` (its `placement` key, or the table when the key is absent): a placement that
+    /// fails.
+    pub start_placement: Option<Location>,
+}
+
+impl Scene {
+    /// Reads and validates a scene file; errors carry `path` as given.
+    ///
+    /// # Errors
+    /// [`SceneError`] when the file cannot be read or is not a valid scene.
+    pub fn from_path(path: &Path) -> Result<Scene, SceneError> {
+        let label = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            path: label.clone(),
+            location: None,
+            kind: Box::new(SceneErrorKind::Io(e)),
+        })?;
+        Scene::parse(&text, &label)
+    }
+
+    /// Parses and validates scene text; `path` is only used in error messages.
+    ///
+    /// # Errors
+    /// [`SceneError`] naming the key and, where known, its line and column.
+    pub fn parse(text: &str, path: &str) -> Result<Scene, SceneError> {
+        let source = Source { text, path };
+        let raw: RawScene = toml::from_str(text).map_err(|e| source.toml_error(&e))?;
+        raw.validate(&source)
+    }
+
+    /// Number of flexible joints `n` (`links - 1`).
+    pub fn n(&self) -> usize {
+        self.chain.n()
+    }
+
+    /// The pin relative to the base attachment point (what sim-core takes), m.
+    pub fn tip_pin_relative_m(&self) -> Option<Vector2<f64>> {
+        self.tip_pin_m.map(|p| p - self.base_position_m)
+    }
+
+    /// Whether the scene has walls (`antenna solve` then places the antenna by `[start]`
+    /// and reports the settled posture).
+    pub fn has_walls(&self) -> bool {
+        !self.walls.is_empty()
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Raw serde model: the keys of scene-format.md and our own tables.
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    antenna: Spanned<RawAntenna>,
+    base: Option<RawBase>,
+    tip_load: Option<RawTipLoad>,
+    tip_pin: Option<Spanned<RawTipPin>>,
+    solver: Option<Spanned<RawSolver>>,
+    walls: Option<Vec<Spanned<RawWall>>>,
+    sweep: Option<RawSweep>,
+    start: Option<Spanned<RawStart>>,
+    contact: Option<RawContact>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBase {
+    position_m: Option<Spanned<Vec<f64>>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTipLoad {
+    force_n: Spanned<Vec<f64>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTipPin {
+    position_m: Spanned<Vec<f64>>,
+}
+
+impl RawScene {
+    fn validate(self, source: &Source<'_>) -> Result<Scene, SceneError> {
+        let antenna_span = self.antenna.span();
+        let antenna = self.antenna.into_inner().validate(source, antenna_span)?;
+        let chain = antenna.chain;
+
+        let base_position_m = match self.base.as_ref().and_then(|b| b.position_m.as_ref()) {
+            Some(p) => point(source, "[base]", "position_m", p)?,
+            None => Vector2::zeros(),
+        };
+        let tip_force_n = match &self.tip_load {
+            Some(load) => point(source, "[tip_load]", "force_n", &load.force_n)?,
+            None => Vector2::zeros(),
+        };
+        let walls = self
+            .walls
+            .iter()
+            .flatten()
+            .enumerate()
+            .map(|(i, w)| w.get_ref().validate(source, i, w.span()))
+            .collect::<Result<Vec<Wall>, SceneError>>()?;
+
+        let tip_pin_m = match &self.tip_pin {
+            Some(pin) => {
+                let position = &pin.get_ref().position_m;
+                if !walls.is_empty() {
+                    return Err(source.error(
+                        Some(pin.span()),
+                        SceneErrorKind::Conflict {
+                            key: "tip_pin".to_string(),
+                            other: "walls".to_string(),
+                            table: "the top level".to_string(),
+                        },
+                    ));
+                }
+                let p = point(source, "[tip_pin]", "position_m", position)?;
+                antenna::check_reach(source, &chain, base_position_m, p, position.span())?;
+                Some(p)
+            }
+            None => None,
+        };
+
+        let solver = match &self.solver {
+            Some(raw) if !walls.is_empty() => {
+                return Err(source.invalid(
+                    raw.span(),
+                    "the top level",
+                    "solver",
+                    "[solver] sets the equilibrium solver of scenes without walls; a scene \
+                     with [[walls]] is placed by [start] and solved with [contact]",
+                ));
+            }
+            Some(raw) => raw.get_ref().validate(source, &chain)?,
+            None => SolverSettings {
+                tolerance: None,
+                max_iterations: None,
+                initial: Start::Straight,
+            },
+        };
+
+        let motion = match &self.sweep {
+            Some(raw) => raw.validate(source)?,
+            None => Motion::default(),
+        };
+        let placement = match &self.start {
+            Some(raw) => raw
+                .get_ref()
+                .validate(source, raw.span(), &chain, walls.len())?,
+            None => Placement::Rest,
+        };
+        let contact = match &self.contact {
+            Some(raw) => raw.validate(source)?,
+            None => ContactSettings::default(),
+        };
+
+        let locations = SceneLocations {
+            path: source.path.to_string(),
+            tip_pin_position_m: self
+                .tip_pin
+                .as_ref()
+                .and_then(|p| source.at(p.get_ref().position_m.span())),
+            solver_initial: self
+                .solver
+                .as_ref()
+                .and_then(|s| s.get_ref().initial.as_ref())
+                .and_then(|i| source.at(i.span())),
+            start_placement: self.start.as_ref().and_then(|s| {
+                s.get_ref()
+                    .placement_span()
+                    .map_or_else(|| source.at(s.span()), |p| source.at(p))
+            }),
+        };
+        Ok(Scene {
+            chain,
+            stiffness: antenna.stiffness,
+            base_position_m,
+            tip_force_n,
+            tip_pin_m,
+            solver,
+            hairs: antenna.hairs,
+            walls,
+            motion,
+            placement,
+            contact,
+            locations,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+[antenna]
+links = 9
+link_length_m = 0.04
+base_angle_deg = 30.0
+
+[antenna.stiffness]
+profile = "linear"
+min_n_m_per_rad = 0.004
+max_n_m_per_rad = 0.082
+"#;
+
+    fn err(text: &str) -> String {
+        match Scene::parse(text, "s.toml") {
+            Ok(_) => panic!("parsed: {text}"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn good_scene_builds_the_chain() {
+        let scene = Scene::parse(GOOD, "s.toml").unwrap();
+        assert_eq!(scene.n(), 8);
+        let k = scene.chain.stiffness_nm_per_rad();
+        assert_eq!(k.len(), 9);
+        assert!((k[1] - 0.082).abs() < 1e-15 && (k[8] - 0.004).abs() < 1e-15);
+        assert_eq!(scene.solver.initial, Start::Straight);
+        assert_eq!(scene.tip_pin_m, None);
+    }
+
+    #[test]
+    fn unknown_keys_name_key_place_and_allowed_keys() {
+        let e = err(&format!("{GOOD}[solver]\nfoo = 2\n"));
+        assert!(e.starts_with("s.toml:12:1: unknown key `foo` in [solver]; allowed: tolerance, max_iterations, initial"), "{e}");
+        let e = err(&format!("{GOOD}[wals]\n"));
+        assert!(
+            e.contains("unknown key `wals` in the top level; allowed: antenna, base, tip_load, tip_pin, solver, walls, sweep, start, contact"),
+            "{e}"
+        );
+        let e = err(&GOOD.replace("profile =", "colour = 1\nprofile ="));
+        assert!(
+            e.contains(":8:1: unknown key `colour` in [antenna.stiffness]"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{GOOD}[tip_pin]\nposition_m = [0.1, 0.1]\nx = 1\n"
+        ));
+        assert!(
+            e.contains(":13:1: unknown key `x` in [tip_pin]; allowed: position_m"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn type_errors_name_the_key() {
+        let e = err(&GOOD.replace("links = 9", "links = \"nine\""));
+        assert!(e.starts_with("s.toml:3:9: `links` in [antenna]:"), "{e}");
+    }
+
+    #[test]
+    fn semantic_errors_name_the_key() {
+        let e = err(&GOOD.replace(
+            "link_length_m = 0.04",
+            "link_length_m = 0.04\nlink_lengths_m = [0.04]",
+        ));
+        assert!(
+            e.contains(
+                "s.toml:5:18: `link_lengths_m` and `link_length_m` in [antenna] exclude each other"
+            ),
+            "{e}"
+        );
+        let e = err(&GOOD.replace("link_length_m = 0.04", "link_lengths_m = [0.04, 0.04]"));
+        assert!(
+            e.contains("`link_lengths_m` in [antenna]: has 2 value(s); expected 9"),
+            "{e}"
+        );
+        let e = err(&GOOD.replace("\"linear\"", "\"lin\""));
+        assert!(e.contains("`profile` in [antenna.stiffness]: unknown stiffness profile name \"lin\"; known profiles: constant, linear"), "{e}");
+        let e = err(&GOOD.replace("0.082", "0.001"));
+        assert!(
+            e.contains("s.toml:10:19: `max_n_m_per_rad` in [antenna.stiffness]: 0.001 is below"),
+            "{e}"
+        );
+        let e = err(&GOOD.replace("30.0", "nan"));
+        assert!(
+            e.contains("s.toml:5:18: `base_angle_deg` in [antenna]: NaN is not a finite number"),
+            "{e}"
+        );
+        let e = err(&GOOD.replace("links = 9", "links = 1"));
+        assert!(e.contains("`links` in [antenna]: 1 is out of range"), "{e}");
+        let e = err(&format!("{GOOD}[solver]\ninitial = \"Z\"\n"));
+        assert!(
+            e.contains("s.toml:12:11: `initial` in [solver]: invalid value: string \"Z\""),
+            "{e}"
+        );
+        let e = err(&format!("{GOOD}[solver]\ninitial = [1.0, 2.0]\n"));
+        assert!(
+            e.contains("`initial` in [solver]: has 2 value(s); expected 8"),
+            "{e}"
+        );
+        let e = err(&format!("{GOOD}[tip_pin]\nposition_m = [1.0, 0.0]\n"));
+        assert!(
+            e.contains("farther than the flexible links reach (0.320000 m)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn missing_keys_are_named() {
+        let e = err("[antenna]\nlink_length_m = 0.04\n");
+        assert!(e.contains("missing key `links` in [antenna]"), "{e}");
+        let e = err(&GOOD.replace("profile = \"linear\"", ""));
+        assert!(
+            e.contains("missing key `profile` or `values_n_m_per_rad` in [antenna.stiffness]"),
+            "{e}"
+        );
+        let e = err("");
+        assert!(e.contains("missing key `antenna` in the top level"), "{e}");
+    }
+
+    #[test]
+    fn custom_profile_is_a_values_list() {
+        let values = "values_n_m_per_rad = [0.05, 0.04, 0.03, 0.02, 0.01, 0.01, 0.01, 0.01]";
+        let text = GOOD
+            .replace(
+                "profile = \"linear\"",
+                &format!("profile = \"custom\"\n{values}"),
+            )
+            .replace("min_n_m_per_rad = 0.004\n", "")
+            .replace("max_n_m_per_rad = 0.082\n", "");
+        let s = Scene::parse(&text, "s.toml").unwrap();
+        assert_eq!(s.stiffness, StiffnessSpec::Values);
+        assert_eq!(s.chain.stiffness_nm_per_rad()[1], 0.05);
+        let e = err(&GOOD.replace("\"linear\"", "\"custom\""));
+        assert!(e.contains("give it as values_n_m_per_rad"), "{e}");
+        let e = err(&GOOD.replace("\"linear\"", "\"custom:0.1,0.2\""));
+        assert!(e.contains("give it as values_n_m_per_rad"), "{e}");
+    }
+
+    #[test]
+    fn explicit_values_and_pin_and_start() {
+        let text = r#"
+[antenna]
+links = 3
+link_lengths_m = [0.02, 0.03, 0.04]
+rest_angles_deg = [10.0, -5.0]
+[antenna.stiffness]
+values_n_m_per_rad = [0.02, 0.01]
+[base]
+position_m = [1.0, 2.0]
+[tip_pin]
+position_m = [1.05, 2.01]
+[solver]
+initial = [20, -20]
+max_iterations = 50
+"#;
+        let s = Scene::parse(text, "s.toml").unwrap();
+        assert_eq!(s.chain.stiffness_nm_per_rad(), &[0.0, 0.02, 0.01]);
+        assert_eq!(s.stiffness, StiffnessSpec::Values);
+        assert!((s.tip_pin_relative_m().unwrap() - Vector2::new(0.05, 0.01)).norm() < 1e-12);
+        match &s.solver.initial {
+            Start::AnglesRad(a) => assert!((a[0] - 20f64.to_radians()).abs() < 1e-15),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(s.solver.max_iterations, Some(50));
+    }
+}

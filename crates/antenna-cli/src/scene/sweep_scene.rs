@@ -1,0 +1,64 @@
+//! [`Scene::sweep_scene`]: a scene as sim-core's [`SweepScene`], what `antenna sweep`, the
+//! solve of a scene with walls, `antenna study` and the GUI's sweep animation run.
+
+use sim_core::sweep::SweepScene;
+
+use super::Scene;
+use crate::error::{SceneError, SceneErrorKind};
+
+impl Scene {
+    /// The sweep this scene describes: its chain (hairs included), `[[walls]]`, the base
+    /// pivot starting at `[base] position_m`, `[sweep]`'s motion, `[start]`'s placement, the
+    /// `[tip_load]` and the `[contact]` settings. Run it with [`sim_core::sweep::Sweep::new`]:
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use antenna_cli::Scene;
+    /// use sim_core::sweep::Sweep;
+    ///
+    /// let scene = Scene::parse(
+    ///     "[antenna]\nlinks = 3\nlink_length_m = 0.04\nbase_angle_deg = 60.0\n\
+    ///      [antenna.stiffness]\nvalues_n_m_per_rad = [0.02, 0.01]\n\
+    ///      [[walls]]\nshape = \"line\"\npoint_m = [0.0, 0.2]\nsolid = \"left\"\n\
+    ///      [sweep]\nduration_s = 0.05\n",
+    ///     "scene.toml",
+    /// )?;
+    /// let mut sweep = Sweep::new(scene.sweep_scene()?)?;
+    /// let mut steps = 0;
+    /// while let Some(step) = sweep.next_step() {
+    ///     step?;
+    ///     steps += 1;
+    /// }
+    /// assert_eq!(steps, 5);
+    /// # Ok(())
+    /// # }
+    /// ```
+    ///
+    /// # Errors
+    /// A [`SceneError`] naming `[tip_pin]` when the scene pins its tip: a sweep moves the
+    /// base and cannot hold the tip on a fixed pin.
+    pub fn sweep_scene(&self) -> Result<SweepScene, SceneError> {
+        if self.tip_pin_m.is_some() {
+            return Err(SceneError {
+                path: self.locations.path.clone(),
+                location: self.locations.tip_pin_position_m,
+                kind: Box::new(SceneErrorKind::Invalid {
+                    key: "position_m".to_string(),
+                    table: "[tip_pin]".to_string(),
+                    reason: "a sweep moves the base and cannot hold the tip on a fixed pin; \
+                             remove [tip_pin] to sweep this scene"
+                        .to_string(),
+                }),
+            });
+        }
+        Ok(SweepScene {
+            chain: self.chain.clone(),
+            walls: self.walls.clone(),
+            base_start_m: self.base_position_m,
+            motion: self.motion,
+            placement: self.placement.clone(),
+            tip_force_n: self.tip_force_n,
+            settings: self.contact,
+        })
+    }
+}

@@ -1,0 +1,242 @@
+//! One result row per grid point of a study, as CSV (a header, then one line per row) or as
+//! JSON lines (one object per row). The columns are documented in the README and on
+//! [`StudyRow`]'s fields; an empty CSV field is a JSON `null`.
+
+use serde::{Deserialize, Serialize};
+
+use super::Variant;
+use crate::scene::{Scene, StiffnessSpec};
+use crate::sweep::SweepSummary;
+
+/// How rows are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StudyFormat {
+    /// Comma-separated values with a header line.
+    Csv,
+    /// One JSON object per line.
+    Jsonl,
+}
+
+/// The result of one sweep of a study.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StudyRow {
+    /// The grid point, `0..` (the last axis varies fastest).
+    pub index: usize,
+    /// The stiffness profile (`custom` for explicit values).
+    pub profile: String,
+    /// The base angle, degrees.
+    pub base_angle_deg: f64,
+    /// The base pivot's start distance from the reference wall (the placement's wall, else
+    /// wall 0), metres (`null` without walls).
+    pub wall_distance_m: Option<f64>,
+    /// The hair layout (`scene` when the axis is absent).
+    pub hairs: String,
+    /// The walls' surface (`scene` when the axis is absent).
+    pub surface: String,
+    /// `ok`, or `failed` (the sweep stopped: the metrics cover the steps done).
+    pub status: String,
+    /// Why it failed (`null` when it did not).
+    pub error: Option<String>,
+    /// Steps swept.
+    pub steps: Option<usize>,
+    /// Simulated time swept, seconds.
+    pub sweep_time_s: Option<f64>,
+    /// Mean preview distance, metres.
+    pub preview_mean_m: Option<f64>,
+    /// Median preview distance, metres.
+    pub preview_median_m: Option<f64>,
+    /// Whether the distal segment flipped during the sweep.
+    pub flipped: Option<bool>,
+    /// The time of the first flip, seconds.
+    pub first_flip_t_s: Option<f64>,
+    /// Whether it was flipped after the placement.
+    pub flipped_at_start: Option<bool>,
+    /// Whether it was flipped at the end.
+    pub flipped_at_end: Option<bool>,
+    /// Steps that snapped.
+    pub snaps: Option<usize>,
+    /// Mean number of contacts per step.
+    pub mean_contacts: Option<f64>,
+    /// Pearson correlation of the point of bend with the base-to-wall distance.
+    pub bend_distance_pearson: Option<f64>,
+    /// Its Spearman rank correlation.
+    pub bend_distance_spearman: Option<f64>,
+    /// Pearson correlation of the point of contact with the base-to-wall distance.
+    pub contact_distance_pearson: Option<f64>,
+    /// Its Spearman rank correlation.
+    pub contact_distance_spearman: Option<f64>,
+    /// Contact points estimated from the sensed angles and touch bits.
+    pub mapping_points: Option<usize>,
+    /// Their mean distance to the true wall, millimetres.
+    pub mapping_mean_error_mm: Option<f64>,
+    /// Wall-clock time of the sweep, milliseconds.
+    pub wall_clock_ms: Option<f64>,
+}
+
+/// The CSV header, in [`StudyRow`]'s field order.
+pub const CSV_COLUMNS: &[&str] = &[
+    "index",
+    "profile",
+    "base_angle_deg",
+    "wall_distance_m",
+    "hairs",
+    "surface",
+    "status",
+    "error",
+    "steps",
+    "sweep_time_s",
+    "preview_mean_m",
+    "preview_median_m",
+    "flipped",
+    "first_flip_t_s",
+    "flipped_at_start",
+    "flipped_at_end",
+    "snaps",
+    "mean_contacts",
+    "bend_distance_pearson",
+    "bend_distance_spearman",
+    "contact_distance_pearson",
+    "contact_distance_spearman",
+    "mapping_points",
+    "mapping_mean_error_mm",
+    "wall_clock_ms",
+];
+
+impl StudyRow {
+    /// The row of grid point `index`: its axis values as run (`scene` is the variant's
+    /// scene, `None` when the variant could not be built), the summary of its sweep (or of
+    /// the steps done) and the error that stopped it.
+    pub fn new(
+        index: usize,
+        variant: &Variant,
+        base: &Scene,
+        scene: Option<&Scene>,
+        summary: Option<&SweepSummary>,
+        error: Option<String>,
+    ) -> StudyRow {
+        let shown = scene.unwrap_or(base);
+        let profile = match (&variant.profile, &shown.stiffness) {
+            (Some(p), _) => p.name().to_string(),
+            (None, StiffnessSpec::Profile { profile, .. }) => profile.name().to_string(),
+            (None, StiffnessSpec::Values) => "custom".to_string(),
+        };
+        let wall_distance_m = shown
+            .walls
+            .get(super::axes::reference_wall(shown))
+            .map(|w| w.signed_distance(&shown.base_position_m).gap_m);
+        StudyRow {
+            index,
+            profile,
+            base_angle_deg: variant
+                .base_angle_deg
+                .unwrap_or_else(|| shown.chain.base_angle_rad().to_degrees()),
+            wall_distance_m: variant.wall_distance_m.or(wall_distance_m),
+            hairs: variant
+                .hairs
+                .as_ref()
+                .map_or_else(|| "scene".to_string(), super::HairLayout::label),
+            surface: variant
+                .surface
+                .map_or_else(|| "scene".to_string(), |s| s.label()),
+            status: if error.is_none() { "ok" } else { "failed" }.to_string(),
+            error,
+            steps: summary.map(|s| s.steps),
+            sweep_time_s: summary.map(|s| s.sweep_time_s),
+            preview_mean_m: summary.and_then(|s| s.preview_mean_m),
+            preview_median_m: summary.and_then(|s| s.preview_median_m),
+            flipped: summary.map(|s| s.flips > 0),
+            first_flip_t_s: summary.and_then(|s| s.first_flip_t_s),
+            flipped_at_start: summary.map(|s| s.flipped_at_start),
+            flipped_at_end: summary.map(|s| s.flipped_at_end),
+            snaps: summary.map(|s| s.snaps),
+            mean_contacts: summary.map(|s| s.mean_contacts),
+            bend_distance_pearson: summary.and_then(|s| s.bend_distance_pearson),
+            bend_distance_spearman: summary.and_then(|s| s.bend_distance_spearman),
+            contact_distance_pearson: summary.and_then(|s| s.contact_distance_pearson),
+            contact_distance_spearman: summary.and_then(|s| s.contact_distance_spearman),
+            mapping_points: summary.map(|s| s.mapping_points),
+            mapping_mean_error_mm: summary.and_then(|s| s.mapping_mean_error_mm),
+            wall_clock_ms: summary.map(|s| s.wall_clock_ms),
+        }
+    }
+
+    /// The CSV header line.
+    pub fn csv_header() -> String {
+        CSV_COLUMNS.join(",")
+    }
+
+    /// The row as one CSV line (fields with a comma, a quote or a line break are quoted).
+    pub fn csv_line(&self) -> String {
+        let value = serde_json::to_value(self).unwrap_or_default();
+        CSV_COLUMNS
+            .iter()
+            .map(|c| match &value[*c] {
+                serde_json::Value::Null => String::new(),
+                serde_json::Value::String(s) => csv_field(s),
+                other => other.to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join(",")
+    }
+
+    /// The row as one JSON line.
+    pub fn json_line(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_columns_are_the_fields_in_order() {
+        let row = StudyRow {
+            index: 3,
+            profile: "linear".into(),
+            base_angle_deg: 30.0,
+            wall_distance_m: Some(0.2),
+            hairs: "distal".into(),
+            surface: "smooth mu=0.3".into(),
+            status: "failed".into(),
+            error: Some("step 4 (t = 0.04 s) failed: \"why\", and more".into()),
+            steps: Some(3),
+            sweep_time_s: Some(0.03),
+            preview_mean_m: None,
+            preview_median_m: None,
+            flipped: Some(false),
+            first_flip_t_s: None,
+            flipped_at_start: Some(true),
+            flipped_at_end: Some(true),
+            snaps: Some(0),
+            mean_contacts: Some(1.5),
+            bend_distance_pearson: None,
+            bend_distance_spearman: None,
+            contact_distance_pearson: None,
+            contact_distance_spearman: None,
+            mapping_points: Some(4),
+            mapping_mean_error_mm: Some(1.25),
+            wall_clock_ms: Some(12.0),
+        };
+        let value = serde_json::to_value(&row).unwrap_or_default();
+        let keys: Vec<&String> = value
+            .as_object()
+            .map(|o| o.keys().collect())
+            .unwrap_or_default();
+        assert_eq!(keys.len(), CSV_COLUMNS.len());
+        for c in CSV_COLUMNS {
+            assert!(value.get(*c).is_some(), "{c}");
+        }
+        let line = row.csv_line();
+        assert!(line.starts_with("3,linear,30.0,0.2,distal,smooth mu=0.3,failed,\"step 4 (t = 0.04 s) failed: \"\"why\"\", and more\",3,0.03,,,false,"), "{line}");
+        assert!(line.ends_with(",4,1.25,12.0"), "{line}");
+    }
+}

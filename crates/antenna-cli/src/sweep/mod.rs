@@ -1,0 +1,140 @@
+//! `antenna sweep`: a scene's sweep run step by step ([`SweepRun`]), each step with the
+//! CLI's own metrics ([`StepMetrics`]), summarized ([`SweepSummary`]), printed as JSON lines
+//! ([`record`]) and drawn ([`plot`]). Failures carry their exit status ([`SweepFailure`]).
+//!
+//! ```
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! use antenna_cli::Scene;
+//! use antenna_cli::sweep::SweepRun;
+//!
+//! let scene = Scene::parse(
+//!     "[antenna]\nlinks = 3\nlink_length_m = 0.04\nbase_angle_deg = 60.0\n\
+//!      [antenna.stiffness]\nvalues_n_m_per_rad = [0.02, 0.01]\n\
+//!      [[walls]]\nshape = \"line\"\npoint_m = [0.0, 0.2]\nsolid = \"left\"\n\
+//!      [sweep]\nduration_s = 0.05\n",
+//!     "scene.toml",
+//! )?;
+//! let mut run = SweepRun::start(&scene)?;
+//! let mut states = 0;
+//! while let Some(state) = run.next_state() {
+//!     state?;
+//!     states += 1;
+//! }
+//! assert_eq!(states, 6); // the placement (step 0) and five steps
+//! assert_eq!(run.summary().steps, 5);
+//! # Ok(())
+//! # }
+//! ```
+
+pub mod failure;
+pub mod plot;
+pub mod record;
+mod step_metrics;
+mod summary;
+
+use std::time::Instant;
+
+use sim_core::Chain;
+use sim_core::Wall;
+use sim_core::sweep::{Sweep, SweepStep};
+
+pub use failure::SweepFailure;
+pub use step_metrics::StepMetrics;
+pub use summary::{SweepStats, SweepSummary};
+
+use crate::scene::Scene;
+
+/// One recorded state of a sweep: sim-core's step and the CLI's metrics of it.
+#[derive(Debug, Clone)]
+pub struct SweepState {
+    /// The step.
+    pub step: SweepStep,
+    /// What the CLI derives from it.
+    pub metrics: StepMetrics,
+}
+
+/// A scene's sweep in progress: the placement (step 0) first, then every step.
+#[derive(Debug)]
+pub struct SweepRun {
+    scene: Scene,
+    chain: Chain,
+    walls: Vec<Wall>,
+    sweep: Sweep,
+    placed_pending: bool,
+    stats: SweepStats,
+    started: Instant,
+}
+
+impl SweepRun {
+    /// Places the antenna as the scene's `[start]` says and gets ready to sweep.
+    ///
+    /// # Errors
+    /// [`SweepFailure`] when the scene cannot be swept (a pinned tip) or the placement
+    /// fails, with the file, the key and why.
+    pub fn start(scene: &Scene) -> Result<SweepRun, SweepFailure> {
+        let started = Instant::now();
+        let sweep_scene = scene.sweep_scene()?;
+        let chain = sweep_scene.chain.clone();
+        let walls = sweep_scene.walls.clone();
+        let sweep = sim_core::sweep::Sweep::new(sweep_scene)
+            .map_err(|e| SweepFailure::from_sweep_error(scene, e))?;
+        Ok(SweepRun {
+            scene: scene.clone(),
+            chain,
+            walls,
+            sweep,
+            placed_pending: true,
+            stats: SweepStats::default(),
+            started,
+        })
+    }
+
+    /// What the placement did, in words.
+    pub fn placement_note(&self) -> &str {
+        self.sweep.placement_note()
+    }
+
+    /// The number of steps after the placement.
+    pub fn steps(&self) -> usize {
+        self.sweep.steps()
+    }
+
+    /// The simulation (for its state after the last step).
+    pub fn sweep(&self) -> &Sweep {
+        &self.sweep
+    }
+
+    /// The chain swept.
+    pub fn chain(&self) -> &Chain {
+        &self.chain
+    }
+
+    /// The walls.
+    pub fn walls(&self) -> &[Wall] {
+        &self.walls
+    }
+
+    /// The next state: the placement (step 0) first, then the steps; `None` when done.
+    pub fn next_state(&mut self) -> Option<Result<SweepState, SweepFailure>> {
+        let step = if self.placed_pending {
+            self.placed_pending = false;
+            Ok(self.sweep.placed()?.clone())
+        } else {
+            match self.sweep.next_step()? {
+                Ok(step) => Ok(step),
+                Err(e) => Err(SweepFailure::from_sweep_error(&self.scene, e)),
+            }
+        };
+        Some(step.map(|step| {
+            let metrics = StepMetrics::of(&self.chain, &self.walls, &step);
+            self.stats.push(&step, &metrics);
+            SweepState { step, metrics }
+        }))
+    }
+
+    /// The summary of the states so far, with the wall-clock time since [`Self::start`].
+    pub fn summary(&self) -> SweepSummary {
+        self.stats
+            .summary(self.started.elapsed().as_secs_f64() * 1e3)
+    }
+}

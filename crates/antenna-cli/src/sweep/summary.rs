@@ -1,0 +1,244 @@
+//! The summary of a sweep (model.md 8): steps, time, contacts, snaps, flips, preview
+//! distance, the correlations of the point of bend and of the point of contact with the
+//! base's distance to the wall, and the mapping error; accumulated step by step
+//! ([`SweepStats`]) and reported as a [`SweepSummary`].
+
+use std::fmt::Write as _;
+
+use serde::{Deserialize, Serialize};
+use sim_core::sweep::SweepStep;
+use sim_core::{MappingAccumulator, pearson_correlation, spearman_correlation};
+
+use super::StepMetrics;
+
+/// What a sweep did, over every recorded step (the placement, step 0, included).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepSummary {
+    /// Steps of the sweep proper (the placement, step 0, not counted).
+    pub steps: usize,
+    /// Simulated time swept, seconds.
+    pub sweep_time_s: f64,
+    /// Wall-clock time of the placement and all steps, milliseconds.
+    pub wall_clock_ms: f64,
+    /// Steps (of `steps + 1`, the placement included) with at least one contact.
+    pub steps_with_contact: usize,
+    /// Mean number of contacts per step.
+    pub mean_contacts: f64,
+    /// Most contacts in one step.
+    pub max_contacts: usize,
+    /// Steps in which the posture snapped (left its branch of equilibria).
+    pub snaps: usize,
+    /// Whether the distal segment had flipped (beyond 90 degrees to the wall) after the
+    /// placement.
+    pub flipped_at_start: bool,
+    /// How many times the distal segment flipped during the sweep (a step flipped after one
+    /// that was not).
+    pub flips: usize,
+    /// The time of the first flip during the sweep, seconds (`null` without one).
+    pub first_flip_t_s: Option<f64>,
+    /// Whether the distal segment is flipped at the end.
+    pub flipped_at_end: bool,
+    /// Mean preview distance over the steps with a contact, metres (`null` without one).
+    pub preview_mean_m: Option<f64>,
+    /// Median preview distance over the steps with a contact, metres.
+    pub preview_median_m: Option<f64>,
+    /// Pearson correlation of the point of bend (joint number) with the base-to-wall
+    /// distance over the steps (`null` where undefined: a constant point of bend or
+    /// distance, or fewer than two steps).
+    pub bend_distance_pearson: Option<f64>,
+    /// Spearman rank correlation of the same.
+    pub bend_distance_spearman: Option<f64>,
+    /// Pearson correlation of the point of contact (the most proximal contact's point
+    /// number) with the base-to-wall distance over the steps with a contact.
+    pub contact_distance_pearson: Option<f64>,
+    /// Spearman rank correlation of the same.
+    pub contact_distance_spearman: Option<f64>,
+    /// Contact points estimated from the sensed angles and touch bits, over all steps.
+    pub mapping_points: usize,
+    /// Their mean distance to the true wall, millimetres (`null` without points).
+    pub mapping_mean_error_mm: Option<f64>,
+    /// Their largest distance to the true wall, millimetres.
+    pub mapping_max_error_mm: Option<f64>,
+    /// Substeps solved over all steps.
+    pub substeps: usize,
+    /// Newton iterations over all steps.
+    pub iterations: usize,
+}
+
+/// The running statistics of a sweep; [`Self::summary`] reports them.
+#[derive(Debug, Clone, Default)]
+pub struct SweepStats {
+    steps: usize,
+    last_t_s: f64,
+    contacts_total: usize,
+    steps_with_contact: usize,
+    max_contacts: usize,
+    snaps: usize,
+    flipped_at_start: bool,
+    last_flipped: bool,
+    flips: usize,
+    first_flip_t_s: Option<f64>,
+    previews_m: Vec<f64>,
+    bend: (Vec<f64>, Vec<f64>),
+    contact: (Vec<f64>, Vec<f64>),
+    mapping: MappingAccumulator,
+    substeps: usize,
+    iterations: usize,
+}
+
+impl SweepStats {
+    /// Adds a step (the placement, step 0, first).
+    pub fn push(&mut self, step: &SweepStep, metrics: &StepMetrics) {
+        let flipped = step.flipped();
+        if step.step == 0 {
+            self.flipped_at_start = flipped;
+        } else {
+            self.steps += 1;
+            if flipped && !self.last_flipped {
+                self.flips += 1;
+                self.first_flip_t_s.get_or_insert(step.t_s);
+            }
+        }
+        self.last_flipped = flipped;
+        self.last_t_s = step.t_s;
+        let contacts = step.contacts.len();
+        self.contacts_total += contacts;
+        self.max_contacts = self.max_contacts.max(contacts);
+        if contacts > 0 {
+            self.steps_with_contact += 1;
+        }
+        if step.report.snapped {
+            self.snaps += 1;
+        }
+        if let Some(p) = step.preview_m {
+            self.previews_m.push(p);
+        }
+        if let Some(d) = metrics.wall_distance_m {
+            if let Some(j) = step.bend_joint {
+                self.bend.0.push(d);
+                self.bend.1.push(j as f64);
+            }
+            if let Some(j) = step.contact_joint {
+                self.contact.0.push(d);
+                self.contact.1.push(j as f64);
+            }
+        }
+        for &e in &metrics.errors_mm {
+            self.mapping.push(e);
+        }
+        self.substeps += step.report.substeps;
+        self.iterations += step.report.iterations;
+    }
+
+    /// The summary so far; `wall_clock_ms` is the caller's measure.
+    pub fn summary(&self, wall_clock_ms: f64) -> SweepSummary {
+        let recorded = self.steps + 1;
+        let mapping = self.mapping.score();
+        SweepSummary {
+            steps: self.steps,
+            sweep_time_s: self.last_t_s,
+            wall_clock_ms,
+            steps_with_contact: self.steps_with_contact,
+            mean_contacts: self.contacts_total as f64 / recorded as f64,
+            max_contacts: self.max_contacts,
+            snaps: self.snaps,
+            flipped_at_start: self.flipped_at_start,
+            flips: self.flips,
+            first_flip_t_s: self.first_flip_t_s,
+            flipped_at_end: self.last_flipped,
+            preview_mean_m: mean(&self.previews_m),
+            preview_median_m: median(&self.previews_m),
+            bend_distance_pearson: pearson_correlation(&self.bend.0, &self.bend.1),
+            bend_distance_spearman: spearman_correlation(&self.bend.0, &self.bend.1),
+            contact_distance_pearson: pearson_correlation(&self.contact.0, &self.contact.1),
+            contact_distance_spearman: spearman_correlation(&self.contact.0, &self.contact.1),
+            mapping_points: mapping.count,
+            mapping_mean_error_mm: mapping.mean_error_mm,
+            mapping_max_error_mm: mapping.max_error_mm,
+            substeps: self.substeps,
+            iterations: self.iterations,
+        }
+    }
+}
+
+fn mean(values: &[f64]) -> Option<f64> {
+    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+}
+
+fn median(values: &[f64]) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let mid = sorted.len() / 2;
+    Some(if sorted.len().is_multiple_of(2) {
+        0.5 * (sorted[mid - 1] + sorted[mid])
+    } else {
+        sorted[mid]
+    })
+}
+
+fn optional(value: Option<f64>, scale: f64, unit: &str) -> String {
+    value.map_or_else(
+        || "undefined".to_string(),
+        |v| format!("{:.4}{unit}", v * scale),
+    )
+}
+
+impl SweepSummary {
+    /// A few lines for people.
+    pub fn human(&self) -> String {
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "{} steps, {:.3} s swept in {:.0} ms wall clock ({} substeps, {} Newton iterations)",
+            self.steps, self.sweep_time_s, self.wall_clock_ms, self.substeps, self.iterations
+        );
+        let _ = writeln!(
+            out,
+            "contacts: {} of {} steps touch a wall; {:.2} contacts per step, at most {}",
+            self.steps_with_contact,
+            self.steps + 1,
+            self.mean_contacts,
+            self.max_contacts
+        );
+        let flip_time = self
+            .first_flip_t_s
+            .map_or_else(String::new, |t| format!(", first at t = {t:.3} s"));
+        let _ = writeln!(
+            out,
+            "snaps: {}; flips: {}{flip_time} (flipped after placement: {}, at the end: {})",
+            self.snaps,
+            self.flips,
+            yes_no(self.flipped_at_start),
+            yes_no(self.flipped_at_end)
+        );
+        let _ = writeln!(
+            out,
+            "preview distance: mean {}, median {}",
+            optional(self.preview_mean_m, 1e3, " mm"),
+            optional(self.preview_median_m, 1e3, " mm")
+        );
+        let _ = writeln!(
+            out,
+            "correlation with the base-to-wall distance: point of bend {} (Spearman {}), point of contact {} (Spearman {})",
+            optional(self.bend_distance_pearson, 1.0, ""),
+            optional(self.bend_distance_spearman, 1.0, ""),
+            optional(self.contact_distance_pearson, 1.0, ""),
+            optional(self.contact_distance_spearman, 1.0, "")
+        );
+        let _ = writeln!(
+            out,
+            "mapping from sensed angles and touch bits: {} points, mean error {}, max {}",
+            self.mapping_points,
+            optional(self.mapping_mean_error_mm, 1.0, " mm"),
+            optional(self.mapping_max_error_mm, 1.0, " mm")
+        );
+        out
+    }
+}
+
+fn yes_no(b: bool) -> &'static str {
+    if b { "yes" } else { "no" }
+}
