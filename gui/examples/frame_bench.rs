@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use antenna_monitor::history::{Health, Sample, SegmentReading};
-use antenna_monitor::{AppOptions, MonitorApp};
+use antenna_monitor::{AppOptions, MonitorApp, is_software_gl, tune_for_software_gl};
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use host_daemon::net::{
@@ -49,9 +49,10 @@ struct Args {
     /// Window height, points.
     #[arg(long, default_value_t = 800.0)]
     height: f32,
-    /// Tessellate without anti-aliasing feathering (fewer triangles), to see its share.
+    /// Keep egui's anti-aliasing feathering even on a software rasterizer (the monitor turns
+    /// it off there), to see its share.
     #[arg(long)]
-    no_feathering: bool,
+    force_feathering: bool,
     /// Write the figures here as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -281,7 +282,7 @@ fn main() -> Result<()> {
         stop: Arc::clone(&stop),
         result: None,
     };
-    let no_feathering = args.no_feathering;
+    let force_feathering = args.force_feathering;
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("antenna-monitor frame bench")
@@ -297,9 +298,9 @@ fn main() -> Result<()> {
         "antenna-monitor-frame-bench",
         options,
         Box::new(move |cc| {
-            if no_feathering {
-                cc.egui_ctx
-                    .tessellation_options_mut(|o| o.feathering = false);
+            // As antenna-monitor's main does.
+            if !force_feathering && cc.gl.as_deref().is_some_and(is_software_gl) {
+                tune_for_software_gl(&cc.egui_ctx);
             }
             Ok(Box::new(bench))
         }),

@@ -90,6 +90,8 @@ pub struct MonitorApp {
     exports: Vec<ExportRecord>,
     message: Option<(String, bool)>,
     refusal: Option<String>,
+    /// Playing a recording: when the cursor last moved.
+    playing: Option<Instant>,
 }
 
 struct Panels {
@@ -152,6 +154,7 @@ impl MonitorApp {
             exports: Vec::new(),
             message: None,
             refusal: None,
+            playing: None,
         };
         if let Some(path) = &options.trial {
             app.open(path);
@@ -203,6 +206,7 @@ impl MonitorApp {
                     note.push_str(&format!("; the file was cut short: {cut}"));
                 }
                 self.message = Some((note, false));
+                self.playing = None;
                 self.source = Source::Trial(Box::new(trial));
             }
             Err(e) => self.message = Some((e.to_string(), true)),
@@ -492,6 +496,7 @@ impl MonitorApp {
         let history = data.history;
         let latest = history.latest_t_s();
         let span = history.first_t_s().zip(latest);
+        self.advance_playback(ui.ctx(), latest);
         let cursor_index = self.view.cursor_s(latest).and_then(|c| history.index_at(c));
         let measured = match (data.rig, cursor_index) {
             (Some(rig), Some(i)) => rig.frame_at(history, i).ok(),
@@ -507,10 +512,13 @@ impl MonitorApp {
             .and_then(|p| p.worker.as_ref().ok())
             .map_or("", PredictionWorker::name);
 
+        let playing = self.playing.is_some();
         let actions = egui::Panel::top("timeline_bar")
             .frame(unfilled(egui::Frame::side_top_panel(ui.style())))
             .show(ui, |ui| {
-                self.panels.timeline.ui(ui, &self.view, span, data.live)
+                self.panels
+                    .timeline
+                    .ui(ui, &self.view, span, data.live, playing)
             })
             .inner;
         let max_window_s = if data.live {
@@ -525,6 +533,16 @@ impl MonitorApp {
                 TimelineAction::Zoom(f) => self.view.zoom(f, max_window_s),
                 TimelineAction::SetHistory(s) => deferred.history_s = Some(s),
                 TimelineAction::Scrub(t) => self.view.scrub(t, latest),
+                TimelineAction::Play => {
+                    // From the start again if the cursor is at the end.
+                    if let (Some((first, last)), Some(c)) = (span, self.view.cursor_s(latest))
+                        && c >= last
+                    {
+                        self.view.scrub(first, latest);
+                    }
+                    self.playing = Some(Instant::now());
+                }
+                TimelineAction::StopPlaying => self.playing = None,
                 TimelineAction::ExportCsv
                 | TimelineAction::ExportPng
                 | TimelineAction::ExportSvg => {
@@ -620,6 +638,20 @@ impl MonitorApp {
         deferred
     }
 
+    /// Moves the cursor of a playing recording on by the time since the last frame times
+    /// the speed; stops at the end.
+    fn advance_playback(&mut self, ctx: &egui::Context, latest: Option<f64>) {
+        let (Some(since), Some(last)) = (self.playing, latest) else {
+            return;
+        };
+        let now = Instant::now();
+        let t = self.view.cursor_s(latest).unwrap_or(last)
+            + (now - since).as_secs_f64() * self.panels.timeline.speed;
+        self.view.scrub(t.min(last), latest);
+        self.playing = (t < last).then_some(now);
+        ctx.request_repaint_after(Duration::from_millis(16));
+    }
+
     fn export(
         &mut self,
         action: TimelineAction,
@@ -675,6 +707,25 @@ impl MonitorApp {
         self.exports.push(record.clone());
         Ok(record)
     }
+}
+
+/// Whether eframe's OpenGL context is a software rasterizer (Mesa's llvmpipe or softpipe,
+/// or another that says so in its renderer string).
+pub fn is_software_gl(gl: &eframe::glow::Context) -> bool {
+    use eframe::glow::HasContext as _;
+    // SAFETY: glGetString(GL_RENDERER) on the context eframe made current on this thread for
+    // the app's creation; it reads a static string and changes no state.
+    let renderer = unsafe { gl.get_parameter_string(eframe::glow::RENDERER) }.to_ascii_lowercase();
+    ["llvmpipe", "softpipe", "swrast", "software"]
+        .iter()
+        .any(|name| renderer.contains(name))
+}
+
+/// Settings for a software rasterizer: no anti-aliasing feathering. Feathering surrounds every
+/// shape with a thin band of blended triangles; under llvmpipe it more than doubles the frame
+/// time (BENCHMARKS.md, "Monitor"), so edges are drawn hard instead.
+pub fn tune_for_software_gl(ctx: &egui::Context) {
+    ctx.tessellation_options_mut(|o| o.feathering = false);
 }
 
 /// A panel frame without its fill: the window is cleared to the panel colour

@@ -65,6 +65,9 @@ pub enum MonitorError {
     /// The posture prediction failed.
     #[error("prediction: {0}")]
     Prediction(String),
+    /// A simulated sweep could not be run or drawn.
+    #[error("sweep: {0}")]
+    Sweep(String),
     /// A control command was not sent.
     #[error("control: {0}")]
     Control(String),

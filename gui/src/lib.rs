@@ -65,7 +65,8 @@ pub mod prediction;
 pub mod recording;
 pub mod rig;
 pub mod screenshot;
+pub mod sweep;
 pub mod view;
 
-pub use app::{AppOptions, MonitorApp};
+pub use app::{AppOptions, MonitorApp, is_software_gl, tune_for_software_gl};
 pub use error::MonitorError;

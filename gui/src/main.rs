@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use antenna_monitor::{AppOptions, MonitorApp};
+use antenna_monitor::{AppOptions, MonitorApp, is_software_gl, tune_for_software_gl};
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 
@@ -86,7 +86,12 @@ fn main() -> Result<()> {
     eframe::run_native(
         "antenna-monitor",
         options,
-        Box::new(move |_cc| Ok(Box::new(app))),
+        Box::new(move |cc| {
+            if cc.gl.as_deref().is_some_and(is_software_gl) {
+                tune_for_software_gl(&cc.egui_ctx);
+            }
+            Ok(Box::new(app))
+        }),
     )
     .map_err(|e| anyhow::anyhow!("the window failed: {e}"))
 }

@@ -319,3 +319,30 @@ fn an_unhealthy_segment_is_shown_as_such() {
     }
     daemon.shutdown().unwrap();
 }
+
+#[test]
+fn the_history_window_the_user_sets_bounds_the_history() {
+    let dir = temp_dir("history");
+    let daemon = start_daemon(config(&dir));
+    let mut harness = monitor(&daemon, "", dir.clone());
+    wait_for_history(&mut harness, 0.1);
+    assert_eq!(
+        harness.state().live().unwrap().lock().history.capacity(),
+        30_000
+    );
+    // One second at 1 kHz, set in the view bar.
+    harness
+        .get_by_role_and_label(Role::SpinButton, "history, s")
+        .set_value_accesskit(1.0);
+    harness.step();
+    step_until(&mut harness, "1.5 s of polls", 10.0, |h| {
+        h.state().live().unwrap().lock().history.total_pushed() >= 1500
+    });
+    let state = harness.state().live().unwrap().lock();
+    assert_eq!(state.history.capacity(), 1000);
+    assert_eq!(state.history.len(), 1000);
+    let span = state.history.latest_t_s().unwrap() - state.history.first_t_s().unwrap();
+    assert!((0.99..1.0).contains(&span), "{span} s held");
+    drop(state);
+    daemon.shutdown().unwrap();
+}

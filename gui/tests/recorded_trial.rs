@@ -1,6 +1,6 @@
 //! Offline: a trial recorded by a real antennad on the simulated rig, opened in the monitor
-//! through its source bar and scrubbed; the chain at the scrubbed instant is the recorded
-//! one, with the touches the recording holds.
+//! through its source bar, played and scrubbed; the chain at the scrubbed instant is the
+//! recorded one, with the touches the recording holds.
 #![allow(clippy::unwrap_used)]
 
 mod support;
@@ -14,7 +14,7 @@ use host_daemon::daemon::{Daemon, DaemonOptions};
 use support::{config, harness, temp_dir};
 
 #[test]
-fn open_a_recorded_trial_and_scrub_it() {
+fn open_a_recorded_trial_play_and_scrub_it() {
     let dir = temp_dir("trial");
     let daemon = Daemon::start(
         config(&dir),
@@ -62,6 +62,21 @@ fn open_a_recorded_trial_and_scrub_it() {
         (t0 - start_s.unwrap()).abs() < 1e-9 && (t1 - end_s).abs() < 1e-9,
         "window {t0}..{t1}, trial {start_s:?}..{end_s}"
     );
+
+    // Play it: the cursor moves on in real time.
+    harness.get_by_label("Play").click();
+    harness.step();
+    std::thread::sleep(Duration::from_millis(300));
+    harness.step();
+    let played = harness.state().view().cursor_s(Some(end_s)).unwrap() - start_s.unwrap();
+    assert!((0.25..1.5).contains(&played), "played {played} s in 0.3 s");
+    harness.get_by_label("Stop playing").click();
+    harness.step();
+    let stopped = harness.state().view().cursor_s(Some(end_s));
+    std::thread::sleep(Duration::from_millis(100));
+    harness.step();
+    assert_eq!(harness.state().view().cursor_s(Some(end_s)), stopped);
+    harness.get_by_label("Play");
 
     // Scrub to the end: the stage has carried the tip against the wall.
     harness

@@ -22,31 +22,59 @@ pub enum TimelineAction {
     ExportPng,
     /// Export the view as SVG.
     ExportSvg,
+    /// Play a recording from the cursor at the set speed.
+    Play,
+    /// Stop playing.
+    StopPlaying,
 }
 
 /// The view bar (see the module documentation).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TimelinePanel {
     history_s: f64,
+    /// Playback speed of a recording (1: real time).
+    pub speed: f64,
 }
 
 impl TimelinePanel {
     /// A bar showing a history window of `history_s` seconds.
     pub fn new(history_s: f64) -> Self {
-        Self { history_s }
+        Self {
+            history_s,
+            speed: 1.0,
+        }
     }
 
     /// Draws the bar for `view` over a history spanning `first_s..=latest_s`; `live` shows
-    /// the history setting (a recording keeps all of itself). Returns the user's actions.
+    /// the history setting (a recording keeps all of itself, and plays instead: `playing`
+    /// says whether it is). Returns the user's actions.
     pub fn ui(
         &mut self,
         ui: &mut egui::Ui,
         view: &ViewState,
         span: Option<(f64, f64)>,
         live: bool,
+        playing: bool,
     ) -> Vec<TimelineAction> {
         let mut actions = Vec::new();
         ui.horizontal(|ui| {
+            if !live {
+                if playing {
+                    if ui.button("Stop playing").clicked() {
+                        actions.push(TimelineAction::StopPlaying);
+                    }
+                } else if ui.button("Play").clicked() {
+                    actions.push(TimelineAction::Play);
+                }
+                let label = ui.label("speed, x");
+                ui.add(
+                    egui::DragValue::new(&mut self.speed)
+                        .range(0.05..=20.0)
+                        .speed(0.05),
+                )
+                .labelled_by(label.id);
+                ui.separator();
+            }
             if view.is_following() {
                 if ui.button("Pause").clicked() {
                     actions.push(TimelineAction::Pause);
