@@ -68,7 +68,8 @@ impl Progress {
         let elapsed_s = elapsed.as_secs_f64();
         let eta = if done > 0 && done < self.total {
             let left_s = elapsed_s * (self.total - done) as f64 / done as f64;
-            format!(", {left_s:.0} s left")
+            let decimals = if left_s < 10.0 { 1 } else { 0 };
+            format!(", {left_s:.decimals$} s left")
         } else {
             String::new()
         };
@@ -107,6 +108,8 @@ mod tests {
         let line = p.line(50, Duration::from_secs(10));
         assert!(line.starts_with("[########----------------------] 50/200 steps (25 %)"));
         assert!(line.ends_with("10.0 s, 30 s left"), "{line}");
+        let soon = p.line(150, Duration::from_secs(3));
+        assert!(soon.ends_with("3.0 s, 1.0 s left"), "{soon}");
         assert!(p.line(200, Duration::from_secs(1)).contains("(100 %)"));
         assert!(
             Progress::new(0, "runs")

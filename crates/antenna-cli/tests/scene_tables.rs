@@ -162,7 +162,6 @@ fn polyline_sinusoid_and_placements_parse() {
         Placement::Approach {
             wall: 0,
             distance_m: 0.05,
-            along_m: 0.0,
             steps: 20
         }
     );

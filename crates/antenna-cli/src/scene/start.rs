@@ -156,7 +156,6 @@ impl RawStart {
                 Placement::Approach {
                     wall,
                     distance_m,
-                    along_m: 0.0,
                     steps,
                 }
             }

@@ -43,8 +43,8 @@ pub struct SweepSummary {
     /// Median preview distance over the steps with a contact, metres.
     pub preview_median_m: Option<f64>,
     /// Pearson correlation of the point of bend (joint number) with the base-to-wall
-    /// distance over the steps (`null` where undefined: a constant point of bend or
-    /// distance, or fewer than two steps).
+    /// distance over the steps (`null` where undefined: a constant point of bend, a
+    /// distance constant to 1 nm, or fewer than two steps).
     pub bend_distance_pearson: Option<f64>,
     /// Spearman rank correlation of the same.
     pub bend_distance_spearman: Option<f64>,
@@ -148,10 +148,10 @@ impl SweepStats {
             flipped_at_end: self.last_flipped,
             preview_mean_m: mean(&self.previews_m),
             preview_median_m: median(&self.previews_m),
-            bend_distance_pearson: pearson_correlation(&self.bend.0, &self.bend.1),
-            bend_distance_spearman: spearman_correlation(&self.bend.0, &self.bend.1),
-            contact_distance_pearson: pearson_correlation(&self.contact.0, &self.contact.1),
-            contact_distance_spearman: spearman_correlation(&self.contact.0, &self.contact.1),
+            bend_distance_pearson: correlation(&self.bend, pearson_correlation),
+            bend_distance_spearman: correlation(&self.bend, spearman_correlation),
+            contact_distance_pearson: correlation(&self.contact, pearson_correlation),
+            contact_distance_spearman: correlation(&self.contact, spearman_correlation),
             mapping_points: mapping.count,
             mapping_mean_error_mm: mapping.mean_error_mm,
             mapping_max_error_mm: mapping.max_error_mm,
@@ -159,6 +159,26 @@ impl SweepStats {
             iterations: self.iterations,
         }
     }
+}
+
+/// A distance that varies by less than this over a sweep is constant (a base moving along a
+/// parallel wall): its correlations are undefined, not the noise of rounding, metres.
+pub const CONSTANT_DISTANCE_M: f64 = 1e-9;
+
+/// The correlation of a point number with the base-to-wall distance (`pairs.0`), `None`
+/// where undefined: fewer than two steps, a constant point number, or a distance that
+/// varies by less than [`CONSTANT_DISTANCE_M`].
+fn correlation(
+    pairs: &(Vec<f64>, Vec<f64>),
+    how: fn(&[f64], &[f64]) -> Option<f64>,
+) -> Option<f64> {
+    let lo = pairs.0.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = pairs.0.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let range_m = hi - lo;
+    if range_m.is_nan() || range_m < CONSTANT_DISTANCE_M {
+        return None;
+    }
+    how(&pairs.0, &pairs.1)
 }
 
 fn mean(values: &[f64]) -> Option<f64> {
