@@ -12,7 +12,7 @@
 mod study;
 mod sweep;
 
-use std::io::Read as _;
+use std::io::{Read as _, Write as _};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -251,7 +251,11 @@ fn main() -> ExitCode {
 
 pub(crate) fn print_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(value).context("writing JSON")?;
-    println!("{text}");
+    // An error (a closed pipe: `antenna solve --json | head`), not a panic.
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{text}")
+        .and_then(|()| out.flush())
+        .context("writing the JSON to stdout")?;
     Ok(())
 }
 
