@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use antenna_monitor::screenshot::{MIN_CHAIN_EXTENT_PX, MIN_CHAIN_PIXELS, check_png};
 use antenna_monitor::{AppOptions, MonitorApp, is_software_gl, tune_for_software_gl};
 use anyhow::{Context, Result, bail};
 use clap::Parser;
@@ -39,10 +40,17 @@ struct Args {
     /// Window size in points, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x800")]
     size: String,
+    /// Check a screenshot of this app for the chain being drawn and exit (0: drawn, 1: not);
+    /// scripts/monitor-screenshot uses it.
+    #[arg(long, value_name = "PNG", hide = true)]
+    check_screenshot: Option<PathBuf>,
 }
 
 fn main() -> Result<()> {
     let args = Args::parse();
+    if let Some(path) = &args.check_screenshot {
+        return check_screenshot(path);
+    }
     if !(args.history_s.is_finite() && args.history_s > 0.0) {
         bail!("--history-s must be positive, got {}", args.history_s);
     }
@@ -94,4 +102,29 @@ fn main() -> Result<()> {
         }),
     )
     .map_err(|e| anyhow::anyhow!("the window failed: {e}"))
+}
+
+/// `--check-screenshot`: is the chain drawn in this PNG?
+fn check_screenshot(path: &std::path::Path) -> Result<()> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let report = check_png(&bytes)
+        .map_err(anyhow::Error::msg)
+        .with_context(|| format!("checking {}", path.display()))?;
+    println!(
+        "check-screenshot: {}: {}x{} px, {} chain-coloured pixels in the chain panel (need \
+         {MIN_CHAIN_PIXELS}), spanning {:?} (need {MIN_CHAIN_EXTENT_PX} px)",
+        path.display(),
+        report.size_px.0,
+        report.size_px.1,
+        report.chain_pixels,
+        report.chain_box_px
+    );
+    if !report.chain_drawn() {
+        bail!(
+            "{}: the chain is not drawn (a blank window?)",
+            path.display()
+        );
+    }
+    println!("check-screenshot: the chain is drawn");
+    Ok(())
 }

@@ -5,16 +5,16 @@
 //! away and coming back, and an unhealthy segment.
 #![allow(clippy::unwrap_used)]
 
-mod support;
-
 use std::time::Duration;
 
+use crate::support::{
+    TOKEN, config, monitor, start_daemon, step_until, temp_dir, wait_for_history,
+};
 use antenna_monitor::client::ConnectionState;
 use antenna_monitor::history::Health;
 use egui::accesskit::Role;
 use egui_kittest::kittest::{NodeT, Queryable};
 use host_daemon::config::{SimFaultConfig, SimFaultKind};
-use support::{TOKEN, config, monitor, start_daemon, step_until, temp_dir, wait_for_history};
 
 #[test]
 fn connect_shows_the_daemon_the_chain_and_the_rig_geometry() {

@@ -1,6 +1,6 @@
 //! Test support: a real antennad in-process on the simulated rig, and the monitor in an
 //! egui_kittest harness (no renderer: clicks and queries go through AccessKit).
-#![allow(clippy::unwrap_used, dead_code)]
+#![allow(clippy::unwrap_used)]
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};

@@ -3,15 +3,13 @@
 //! recorded one, with the touches the recording holds.
 #![allow(clippy::unwrap_used)]
 
-mod support;
-
 use std::time::Duration;
 
+use crate::support::{config, harness, temp_dir};
 use antenna_monitor::{AppOptions, MonitorApp};
 use egui::accesskit::Role;
 use egui_kittest::kittest::Queryable;
 use host_daemon::daemon::{Daemon, DaemonOptions};
-use support::{config, harness, temp_dir};
 
 #[test]
 fn open_a_recorded_trial_play_and_scrub_it() {
