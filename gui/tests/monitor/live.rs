@@ -283,6 +283,7 @@ fn the_daemon_going_away_is_shown_and_the_monitor_reconnects() {
         let state = h.state().live().unwrap().lock();
         state.connections == 2 && matches!(state.connection, ConnectionState::Connected { .. })
     });
+    harness.step();
     harness.get_by_label_contains("connected to antennad");
     daemon.shutdown().unwrap();
 }
@@ -342,7 +343,8 @@ fn the_history_window_the_user_sets_bounds_the_history() {
     assert_eq!(state.history.capacity(), 1000);
     assert_eq!(state.history.len(), 1000);
     let span = state.history.latest_t_s().unwrap() - state.history.first_t_s().unwrap();
-    assert!((0.99..1.0).contains(&span), "{span} s held");
+    // 1000 polls at 1 kHz: 0.999 s, more if a late deadline was skipped.
+    assert!((0.99..1.05).contains(&span), "{span} s held");
     drop(state);
     daemon.shutdown().unwrap();
 }

@@ -46,7 +46,8 @@ fn open_a_recorded_trial_play_and_scrub_it() {
     let trial = harness.state().trial().expect("the trial opened");
     assert_eq!(trial.name, "wall-sweep");
     let polls = trial.history.len();
-    assert!((2400..=2501).contains(&polls), "{polls} polls");
+    // 2.5 s at 1 kHz, give or take the polls at either end and a skipped late deadline.
+    assert!((2400..=2510).contains(&polls), "{polls} polls");
     assert!(trial.rig.wall.is_some());
     let (start_s, end_s) = (
         trial.history.first_t_s(),
