@@ -119,6 +119,34 @@ impl Chain {
         &self.hairs
     }
 
+    /// A builder holding this chain's description, to change some of it.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), sim_core::ChainError> {
+    /// let chain = sim_core::Chain::builder(3).stiffness_nm_per_rad(0.01).build()?;
+    /// assert_eq!(chain.to_builder().build()?, chain);
+    /// let stiffer = chain.to_builder().stiffness_nm_per_rad(0.02).build()?;
+    /// assert_eq!(stiffer.stiffness_nm_per_rad()[1..], [0.02; 3]);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn to_builder(&self) -> ChainBuilder {
+        ChainBuilder {
+            n: self.n(),
+            link_lengths_m: self.link_lengths_m.clone(),
+            base_angle_rad: self.base_angle_rad,
+            joint_limits: self.joint_limits[1..].to_vec(),
+            stiffness_nm_per_rad: self.stiffness_nm_per_rad[1..].to_vec(),
+            rest_angles_rad: self.rest_angles_rad[1..].to_vec(),
+            hairs: self
+                .hairs
+                .iter()
+                .enumerate()
+                .filter_map(|(link, hair)| hair.map(|h| (link, h)))
+                .collect(),
+        }
+    }
+
     /// A copy of this chain with another base angle (joint 0's limits follow it).
     ///
     /// # Errors
@@ -252,6 +280,12 @@ impl ChainBuilder {
     /// A hair on link `link` (`0..=n`; model.md puts hairs on flagellar links `1..=n`).
     pub fn hair(mut self, link: usize, hair: Hair) -> Self {
         self.hairs.push((link, hair));
+        self
+    }
+
+    /// Removes every hair given so far.
+    pub fn without_hairs(mut self) -> Self {
+        self.hairs.clear();
         self
     }
 

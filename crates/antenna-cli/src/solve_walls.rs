@@ -6,13 +6,14 @@
 //!   the tip when the tip (the distal end of link `n`) is a contact, zero otherwise.
 //! - `iterations` and `residual` are the placement's Newton iterations and the final
 //!   residual of its equations (metres); `converged` says the residual is within
-//!   `[contact] tolerance_m`.
-//! - `stable`: until sim-core exposes the stability test of a contact state, the settled
-//!   state passing sim-core's independent equilibrium check (`QuasiStatic::check`).
+//!   `[contact] tolerance_m` (or the solver's acceptable residual at a degenerate contact).
+//! - `stable`: sim-core's stability test of the contact state (`Sweep::is_stable`: the
+//!   Hessian of the Lagrangian positive definite on the tangent space of the active
+//!   constraints).
 
 use std::fmt::Write as _;
 
-use sim_core::contact::{Feature, QuasiStatic};
+use sim_core::contact::Feature;
 use sim_core::equilibrium::count_inflections;
 use sim_core::sweep::{Sweep, SweepStep};
 use sim_core::{Frame, frame_poses, strain_energy_j};
@@ -39,8 +40,9 @@ pub struct WallEquilibrium {
 /// [`SweepFailure`]: bad input (a start inside a wall, a wall the tip cannot reach), no
 /// equilibrium found, or a numerical breakdown, each with the file and the key.
 pub fn solve_wall_scene(scene: &Scene) -> Result<WallEquilibrium, SweepFailure> {
-    let sweep =
+    let mut sweep =
         Sweep::new(scene.sweep_scene()?).map_err(|e| SweepFailure::from_sweep_error(scene, e))?;
+    let stable = sweep.is_stable();
     let Some(placed) = sweep.placed().cloned() else {
         return Err(SweepFailure::Breakdown(format!(
             "{}: the sweep has no placed state",
@@ -81,30 +83,15 @@ pub fn solve_wall_scene(scene: &Scene) -> Result<WallEquilibrium, SweepFailure> 
         tip_force_n: [-on_tip.x + 0.0, -on_tip.y + 0.0],
         iterations: placed.report.iterations,
         residual,
-        converged: residual <= scene.contact.tolerance_m,
+        converged: residual <= scene.contact.tolerance_m.max(scene.contact.acceptable_m),
         inflections: count_inflections(&theta[1..]),
-        stable: stable_by_equilibrium_check(sim),
+        stable,
     };
     Ok(WallEquilibrium {
         report,
         placed,
         note: sweep.placement_note().to_string(),
     })
-}
-
-/// The tolerances of [`stable_by_equilibrium_check`]: torques (N m), lengths (m), forces (N).
-const CHECK_TOLERANCES: (f64, f64, f64) = (1e-9, 1e-9, 1e-9);
-
-/// A stand-in for sim-core's stability test of a contact state (the Hessian of the
-/// Lagrangian positive definite on the tangent space of the active constraints), which
-/// sim-core does not expose yet: the settled state passes sim-core's independent
-/// equilibrium check (torque balance, stop signs, non-penetration, the friction cone,
-/// complementarity) within [`CHECK_TOLERANCES`]. The state was reached by steps that follow
-/// the downhill path where a branch ends, so an equilibrium it settles in is a minimum unless
-/// it sits exactly on a saddle, which this does not detect.
-fn stable_by_equilibrium_check(sim: &QuasiStatic) -> bool {
-    let (torque_nm, length_m, force_n) = CHECK_TOLERANCES;
-    sim.check().holds(torque_nm, length_m, force_n)
 }
 
 /// A short human summary of the settled posture: what the placement did, convergence,

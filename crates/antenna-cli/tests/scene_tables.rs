@@ -162,6 +162,7 @@ fn polyline_sinusoid_and_placements_parse() {
         Placement::Approach {
             wall: 0,
             distance_m: 0.05,
+            along_m: 0.0,
             steps: 20
         }
     );
@@ -414,7 +415,7 @@ fn start_table_errors() {
         "start_unknown.toml",
         &start("placement = \"rest\"\nhow = 1"),
         "24:1: unknown key `how` in [start]; allowed: placement, angles_deg, wall, distance_m, \
-         steps, ahead_m, shape",
+         along_m, steps, ahead_m, shape",
     );
     expect(
         "start_placement.toml",
@@ -442,7 +443,7 @@ fn start_table_errors() {
         "start_foreign_key.toml",
         &start("placement = \"approach\"\ndistance_m = 0.05\nahead_m = 0.1"),
         "25:11: `ahead_m` in [start]: not a key of placement \"approach\" (it takes wall, \
-         distance_m, steps)",
+         distance_m, along_m, steps)",
     );
     expect(
         "start_shape.toml",

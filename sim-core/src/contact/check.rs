@@ -27,6 +27,10 @@ pub struct EquilibriumCheck {
     pub separation_m: f64,
 }
 
+/// A joint or hair this close to a limit is on it (the solver ends within its tolerance of
+/// a limit, about `1e-12` rad).
+const ON_LIMIT_RAD: f64 = 1e-9;
+
 /// Forces below this are zero for the complementarity check (rounding of forces of order
 /// 0.01-1 N).
 const FORCE_ZERO_N: f64 = 1e-12;
@@ -102,8 +106,8 @@ impl QuasiStatic {
                 }
             }
             let lim = limits[j];
-            let on_cw = theta[j] <= lim.cw_rad;
-            let on_ccw = theta[j] >= lim.ccw_rad;
+            let on_cw = theta[j] <= lim.cw_rad + ON_LIMIT_RAD;
+            let on_ccw = theta[j] >= lim.ccw_rad - ON_LIMIT_RAD;
             if on_cw && on_ccw {
                 continue;
             } else if on_cw {
@@ -128,9 +132,9 @@ impl QuasiStatic {
             let arm = tip - pivot;
             let rate = Vector2::new(-arm.y, arm.x) * hair.direction_rate();
             let g = hair.spring_gradient_nm(beta) - rate.dot(&c.force_n());
-            if beta >= hair.open_angle_rad {
+            if beta >= hair.open_angle_rad - ON_LIMIT_RAD {
                 out.limit_sign_violation_nm = out.limit_sign_violation_nm.max(g);
-            } else if beta <= 0.0 {
+            } else if beta <= ON_LIMIT_RAD {
                 out.limit_sign_violation_nm = out.limit_sign_violation_nm.max(-g);
             } else {
                 out.torque_residual_nm = out.torque_residual_nm.max(g.abs());

@@ -70,6 +70,11 @@ impl FrictionLaw {
         }
     }
 
+    /// Whether this is an anchored hair tip's law.
+    pub fn is_anchored(&self) -> bool {
+        matches!(self, FrictionLaw::Anchored { .. })
+    }
+
     /// The shear bound `B` for a normal force `normal_n`, and `dB/dN`.
     pub(crate) fn shear_bound(&self, normal_n: f64) -> (f64, f64) {
         match *self {

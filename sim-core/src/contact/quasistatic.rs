@@ -10,7 +10,10 @@ use super::ContactError;
 use super::feature::{Contact, Feature, FrictionLaw};
 use super::posture::Posture;
 use super::settings::ContactSettings;
-use super::ssn::{Candidate, Proximal, Ssn, StepProblem, hair_of};
+use super::ssn::{
+    Candidate, Proximal, Site, Ssn, SsnOutcome, StepProblem, hair_of, link_owners, located,
+    window_contact,
+};
 use crate::{Chain, Surface, Wall};
 
 /// What one call of [`QuasiStatic::step_to`] took.
@@ -27,6 +30,16 @@ pub struct StepReport {
     pub iterations: usize,
     /// Solves repeated because a contact was missed, or a hair anchored or let go.
     pub resolves: usize,
+    /// Anchored hairs torn out: where an anchored hair and its segment wedge the antenna
+    /// against the wall so that no posture nearby is an equilibrium, the anchors give (the
+    /// rough surface lets go) and the step is solved again without them.
+    pub anchors_released: usize,
+    /// Solves that needed the fixed point on the normal forces (Tresca problems) instead of
+    /// Coulomb's law directly: where a sliding contact's friction drives it into the wall.
+    pub fixed_point_solves: usize,
+    /// Contacts that jammed (Coulomb's law has no quasi-static answer for them: sliding
+    /// would need ever more normal force) and slid without friction for the step.
+    pub jams: usize,
     /// The final residual of the equations, metres.
     pub residual_m: f64,
 }
@@ -69,6 +82,10 @@ pub struct QuasiStatic {
     /// A hand holding the tip at this offset from the base pivot.
     hand_offset_m: Option<Vector2<f64>>,
     hand_force_n: Vector2<f64>,
+    /// No hair anchors during the rest of this step (set after anchors were torn out).
+    anchoring_blocked: bool,
+    /// Which window owns each link's interior in the current step, per wall.
+    owners: Vec<Vec<usize>>,
 }
 
 impl QuasiStatic {
@@ -134,6 +151,8 @@ impl QuasiStatic {
             probe: Posture::default(),
             hand_offset_m: None,
             hand_force_n: Vector2::zeros(),
+            anchoring_blocked: false,
+            owners: Vec::new(),
         };
         sim.check_start()?;
         Ok(sim)
@@ -246,10 +265,17 @@ impl QuasiStatic {
         let mut cands: Vec<Candidate> = self
             .contacts
             .iter()
-            .map(|c| Candidate {
-                start_m: c.material_m,
-                material_s: c.s,
-                ..*c
+            .map(|c| {
+                let (material_link, material_s) = match c.feature {
+                    Feature::Vertex { link } => (link, 1.0),
+                    Feature::Link { link } | Feature::HairTip { link } => (link, c.s),
+                };
+                Candidate {
+                    start_m: c.point_m,
+                    material_link,
+                    material_s,
+                    ..*c
+                }
             })
             .collect();
         let problem = StepProblem {
@@ -260,8 +286,10 @@ impl QuasiStatic {
             hair_links: &hair_links,
             hair_beta_rad: &self.beta,
             proximal: None,
+            owners: &self.owners,
             hand_m: self.hand_offset_m.map(|o| self.base_m + o),
             tolerance_m: self.settings.tolerance_m,
+            acceptable_m: self.settings.acceptable_m,
             max_iterations: 1,
         };
         let reduced = self.ssn.tangent_hessian(&problem, &x, &mut cands);
@@ -353,7 +381,15 @@ impl QuasiStatic {
                     if d.norm() > min_m && d.norm() > 0.0 {
                         goals.push(self.base_m + d * 0.5);
                     } else {
-                        self.follow_snap(goal, &mut report)?;
+                        let followed = match self.follow_snap(goal, &mut report) {
+                            Err(e) if self.release_anchors(&mut report) => {
+                                let retry = self.follow_snap(goal, &mut report);
+                                retry.map_err(|_| e)
+                            }
+                            other => other,
+                        };
+                        self.anchoring_blocked = false;
+                        followed?;
                         report.substeps += 1;
                         goals.pop();
                     }
@@ -422,6 +458,24 @@ impl QuasiStatic {
         ))
     }
 
+    /// Tears out every anchored hair (they become Coulomb contacts) and blocks anchoring for
+    /// the rest of the step; whether there was any.
+    fn release_anchors(&mut self, report: &mut StepReport) -> bool {
+        let mut released = 0;
+        for c in &mut self.contacts {
+            if c.law.is_anchored() {
+                let wall = &self.walls[c.wall];
+                c.law = FrictionLaw::Coulomb {
+                    mu: wall.surface_at(&wall.signed_distance(&c.point_m)).mu(),
+                };
+                released += 1;
+            }
+        }
+        report.anchors_released += released;
+        self.anchoring_blocked = released > 0;
+        released > 0
+    }
+
     /// The joint angles `theta_1..theta_n` (the hair angles are not carried).
     fn coordinates(&self) -> Vec<f64> {
         self.theta[1..].to_vec()
@@ -437,6 +491,7 @@ impl QuasiStatic {
         let n = self.chain.n();
         self.start.update(&self.chain, self.base_m, &self.theta);
         self.probe.update(&self.chain, goal, &self.theta);
+        self.owners = link_owners(&self.walls, &self.probe, n);
         let mut cands = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
         let mut demoted: Vec<usize> = Vec::new();
         let mut promoted: Vec<usize> = Vec::new();
@@ -473,14 +528,27 @@ impl QuasiStatic {
                 hair_links: &hair_links,
                 hair_beta_rad: &self.beta,
                 proximal: prox,
+                owners: &self.owners,
                 hand_m: self.hand_offset_m.map(|o| goal + o),
                 tolerance_m: self.settings.tolerance_m,
+                acceptable_m: self.settings.acceptable_m,
                 max_iterations: self.settings.max_iterations,
             };
-            let outcome = self.ssn.solve(&problem, &mut x, &mut cands);
+            let x_start = x.clone();
+            let cands_start = cands.clone();
+            let mut outcome = self.ssn.solve(&problem, &mut x, &mut cands);
             report.iterations += outcome.iterations;
             if !outcome.converged {
-                return Err(Reject::NoConvergence);
+                // Coulomb's law makes the step's equations non-monotone (the friction of a
+                // sliding contact can drive it into the wall): solve instead the Tresca
+                // problems with the normal forces held and iterate them to a fixed point
+                // (model.md 6), starting from the last step's forces.
+                x.clone_from(&x_start);
+                cands.clone_from(&cands_start);
+                outcome = solve_by_fixed_point(&mut self.ssn, &problem, &mut x, &mut cands, report);
+                if !outcome.converged {
+                    return Err(Reject::NoConvergence);
+                }
             }
             // Missed contacts: any point now inside a wall joins and the step is re-solved.
             let missed = self.missed_contacts(&x, &hair_links, &cands, goal);
@@ -488,7 +556,7 @@ impl QuasiStatic {
             cands.extend(missed);
             // Hair anchoring on rough surfaces (model.md 7).
             for (k, cand) in cands.iter_mut().enumerate() {
-                let Feature::HairTip { link } = cand.feature else {
+                let Site::HairTip(link) = cand.site else {
                     continue;
                 };
                 let hair = hair_of(&self.chain, link);
@@ -513,6 +581,7 @@ impl QuasiStatic {
                             ..
                         },
                     ) if on_stop
+                        && !self.anchoring_blocked
                         && cand.normal_active
                         && cand.normal_force_n > 0.0
                         && !demoted.contains(&k)
@@ -580,32 +649,29 @@ impl QuasiStatic {
         });
     }
 
-    /// The candidate contacts of a step to the base at `goal`: every point within the margin
-    /// of a wall with the posture carried to `goal`, and the contacts of the last step (their
-    /// forces and friction state as the start).
+    /// The candidate contacts of a step to the base at `goal`: every window of the chain and
+    /// hair tip within the margin of a wall with the posture carried to `goal`, and the
+    /// contacts of the last step (their forces and friction state as the start).
     fn candidates(&self, goal: Vector2<f64>) -> Result<Vec<Candidate>, ContactError> {
         let margin = self.settings.margin_m;
         let n = self.chain.n();
         let mut out: Vec<Candidate> = Vec::new();
         for (w, wall) in self.walls.iter().enumerate() {
             self.check_base(w, wall, &self.probe, goal)?;
-            for link in 1..=n {
-                let a = self.probe.start_of(link);
-                let b = self.probe.end_m[link];
-                let tip_gap = wall.signed_distance(&b).gap_m;
-                if tip_gap < margin {
-                    out.push(self.candidate(Feature::Vertex { link }, w, 1.0));
-                }
-                if let Some(sc) = wall.segment_contact_within(&a, &b, margin)
-                    && sc.s > 1e-6
-                    && sc.s < 1.0 - 1e-6
+            for i in 0..=n {
+                if window_contact(wall, &self.owners[w], &self.probe, n, i)
+                    .wall
+                    .gap_m
+                    < margin
                 {
-                    out.push(self.candidate(Feature::Link { link }, w, sc.s));
+                    out.push(self.candidate(Site::Window(i), w));
                 }
+            }
+            for link in 1..=n {
                 if let Some(Some(hair)) = self.chain.hairs().get(link) {
                     let tip = self.probe.hair_tip(hair, link, self.beta[link]);
                     if wall.signed_distance(&tip).gap_m < margin {
-                        out.push(self.candidate(Feature::HairTip { link }, w, 0.0));
+                        out.push(self.candidate(Site::HairTip(link), w));
                     }
                 }
             }
@@ -613,18 +679,12 @@ impl QuasiStatic {
         for old in &self.contacts {
             match out
                 .iter_mut()
-                .find(|c| c.feature == old.feature && c.wall == old.wall)
+                .find(|c| c.site == old.site && c.wall == old.wall)
             {
-                Some(c) => {
-                    c.normal_force_n = old.normal_force_n;
-                    c.shear_force_n = old.shear_force_n;
-                    c.law = old.law;
-                }
+                Some(c) => carry(c, old),
                 None => {
-                    let mut c = self.candidate(old.feature, old.wall, old.s);
-                    c.normal_force_n = old.normal_force_n;
-                    c.shear_force_n = old.shear_force_n;
-                    c.law = old.law;
+                    let mut c = self.candidate(old.site, old.wall);
+                    carry(&mut c, old);
                     out.push(c);
                 }
             }
@@ -632,24 +692,35 @@ impl QuasiStatic {
         Ok(out)
     }
 
-    /// A fresh candidate: the material point at the start of the step and the surface's
-    /// Coulomb law (a hair tip anchors only once it touches, see [`Self::attempt`]).
-    fn candidate(&self, feature: Feature, wall: usize, s: f64) -> Candidate {
-        let start = match feature {
-            Feature::Vertex { link } => self.start.end_m[link],
-            Feature::Link { link } => self.start.link_point(link, s),
-            Feature::HairTip { link } => {
-                self.start
-                    .hair_tip(hair_of(&self.chain, link), link, self.beta[link])
-            }
-        };
+    /// A fresh candidate: its material point where the site touches (or comes nearest) at
+    /// the start of the step, and the surface's Coulomb law (a hair tip anchors only once
+    /// it touches, see [`Self::attempt`]).
+    fn candidate(&self, site: Site, wall: usize) -> Candidate {
         let w = &self.walls[wall];
+        let (link, s, start) = match site {
+            Site::Window(i) => {
+                let (link, s) = located(&window_contact(
+                    w,
+                    &self.owners[wall],
+                    &self.start,
+                    self.chain.n(),
+                    i,
+                ));
+                (link, s, self.start.link_point(link, s))
+            }
+            Site::HairTip(link) => (
+                link,
+                1.0,
+                self.start
+                    .hair_tip(hair_of(&self.chain, link), link, self.beta[link]),
+            ),
+        };
         let surface = w.surface_at(&w.signed_distance(&start));
         let law = FrictionLaw::Coulomb { mu: surface.mu() };
-        Candidate::new(feature, wall, law, s, start)
+        Candidate::new(site, wall, law, link, s, start)
     }
 
-    /// Points inside a wall after a solve that are not candidates yet.
+    /// Windows and hair tips inside a wall after a solve that are not candidates yet.
     fn missed_contacts(
         &mut self,
         x: &[f64],
@@ -665,36 +736,31 @@ impl QuasiStatic {
         for (h, &l) in hair_links.iter().enumerate() {
             beta[l] = x[n + h];
         }
-        let known = |f: Feature, w: usize| cands.iter().any(|c| c.feature == f && c.wall == w);
+        let known = |site: Site, w: usize| cands.iter().any(|c| c.site == site && c.wall == w);
         let mut found = Vec::new();
         for (w, wall) in self.walls.iter().enumerate() {
-            for link in 1..=n {
-                let a = self.probe.start_of(link);
-                let b = self.probe.end_m[link];
-                if wall.signed_distance(&b).gap_m < -tol && !known(Feature::Vertex { link }, w) {
-                    found.push((Feature::Vertex { link }, w, 1.0));
-                }
-                let sc = wall.segment_contact(&a, &b);
-                if sc.wall.gap_m < -tol
-                    && sc.s > 1e-6
-                    && sc.s < 1.0 - 1e-6
-                    && !known(Feature::Link { link }, w)
+            for i in 0..=n {
+                if window_contact(wall, &self.owners[w], &self.probe, n, i)
+                    .wall
+                    .gap_m
+                    < -tol
+                    && !known(Site::Window(i), w)
                 {
-                    found.push((Feature::Link { link }, w, sc.s));
+                    found.push((Site::Window(i), w));
                 }
+            }
+            for link in 1..=n {
                 if let Some(Some(hair)) = self.chain.hairs().get(link) {
                     let tip = self.probe.hair_tip(hair, link, beta[link]);
-                    if wall.signed_distance(&tip).gap_m < -tol
-                        && !known(Feature::HairTip { link }, w)
-                    {
-                        found.push((Feature::HairTip { link }, w, 0.0));
+                    if wall.signed_distance(&tip).gap_m < -tol && !known(Site::HairTip(link), w) {
+                        found.push((Site::HairTip(link), w));
                     }
                 }
             }
         }
         found
             .into_iter()
-            .map(|(f, w, s)| self.candidate(f, w, s))
+            .map(|(site, w)| self.candidate(site, w))
             .collect()
     }
 
@@ -750,6 +816,107 @@ impl QuasiStatic {
         }
         Ok(())
     }
+}
+
+/// Model.md 6's fixed point: Tresca solves with the normal forces held, each started from
+/// the last, until the normal forces stop changing (then the answer is Coulomb's). An
+/// iteration that does not settle in [`TRESCA_ITERATIONS`] is not converged.
+fn solve_by_fixed_point(
+    ssn: &mut Ssn,
+    problem: &StepProblem<'_>,
+    x: &mut [f64],
+    cands: &mut [Candidate],
+    report: &mut StepReport,
+) -> SsnOutcome {
+    for c in cands.iter_mut() {
+        c.tresca_n = Some(c.normal_force_n.max(0.0));
+    }
+    let mut outcome = SsnOutcome {
+        converged: false,
+        iterations: 0,
+        residual_m: f64::INFINITY,
+        hand_force_n: Vector2::zeros(),
+    };
+    for _ in 0..TRESCA_ITERATIONS {
+        outcome = ssn.solve(problem, x, cands);
+        report.iterations += outcome.iterations;
+        if !outcome.converged {
+            break;
+        }
+        let mut settled = true;
+        for c in cands.iter_mut() {
+            let held = c.tresca_n.unwrap_or(0.0);
+            let now = c.normal_force_n.max(0.0);
+            if (now - held).abs() > TRESCA_TOLERANCE_N * (1.0 + now) {
+                settled = false;
+            }
+            c.tresca_n = Some(now);
+        }
+        if settled {
+            report.fixed_point_solves += 1;
+            for c in cands.iter_mut() {
+                c.tresca_n = None;
+            }
+            return outcome;
+        }
+    }
+    // No fixed point: a jam (a frictional paradox: sliding needs more normal force the more
+    // friction it has, without bound). The jamming contacts slide without friction for this
+    // step, the others keep their last friction bound; reported, and it keeps the cone.
+    let mut jammed = 0;
+    for c in cands.iter_mut() {
+        let held = c.tresca_n.unwrap_or(0.0);
+        if (c.normal_force_n.max(0.0) - held).abs() > 1e-3 * (1e-9 + held) {
+            c.tresca_n = Some(0.0);
+            jammed += 1;
+        } else {
+            c.tresca_n = Some(held.min(c.normal_force_n.max(0.0)));
+        }
+    }
+    if jammed > 0 {
+        // Any other contact whose friction bound then exceeds mu N loses its friction too,
+        // until every contact is inside its cone.
+        for _ in 0..=cands.len() {
+            outcome = ssn.solve(problem, x, cands);
+            report.iterations += outcome.iterations;
+            if !outcome.converged {
+                break;
+            }
+            let mut outside = false;
+            for c in cands.iter_mut() {
+                let bound = c.law.shear_bound(c.normal_force_n).0;
+                if c.shear_force_n.abs() > bound + 1e-12 && c.tresca_n != Some(0.0) {
+                    c.tresca_n = Some(0.0);
+                    jammed += 1;
+                    outside = true;
+                }
+            }
+            if !outside {
+                break;
+            }
+        }
+        report.jams += jammed;
+    }
+    for c in cands.iter_mut() {
+        c.tresca_n = None;
+    }
+    outcome.converged &= jammed > 0;
+    outcome
+}
+
+/// Fixed-point iterations on the normal forces before a step is given up.
+const TRESCA_ITERATIONS: usize = 30;
+/// When the held normal forces count as settled, relative.
+const TRESCA_TOLERANCE_N: f64 = 1e-10;
+
+/// A contact of the last step carries its forces, law and modes into the next step's
+/// candidate (the friction state the model remembers).
+fn carry(c: &mut Candidate, old: &Candidate) {
+    c.normal_force_n = old.normal_force_n;
+    c.shear_force_n = old.shear_force_n;
+    c.law = old.law;
+    c.normal_active = old.normal_active;
+    c.slip = old.slip;
 }
 
 /// `theta` with its flexible joints replaced by the first `n` coordinates of `x`.

@@ -9,6 +9,10 @@ pub struct ContactSettings {
     /// Convergence: every residual of the step's equations below this, metres (joint
     /// equations are scaled to metres by the mean link length). Default `1e-12`.
     pub tolerance_m: f64,
+    /// A solve that stalls above [`Self::tolerance_m`] (at a degenerate point: a contact
+    /// touching with zero force, or sliding at exactly the friction limit) is accepted
+    /// within this residual, metres. Default `1e-9`.
+    pub acceptable_m: f64,
     /// Newton iterations per solve. Default 60.
     pub max_iterations: usize,
     /// A step that fails, or moves a joint by more than [`Self::jump_rad`], is split in
@@ -32,6 +36,7 @@ impl Default for ContactSettings {
     fn default() -> Self {
         ContactSettings {
             tolerance_m: 1e-12,
+            acceptable_m: 1e-9,
             max_iterations: 60,
             max_substep_depth: 12,
             jump_rad: 0.05,
@@ -60,6 +65,7 @@ impl ContactSettings {
             }
         };
         positive("tolerance_m", self.tolerance_m)?;
+        positive("acceptable_m", self.acceptable_m)?;
         positive("jump_rad", self.jump_rad)?;
         positive("margin_m", self.margin_m)?;
         positive("penetration_tolerance_m", self.penetration_tolerance_m)?;

@@ -36,16 +36,33 @@ use nalgebra::{DMatrix, DVector, Vector2};
 
 use super::feature::{Feature, FrictionLaw, Slip};
 use super::posture::{Posture, cross, perp};
-use crate::{Chain, Hair, Wall};
+use crate::{Chain, Hair, Wall, WallPoint};
+
+/// Where on the chain a candidate contact is looked for: its identity from step to step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub(crate) enum Site {
+    /// The window around the link end `p_i` (`i = 0..=n`): the distal half of link `i` and
+    /// the proximal half of link `i + 1` (the ones that exist and move). The windows tile
+    /// the flagellum without overlapping, so a wall touching the chain at a joint, or next
+    /// to it on either link, or sliding across it, is one contact, never two copies (see
+    /// [`window_contact`]).
+    Window(usize),
+    /// The tip of the hair on a link.
+    HairTip(usize),
+}
 
 /// A candidate contact during one step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Candidate {
+    pub site: Site,
+    /// Where the contact point is now (filled by the evaluation): the link end (a
+    /// [`Feature::Vertex`]), a point inside a link, or a hair tip.
     pub feature: Feature,
     pub wall: usize,
     pub law: FrictionLaw,
-    /// For [`Feature::Link`]: the fraction along the link of the material point that was in
-    /// contact at the start of the step.
+    /// The link and fraction along it of the material point that was in contact at the
+    /// start of the step (for a hair tip: its link).
+    pub material_link: usize,
     pub material_s: f64,
     /// The material point's position at the start of the step.
     pub start_m: Vector2<f64>,
@@ -61,20 +78,31 @@ pub(crate) struct Candidate {
     pub slip_m: f64,
     pub normal_active: bool,
     pub slip: Slip,
+    /// When set, the shear bound is `mu` times this normal force instead of the current one
+    /// (the Tresca problem of model.md 6's fixed-point iteration on the normal forces).
+    pub tresca_n: Option<f64>,
 }
 
 impl Candidate {
     pub fn new(
-        feature: Feature,
+        site: Site,
         wall: usize,
         law: FrictionLaw,
+        material_link: usize,
         material_s: f64,
         start_m: Vector2<f64>,
     ) -> Candidate {
         Candidate {
-            feature,
+            site,
+            feature: match site {
+                Site::HairTip(link) => Feature::HairTip { link },
+                Site::Window(_) => Feature::Link {
+                    link: material_link,
+                },
+            },
             wall,
             law,
+            material_link,
             material_s,
             start_m,
             normal_force_n: 0.0,
@@ -88,6 +116,7 @@ impl Candidate {
             slip_m: 0.0,
             normal_active: false,
             slip: Slip::Stuck,
+            tresca_n: None,
         }
     }
 }
@@ -112,10 +141,14 @@ pub(crate) struct StepProblem<'a> {
     /// coordinate, keep theirs).
     pub hair_beta_rad: &'a [f64],
     pub proximal: Option<Proximal<'a>>,
+    /// Which window owns each link's interior, per wall ([`link_owners`]).
+    pub owners: &'a [Vec<usize>],
     /// A hand holding the tip near this point (ground frame) with a stiff spring: the force
     /// `k_hand (target - p_n)` acts on the tip, `k_hand = 1000 c`.
     pub hand_m: Option<Vector2<f64>>,
     pub tolerance_m: f64,
+    /// The residual accepted from a solve that stalls above `tolerance_m`.
+    pub acceptable_m: f64,
     pub max_iterations: usize,
 }
 
@@ -152,7 +185,7 @@ pub(crate) struct Ssn {
     trial: Vec<Candidate>,
     length_m: f64,
     c_n_per_m: f64,
-    hand: bool,
+    fd_posture: Posture,
 }
 
 impl Ssn {
@@ -196,7 +229,6 @@ impl Ssn {
         self.theta[0] = chain.base_angle_rad();
         self.beta.clear();
         self.beta.extend_from_slice(p.hair_beta_rad);
-        self.hand = p.hand_m.is_some();
     }
 
     /// Solves the step: `x` (the coordinates) and the candidates' forces are the start and
@@ -291,7 +323,10 @@ impl Ssn {
             recent[outcome.iterations % NONMONOTONE_MEMORY] = merit;
             outcome.residual_m = self.phi.amax();
         }
-        outcome.converged = outcome.residual_m <= p.tolerance_m;
+        // A solve that stalls at a degenerate point (a contact touching with N = 0 and
+        // gap = 0: the modes trade places and Newton's method stops improving) is accepted
+        // within the acceptable residual.
+        outcome.converged = outcome.residual_m <= p.tolerance_m.max(p.acceptable_m);
         for (a, v) in x.iter_mut().enumerate() {
             *v = self.z[a];
         }
@@ -378,7 +413,7 @@ impl Ssn {
         for (k_idx, cand) in cands.iter_mut().enumerate() {
             cand.normal_force_n = self.z[m + k_idx];
             cand.shear_force_n = self.z[m + c + k_idx];
-            self.geometry(p, cand);
+            geometry(p, &self.posture, &self.beta, cand);
             let force = cand.normal * cand.normal_force_n + cand.tangent * cand.shear_force_n;
             let link = cand.feature.link();
             for j in 1..=link {
@@ -392,26 +427,24 @@ impl Ssn {
                 self.r[v] -= rate.dot(&force);
             }
             if jacobian {
+                let hair_column = match cand.site {
+                    Site::HairTip(link) => Some((
+                        n + hair_index(p.hair_links, link),
+                        self.posture
+                            .hair_tip_rate(hair_of(chain, link), link, self.beta[link]),
+                    )),
+                    Site::Window(_) => None,
+                };
                 let cols = &mut self.jac[k_idx * m..(k_idx + 1) * m];
-                point_columns(
-                    &self.posture,
-                    chain,
-                    p.hair_links,
-                    cand,
-                    cand.point_m,
-                    &self.beta,
-                    cols,
-                );
+                point_columns(&self.posture, cand.feature.link(), cand.point_m, cols);
+                if let Some((v, rate)) = hair_column {
+                    cols[v] = rate;
+                }
                 let cols = &mut self.jac_mat[k_idx * m..(k_idx + 1) * m];
-                point_columns(
-                    &self.posture,
-                    chain,
-                    p.hair_links,
-                    cand,
-                    cand.material_m,
-                    &self.beta,
-                    cols,
-                );
+                point_columns(&self.posture, cand.material_link, cand.material_m, cols);
+                if let Some((v, rate)) = hair_column {
+                    cols[v] = rate;
+                }
             }
         }
 
@@ -460,7 +493,17 @@ impl Ssn {
             let row_t = m + c + k_idx;
             let n_min = cand.law.min_normal_n();
             let normal = cand.normal_force_n;
-            cand.normal_active = normal - cn * cand.gap_m > n_min;
+            // Hysteresis: a mode changes only when its condition is violated by more than
+            // `hyst` (a force of `c` times 1e-11 m): at a degenerate point (a contact
+            // touching with N = 0, or sliding at exactly |T| = B) the plain rule flips the
+            // mode back and forth between iterations and Newton's method stalls.
+            let hyst = HYSTERESIS_M * cn;
+            let y_normal = normal - cn * cand.gap_m - n_min;
+            cand.normal_active = if cand.normal_active {
+                y_normal > -hyst
+            } else {
+                y_normal > hyst
+            };
             if cand.normal_active {
                 self.phi[row_n] = cand.gap_m;
                 if jacobian {
@@ -474,15 +517,43 @@ impl Ssn {
                     self.big[(row_n, row_n)] = 1.0 / cn;
                 }
             }
-            let (bound, dbound) = cand.law.shear_bound(normal);
+            let (bound, dbound) = match cand.tresca_n {
+                // Tresca: the bound from a given normal force, held fixed in this solve.
+                Some(held) => (cand.law.shear_bound(held).0, 0.0),
+                None => cand.law.shear_bound(normal),
+            };
             let shear = cand.shear_force_n;
             let y = shear - cn * cand.slip_m;
-            let (value, slip) = if y >= bound {
-                (shear - bound, Slip::Backward)
-            } else if y <= -bound {
-                (shear + bound, Slip::Forward)
-            } else {
-                (f64::NAN, Slip::Stuck)
+            let margin = if cand.normal_active { hyst } else { 0.0 };
+            let slip = match cand.slip {
+                _ if !cand.normal_active => {
+                    if y >= bound {
+                        Slip::Backward
+                    } else if y <= -bound {
+                        Slip::Forward
+                    } else {
+                        Slip::Stuck
+                    }
+                }
+                Slip::Stuck if y > bound + margin => Slip::Backward,
+                Slip::Stuck if y < -bound - margin => Slip::Forward,
+                Slip::Stuck => Slip::Stuck,
+                Slip::Backward if y >= bound - margin => Slip::Backward,
+                Slip::Forward if y <= -bound + margin => Slip::Forward,
+                Slip::Backward | Slip::Forward => {
+                    if y >= bound {
+                        Slip::Backward
+                    } else if y <= -bound {
+                        Slip::Forward
+                    } else {
+                        Slip::Stuck
+                    }
+                }
+            };
+            let value = match slip {
+                Slip::Backward => shear - bound,
+                Slip::Forward => shear + bound,
+                Slip::Stuck => f64::NAN,
             };
             cand.slip = slip;
             match slip {
@@ -580,6 +651,82 @@ impl Ssn {
         basis.transpose() * h * basis
     }
 
+    /// The contacts' part of the Hessian of the Lagrangian, `d/dx (-sum_k J_k^T F_k)` at
+    /// fixed forces, by central differences: for contacts on curved walls (a sinusoid, a
+    /// polyline's corner) and link-interior contacts, whose normals turn and whose contact
+    /// points slide along the link as the posture changes (terms of the order of the force
+    /// times the wall's radius of curvature, as large as the joint springs).
+    fn add_contact_hessian_by_differences(
+        &mut self,
+        p: &StepProblem<'_>,
+        m: usize,
+        cands: &[Candidate],
+    ) {
+        let n = p.chain.n();
+        let mut x: Vec<f64> = (0..m).map(|a| self.z[a]).collect();
+        let mut plus = vec![0.0; m];
+        let mut minus = vec![0.0; m];
+        for b in 0..m {
+            let h = FD_STEP_RAD;
+            let saved = x[b];
+            x[b] = saved + h;
+            self.contact_force_into(p, n, &x, cands, &mut plus);
+            x[b] = saved - h;
+            self.contact_force_into(p, n, &x, cands, &mut minus);
+            x[b] = saved;
+            for a in 0..m {
+                self.hess[(a, b)] += (plus[a] - minus[a]) / (2.0 * h);
+            }
+        }
+        // Symmetrize: the exact Hessian of a potential is symmetric (friction makes the
+        // true Jacobian unsymmetric only through the bounds, handled by the rows).
+        for a in 0..m {
+            for b in 0..a {
+                let mean = 0.5 * (self.hess[(a, b)] + self.hess[(b, a)]);
+                self.hess[(a, b)] = mean;
+                self.hess[(b, a)] = mean;
+            }
+        }
+    }
+
+    /// `-sum_k J_k^T F_k` over the candidates at coordinates `x`, forces held, into `out`.
+    fn contact_force_into(
+        &mut self,
+        p: &StepProblem<'_>,
+        n: usize,
+        x: &[f64],
+        cands: &[Candidate],
+        out: &mut [f64],
+    ) {
+        let mut theta = std::mem::take(&mut self.theta);
+        let mut beta = std::mem::take(&mut self.beta);
+        theta[1..=n].copy_from_slice(&x[..n]);
+        for (h, &link) in p.hair_links.iter().enumerate() {
+            beta[link] = x[n + h];
+        }
+        let mut posture = std::mem::take(&mut self.fd_posture);
+        posture.update(p.chain, p.base_m, &theta);
+        out.fill(0.0);
+        for cand in cands {
+            let mut c = *cand;
+            geometry(p, &posture, &beta, &mut c);
+            let force = c.normal * c.normal_force_n + c.tangent * c.shear_force_n;
+            let link = c.feature.link();
+            for j in 1..=link {
+                out[j - 1] -= cross(c.point_m - posture.end_m[j - 1], force);
+            }
+            if let Feature::HairTip { link } = c.feature {
+                let v = n + hair_index(p.hair_links, link);
+                out[v] -= posture
+                    .hair_tip_rate(hair_of(p.chain, link), link, beta[link])
+                    .dot(&force);
+            }
+        }
+        self.fd_posture = posture;
+        self.theta = theta;
+        self.beta = beta;
+    }
+
     /// The hand spring's force on the tip (zero without a hand); valid after the posture
     /// is updated.
     fn hand_force_n(&self, p: &StepProblem<'_>) -> Vector2<f64> {
@@ -587,38 +734,6 @@ impl Ssn {
             (Some(target), Some(tip)) => (target - tip) * HAND_STIFFNESS * self.c_n_per_m,
             _ => Vector2::zeros(),
         }
-    }
-
-    /// The contact point, material point, gap, normal, tangent and slip of `cand`.
-    fn geometry(&self, p: &StepProblem<'_>, cand: &mut Candidate) {
-        let wall = &p.walls[cand.wall];
-        let posture = &self.posture;
-        let point = match cand.feature {
-            Feature::Vertex { link } => {
-                let x = posture.end_m[link];
-                cand.s = 1.0;
-                cand.material_m = x;
-                (x, wall.signed_distance(&x))
-            }
-            Feature::Link { link } => {
-                let sc = wall.segment_contact(&posture.start_of(link), &posture.end_m[link]);
-                cand.s = sc.s;
-                cand.material_m = posture.link_point(link, cand.material_s);
-                (sc.point_m, sc.wall)
-            }
-            Feature::HairTip { link } => {
-                let hair = hair_of(p.chain, link);
-                let x = posture.hair_tip(hair, link, self.beta[link]);
-                cand.s = 1.0 - hair.pivot_from_distal_end_m / p.chain.link_lengths_m()[link];
-                cand.material_m = x;
-                (x, wall.signed_distance(&x))
-            }
-        };
-        cand.point_m = point.0;
-        cand.gap_m = point.1.gap_m;
-        cand.normal = point.1.normal;
-        cand.tangent = point.1.tangent;
-        cand.slip_m = cand.tangent.dot(&(cand.material_m - cand.start_m));
     }
 
     /// `hess = grad^2 U + proximal + sum_forces F . (-grad^2 X)`: the Hessian of the
@@ -655,6 +770,10 @@ impl Ssn {
                 }
             }
         }
+        if cands.iter().any(|c| needs_differences(p, c)) {
+            self.add_contact_hessian_by_differences(p, m, cands);
+            return;
+        }
         for cand in cands {
             let force = cand.normal * cand.normal_force_n + cand.tangent * cand.shear_force_n;
             let link = cand.feature.link();
@@ -678,6 +797,19 @@ impl Ssn {
 /// The least dual regularization of the Newton matrix (relative to `1 / c`).
 const DUAL_REGULARIZATION: f64 = 1e-10;
 
+/// The step of the central differences of the contact Hessian, radians.
+const FD_STEP_RAD: f64 = 1e-6;
+
+/// Whether a candidate's curvature terms are left to differences: a link-interior contact,
+/// or any contact on a wall that is not a straight line.
+fn needs_differences(p: &StepProblem<'_>, cand: &Candidate) -> bool {
+    matches!(cand.feature, Feature::Link { .. })
+        || !matches!(p.walls[cand.wall].shape, crate::WallShape::Line(_))
+}
+
+/// The hysteresis of the contact modes, as a length (times `c` it is a force).
+const HYSTERESIS_M: f64 = 1e-11;
+
 /// How many past merits the non-monotone line search compares against.
 const NONMONOTONE_MEMORY: usize = 6;
 
@@ -693,6 +825,119 @@ fn next_damping(damping: f64) -> f64 {
         MIN_DAMPING
     } else {
         damping * 100.0
+    }
+}
+
+/// The contact point, material point, gap, normal, tangent and slip of `cand` in `posture`
+/// (hair angles `beta`).
+fn geometry(p: &StepProblem<'_>, posture: &Posture, beta: &[f64], cand: &mut Candidate) {
+    let wall = &p.walls[cand.wall];
+    let point = match cand.site {
+        Site::Window(i) => {
+            let contact = window_contact(wall, &p.owners[cand.wall], posture, p.chain.n(), i);
+            cand.s = contact.s;
+            cand.feature = contact.feature;
+            cand.material_m = posture.link_point(cand.material_link, cand.material_s);
+            (contact.point_m, contact.wall)
+        }
+        Site::HairTip(link) => {
+            let hair = hair_of(p.chain, link);
+            let x = posture.hair_tip(hair, link, beta[link]);
+            cand.s = 1.0 - hair.pivot_from_distal_end_m / p.chain.link_lengths_m()[link];
+            cand.feature = Feature::HairTip { link };
+            cand.material_m = x;
+            (x, wall.signed_distance(&x))
+        }
+    };
+    cand.point_m = point.0;
+    cand.gap_m = point.1.gap_m;
+    cand.normal = point.1.normal;
+    cand.tangent = point.1.tangent;
+    cand.slip_m = cand.tangent.dot(&(cand.material_m - cand.start_m));
+}
+
+/// The deepest point of window `i` (see [`Site::Window`]) against `wall`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct WindowContact {
+    /// [`Feature::Vertex`] at the link end `p_i`, else [`Feature::Link`] of the link it is on.
+    pub feature: Feature,
+    /// The fraction along that link.
+    pub s: f64,
+    pub point_m: Vector2<f64>,
+    pub wall: WallPoint,
+}
+
+/// Which window owns each link's interior for one step, per wall: `owners[w][link]` is
+/// `link - 1` or `link` (the windows at its two ends). Decided once at the start of a step
+/// from where the link's deepest point is (its proximal half: the proximal window), so a
+/// contact sliding along a link stays with one window for the whole step: the windows'
+/// contact points move continuously and no contact is handed over mid-solve.
+pub(crate) fn link_owners(walls: &[Wall], posture: &Posture, n: usize) -> Vec<Vec<usize>> {
+    walls
+        .iter()
+        .map(|wall| {
+            (0..=n)
+                .map(|link| {
+                    if link == 0 {
+                        return 0;
+                    }
+                    match wall
+                        .segment_interior_contact(&posture.start_of(link), &posture.end_m[link])
+                    {
+                        Some(sc) if sc.s >= 0.5 => link,
+                        _ => link - 1,
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The deepest point of window `i` against `wall`: the link end `p_i`, or a point strictly
+/// inside one of its two links where that link's deepest point is, if this window owns that
+/// link's interior ([`link_owners`]) and it is deeper (a wall corner or crest poking into
+/// the link). A link whose deepest point is one of its ends (a flat wall) adds nothing
+/// beyond the end itself: on a flat wall every window's contact is its link end, and a link
+/// lying flat on a wall bears on the windows of its two ends.
+pub(crate) fn window_contact(
+    wall: &Wall,
+    owners: &[usize],
+    posture: &Posture,
+    n: usize,
+    i: usize,
+) -> WindowContact {
+    let joint = posture.end_m[i];
+    let mut best = WindowContact {
+        feature: Feature::Vertex { link: i },
+        s: 1.0,
+        point_m: joint,
+        wall: wall.signed_distance(&joint),
+    };
+    for link in [i, i + 1] {
+        if link == 0 || link > n || owners.get(link) != Some(&i) {
+            continue;
+        }
+        if let Some(sc) =
+            wall.segment_interior_contact(&posture.start_of(link), &posture.end_m[link])
+            && sc.wall.gap_m < best.wall.gap_m
+        {
+            best = WindowContact {
+                feature: Feature::Link { link },
+                s: sc.s,
+                point_m: sc.point_m,
+                wall: sc.wall,
+            };
+        }
+    }
+    best
+}
+
+/// The link and fraction of a window contact's point: a link end `p_i` is the end of link
+/// `i` (`s = 1`).
+pub(crate) fn located(contact: &WindowContact) -> (usize, f64) {
+    match contact.feature {
+        Feature::Vertex { link } => (link, 1.0),
+        Feature::Link { link } | Feature::HairTip { link } => (link, contact.s),
     }
 }
 
@@ -716,25 +961,12 @@ fn add_point_curvature(
     }
 }
 
-/// The Jacobian columns (`m` of them) of the point `x_m` of candidate `cand`.
-fn point_columns(
-    posture: &Posture,
-    chain: &Chain,
-    hair_links: &[usize],
-    cand: &Candidate,
-    x_m: Vector2<f64>,
-    beta: &[f64],
-    cols: &mut [Vector2<f64>],
-) {
+/// The Jacobian columns (`m` of them) of the point `x_m` fixed to link `link`: joints
+/// `1..=link`, zero elsewhere (a hair tip's own column is set by the caller).
+fn point_columns(posture: &Posture, link: usize, x_m: Vector2<f64>, cols: &mut [Vector2<f64>]) {
     cols.fill(Vector2::zeros());
-    let link = cand.feature.link();
     for j in 1..=link {
         cols[j - 1] = posture.column(j, x_m);
-    }
-    if let Feature::HairTip { link } = cand.feature {
-        let n = chain.n();
-        let hair = hair_of(chain, link);
-        cols[n + hair_index(hair_links, link)] = posture.hair_tip_rate(hair, link, beta[link]);
     }
 }
 
@@ -832,6 +1064,7 @@ mod tests {
             .unwrap(),
         );
         let walls = [wall];
+        let owners = vec![vec![0, 0, 1, 2, 3]];
         let hair_links = [3, 4];
         let beta = vec![0.0, 0.0, 0.0, 0.6, 0.5];
         for (law_tip, law_hair, normal_n, shear_n) in [
@@ -866,30 +1099,28 @@ mod tests {
                 hair_beta_rad: &beta,
                 proximal: None,
                 hand_m: Some(Vector2::new(0.1, 0.1)),
+                owners: &owners,
                 tolerance_m: 1e-12,
+                acceptable_m: 1e-12,
                 max_iterations: 10,
             };
             let x = [0.2, 0.3, 0.25, 0.4, 0.6, 0.5];
             let m = x.len();
             let mut cands = vec![
+                Candidate::new(Site::Window(4), 0, law_tip, 4, 1.0, Vector2::new(0.1, 0.1)),
                 Candidate::new(
-                    Feature::Vertex { link: 4 },
-                    0,
-                    law_tip,
-                    1.0,
-                    Vector2::new(0.1, 0.1),
-                ),
-                Candidate::new(
-                    Feature::HairTip { link: 4 },
+                    Site::HairTip(4),
                     0,
                     law_hair,
-                    0.0,
+                    4,
+                    1.0,
                     Vector2::new(0.09, 0.11),
                 ),
                 Candidate::new(
-                    Feature::Vertex { link: 2 },
+                    Site::Window(2),
                     0,
                     law_tip,
+                    2,
                     1.0,
                     Vector2::new(0.05, 0.05),
                 ),

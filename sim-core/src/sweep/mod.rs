@@ -294,6 +294,11 @@ impl Sweep {
         &self.sim
     }
 
+    /// Whether the current state is a strict local minimum ([`QuasiStatic::is_stable`]).
+    pub fn is_stable(&mut self) -> bool {
+        self.sim.is_stable()
+    }
+
     /// The motion.
     pub fn motion(&self) -> &Motion {
         &self.motion

@@ -17,14 +17,20 @@ pub enum Placement {
     /// where they are.
     Angles(Vec<f64>),
     /// The base starts `distance_m` farther from wall `wall` (along the wall's normal at the
-    /// point nearest the tip) and moves onto its start position in `steps` equal steps: the
-    /// tip meets the wall and the antenna bends forward, as when a robot comes up to a wall
-    /// (the seed 3.3.1 start, "projecting in the direction of motion").
+    /// point nearest the tip) and `along_m` back along the direction of motion, and moves in
+    /// a straight line onto its start position in `steps` equal steps: the tip meets the
+    /// wall and the antenna bends, as when a robot comes up to a wall. With `along_m = 0` or
+    /// negative (the base sliding back as it comes in, dragging the tip backward) the antenna
+    /// ends projecting forward (the seed 3.3.1 start, "projecting in the direction of
+    /// motion"); a steep antenna meeting the wall head-on needs the backward slide.
     Approach {
         /// The wall to approach.
         wall: usize,
         /// How far away the base starts, metres.
         distance_m: f64,
+        /// How far the base travels along the direction of motion while it comes in, metres
+        /// (negative: backward).
+        along_m: f64,
         /// In how many steps it comes.
         steps: usize,
     },
@@ -93,12 +99,15 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
         Placement::Approach {
             wall,
             distance_m,
+            along_m,
             steps,
         } => {
             let w = wall_of(*wall)?;
-            if !(distance_m.is_finite() && *distance_m >= 0.0) || *steps == 0 {
+            if !(distance_m.is_finite() && *distance_m >= 0.0 && along_m.is_finite()) || *steps == 0
+            {
                 return Err(SweepError::Placement(format!(
-                    "approach needs distance_m >= 0 and steps >= 1 (got {distance_m}, {steps})"
+                    "approach needs distance_m >= 0, a finite along_m and steps >= 1 (got \
+                     {distance_m}, {along_m}, {steps})"
                 )));
             }
             let rest = chain.rest_theta();
@@ -107,7 +116,8 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
                     .map_err(|e| SweepError::Placement(e.to_string()))?
                     .position_m;
             let away = w.signed_distance(&tip).normal;
-            let from = base + away * *distance_m;
+            let forward = motion_direction(scene);
+            let from = base + away * *distance_m - forward * *along_m;
             let mut sim = new_sim(from, &rest).map_err(|e| {
                 SweepError::Placement(format!(
                     "the base {distance_m} m back from wall {wall} still leaves the antenna in \
@@ -126,8 +136,8 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
             }
             let note = format!(
                 "approach: the base started {distance_m} m back from wall {wall} along its \
-                 normal ({:.4}, {:.4}) and came onto ({:.4}, {:.4}) m in {steps} steps; {} \
-                 contact(s){}",
+                 normal ({:.4}, {:.4}), travelling {along_m} m along the motion, and came onto \
+                 ({:.4}, {:.4}) m in {steps} steps; {} contact(s){}",
                 away.x,
                 away.y,
                 base.x,
@@ -143,12 +153,7 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
             start,
         } => {
             let w = wall_of(*wall)?;
-            let direction = scene.motion.velocity_m_per_s;
-            let along = if direction == Vector2::zeros() {
-                Vector2::new(1.0, 0.0)
-            } else {
-                direction.normalize()
-            };
+            let along = motion_direction(scene);
             let pin = point_ahead(w, base, along, *ahead_m);
             let problem = EquilibriumProblem::new(&chain).with_tip_pin_m(pin - base);
             let eq = solve_equilibrium(&problem, start, &SolveOptions::default())?;
@@ -162,8 +167,16 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
             // The pinned posture ignores the walls: hold the tip there and bring the held
             // antenna onto the walls from where it is clear of them.
             let away = w.signed_distance(&pin).normal;
-            let depth = deepest_penetration(&chain, &scene.walls, base, &eq.theta_rad);
-            let clear_m = if depth > 0.0 { depth + 1e-3 } else { 0.0 };
+            // Back off along the normal until clear (on a curved wall one step may not do).
+            let mut clear_m = 0.0;
+            for _ in 0..50 {
+                let depth =
+                    deepest_penetration(&chain, &scene.walls, base + away * clear_m, &eq.theta_rad);
+                if depth <= 0.0 {
+                    break;
+                }
+                clear_m += depth + 1e-3;
+            }
             let from = base + away * clear_m;
             let mut sim = new_sim(from, &eq.theta_rad).map_err(|e| {
                 SweepError::Placement(format!(
@@ -210,7 +223,8 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
     }
 }
 
-/// The deepest penetration of any link of the posture into any wall (0 if clear), metres.
+/// The deepest penetration of any link or open hair tip of the posture into any wall (0 if
+/// clear), metres.
 fn deepest_penetration(
     chain: &crate::Chain,
     walls: &[Wall],
@@ -232,7 +246,30 @@ fn deepest_penetration(
         }
         at = end;
     }
+    // Hair tips, open against their stops.
+    let open: Vec<f64> = chain
+        .hairs()
+        .iter()
+        .map(|h| h.map_or(0.0, |h| h.open_angle_rad))
+        .collect();
+    if let Ok(hairs) = crate::hair_poses(chain, theta, &open, crate::Frame::GROUND) {
+        for h in hairs {
+            for wall in walls {
+                deepest = deepest.max(-wall.signed_distance(&(base + h.tip_m)).gap_m);
+            }
+        }
+    }
     deepest
+}
+
+/// The unit direction of motion (`+x` when standing still).
+fn motion_direction(scene: &SweepScene) -> Vector2<f64> {
+    let v = scene.motion.velocity_m_per_s;
+    if v == Vector2::zeros() {
+        Vector2::new(1.0, 0.0)
+    } else {
+        v.normalize()
+    }
 }
 
 /// Settles the placed posture (a step of length zero).
@@ -250,6 +287,9 @@ fn accumulate(total: &mut StepReport, r: &StepReport) {
     total.snap_steps += r.snap_steps;
     total.iterations += r.iterations;
     total.resolves += r.resolves;
+    total.anchors_released += r.anchors_released;
+    total.fixed_point_solves += r.fixed_point_solves;
+    total.jams += r.jams;
     total.residual_m = r.residual_m;
 }
 

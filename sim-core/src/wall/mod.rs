@@ -165,6 +165,23 @@ impl WallShape {
         }
     }
 
+    /// The deepest point strictly inside the segment `a -> b` among the points where the gap
+    /// along it can have an interior minimum (a polyline's corners and equidistance points, a
+    /// sinusoid's crests and tangencies), or `None` (always for a line, whose gap along a
+    /// segment is linear). Continuous where [`Self::segment_contact`] jumps between an end
+    /// and an interior point of equal depth.
+    pub fn segment_interior_contact(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+    ) -> Option<SegmentContact> {
+        match self {
+            WallShape::Line(_) => None,
+            WallShape::Polyline(w) => w.segment_interior_contact(a_m, b_m),
+            WallShape::Sinusoid(w) => w.segment_interior_contact(a_m, b_m),
+        }
+    }
+
     /// [`Self::segment_contact`] if the segment comes within `max_gap_m` of the wall (its
     /// smallest gap `<= max_gap_m`), else `None`; a sinusoid answers a segment beyond its
     /// amplitude band by more than `max_gap_m` without searching.
@@ -235,6 +252,15 @@ impl Wall {
     /// sinusoid crest inside the segment is found.
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
         self.shape.segment_contact(a_m, b_m)
+    }
+
+    /// See [`WallShape::segment_interior_contact`]; no allocation.
+    pub fn segment_interior_contact(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+    ) -> Option<SegmentContact> {
+        self.shape.segment_interior_contact(a_m, b_m)
     }
 
     /// [`Self::segment_contact`] if the segment comes within `max_gap_m` of the wall, else

@@ -209,23 +209,49 @@ impl Polyline {
     /// The deepest (or closest) point of `a -> b` (see the module docs); `O(edges^3)` (the
     /// pairs of features, each checked in `O(edges)`), no allocation.
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
+        let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
+        self.interior_candidates(a_m, b_m, ends.wall.gap_m)
+            .map_or(ends, |inner| better(ends, inner))
+    }
+
+    /// The deepest of the segment's interior candidate points (`0 < s < 1`: corner feet and
+    /// the equidistance points of the module docs), or `None`; no allocation.
+    pub fn segment_interior_contact(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+    ) -> Option<SegmentContact> {
+        let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
+        self.interior_candidates(a_m, b_m, ends.wall.gap_m)
+    }
+
+    /// The point of `a -> b` at `s` with its wall point.
+    fn at(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>, s: f64) -> SegmentContact {
+        let point_m = lerp(a_m, b_m, s);
+        SegmentContact {
+            s,
+            point_m,
+            wall: self.signed_distance(&point_m),
+        }
+    }
+
+    /// The deepest interior candidate of `a -> b`; `ends_gap_m` is the smaller gap of its
+    /// ends (the solid-side candidates matter only if part of the segment is in the solid).
+    fn interior_candidates(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        ends_gap_m: f64,
+    ) -> Option<SegmentContact> {
         let d = b_m - a_m;
-        let at = |s: f64| {
-            let point_m = lerp(a_m, b_m, s);
-            SegmentContact {
-                s,
-                point_m,
-                wall: self.signed_distance(&point_m),
-            }
-        };
-        let mut best = at(0.0);
-        best = better(best, at(1.0));
+        let mut best: Option<SegmentContact> = None;
         // The solid-side candidates matter only if part of the segment is in the solid: an
         // end is, or the segment crosses the wall.
-        let needs_solid_side = best.wall.gap_m <= 0.0 || self.crosses(a_m, b_m);
+        let needs_solid_side = ends_gap_m <= 0.0 || self.crosses(a_m, b_m);
         let mut consider = |s: f64| {
-            if (0.0..=1.0).contains(&s) {
-                best = better(best, at(s));
+            if s > 0.0 && s < 1.0 {
+                let c = self.at(a_m, b_m, s);
+                best = Some(best.map_or(c, |b| better(b, c)));
             }
         };
         let d2 = d.norm_squared();

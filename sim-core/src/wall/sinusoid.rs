@@ -326,17 +326,42 @@ impl Sinusoid {
 
     /// The deepest (or closest) point of `a -> b` (see the module docs); no allocation.
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
-        let at = |s: f64| {
-            let point_m = lerp(a_m, b_m, s);
-            SegmentContact {
-                s,
-                point_m,
-                wall: self.signed_distance(&point_m),
-            }
-        };
-        let mut best = better(at(0.0), at(1.0));
+        let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
+        self.interior_candidates(a_m, b_m, &ends)
+            .map_or(ends, |inner| better(ends, inner))
+    }
+
+    /// The deepest of the segment's interior candidate points (`0 < s < 1`: crest crossings
+    /// and the points facing a parallel tangent), or `None`; no allocation.
+    pub fn segment_interior_contact(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+    ) -> Option<SegmentContact> {
+        let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
+        self.interior_candidates(a_m, b_m, &ends)
+    }
+
+    /// The point of `a -> b` at `s` with its wall point.
+    fn at(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>, s: f64) -> SegmentContact {
+        let point_m = lerp(a_m, b_m, s);
+        SegmentContact {
+            s,
+            point_m,
+            wall: self.signed_distance(&point_m),
+        }
+    }
+
+    /// The deepest interior candidate of `a -> b` given its better end `ends`.
+    fn interior_candidates(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        ends: &SegmentContact,
+    ) -> Option<SegmentContact> {
+        let mut best: Option<SegmentContact> = None;
         if self.amplitude_m == 0.0 {
-            return best;
+            return None;
         }
         let (xa, ya) = self.local(a_m);
         let (xb, yb) = self.local(b_m);
@@ -379,7 +404,7 @@ impl Sinusoid {
         // |t - x(s*)| <= |F(s*)|: at most the best end gap if the segment stays free, at most
         // the deepest vertical penetration otherwise.
         let reach = if lowest >= 0.0 {
-            best.wall.gap_m.max(0.0)
+            ends.wall.gap_m.max(0.0)
         } else {
             -lowest
         };
@@ -390,8 +415,9 @@ impl Sinusoid {
             for base in [FRAC_PI_2, FRAC_PI_2 + PI] {
                 each(lo.max(x_min), hi.min(x_max), base, &mut |t| {
                     let s = (t - xa) / dx;
-                    if (0.0..=1.0).contains(&s) {
-                        best = better(best, at(s));
+                    if s > 0.0 && s < 1.0 {
+                        let c = self.at(a_m, b_m, s);
+                        best = Some(best.map_or(c, |b| better(b, c)));
                     }
                 });
             }
@@ -406,8 +432,9 @@ impl Sinusoid {
                     let denom = dx * ny - dy * nx;
                     if denom != 0.0 && d_len2 > 0.0 {
                         let s = (cx * ny - cy * nx) / denom;
-                        if (0.0..=1.0).contains(&s) {
-                            best = better(best, at(s));
+                        if s > 0.0 && s < 1.0 {
+                            let c = self.at(a_m, b_m, s);
+                            best = Some(best.map_or(c, |b| better(b, c)));
                         }
                     }
                 });

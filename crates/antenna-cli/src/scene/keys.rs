@@ -70,6 +70,7 @@ pub const START_KEYS: &[&str] = &[
     "angles_deg",
     "wall",
     "distance_m",
+    "along_m",
     "steps",
     "ahead_m",
     "shape",

@@ -21,7 +21,7 @@ pub const PLACEMENT_NAMES: &[&str] = &["rest", "angles", "approach", "tip-on-wal
 const PLACEMENT_KEYS: [&[&str]; 4] = [
     &[],
     &["angles_deg"],
-    &["wall", "distance_m", "steps"],
+    &["wall", "distance_m", "along_m", "steps"],
     &["wall", "ahead_m", "shape"],
 ];
 /// The approach's steps when `steps` is not given.
@@ -36,6 +36,7 @@ pub(crate) struct RawStart {
     angles_deg: Option<Spanned<Vec<f64>>>,
     wall: Option<Spanned<i64>>,
     distance_m: Option<Spanned<f64>>,
+    along_m: Option<Spanned<f64>>,
     steps: Option<Spanned<i64>>,
     ahead_m: Option<Spanned<f64>>,
     shape: Option<Spanned<String>>,
@@ -61,10 +62,11 @@ impl RawStart {
         };
         let name = PLACEMENT_NAMES[which];
         let takes = PLACEMENT_KEYS[which];
-        let given: [(&str, Option<Range<usize>>); 6] = [
+        let given: [(&str, Option<Range<usize>>); 7] = [
             ("angles_deg", self.angles_deg.as_ref().map(Spanned::span)),
             ("wall", self.wall.as_ref().map(Spanned::span)),
             ("distance_m", self.distance_m.as_ref().map(Spanned::span)),
+            ("along_m", self.along_m.as_ref().map(Spanned::span)),
             ("steps", self.steps.as_ref().map(Spanned::span)),
             ("ahead_m", self.ahead_m.as_ref().map(Spanned::span)),
             ("shape", self.shape.as_ref().map(Spanned::span)),
@@ -153,9 +155,14 @@ impl RawStart {
                     Some(s) => count(source, START, "steps", s, 1, MAX_APPROACH_STEPS)?,
                     None => DEFAULT_APPROACH_STEPS,
                 };
+                let along_m = match &self.along_m {
+                    Some(a) => finite(source, START, "along_m", a)?,
+                    None => 0.0,
+                };
                 Placement::Approach {
                     wall,
                     distance_m,
+                    along_m,
                     steps,
                 }
             }
