@@ -70,6 +70,11 @@ struct Accepted {
 pub struct QuasiStatic {
     chain: Chain,
     walls: Vec<Wall>,
+    /// The walls as the contacts see them: polylines cut at their concave corners
+    /// ([`crate::Polyline::split_at_concave_corners`]); `piece_of[i]` is the wall piece `i`
+    /// belongs to. Contacts are reported against `walls`.
+    contact_walls: Vec<Wall>,
+    piece_of: Vec<usize>,
     tip_force_n: Vector2<f64>,
     settings: ContactSettings,
     base_m: Vector2<f64>,
@@ -137,8 +142,11 @@ impl QuasiStatic {
             .iter()
             .map(|h| h.map_or(0.0, |h| h.open_angle_rad))
             .collect();
+        let (contact_walls, piece_of) = contact_pieces(&walls);
         let mut sim = QuasiStatic {
             chain,
+            contact_walls,
+            piece_of,
             walls,
             tip_force_n: Vector2::zeros(),
             settings,
@@ -226,7 +234,7 @@ impl QuasiStatic {
         out.clear();
         out.extend(self.contacts.iter().map(|c| Contact {
             feature: c.feature,
-            wall: c.wall,
+            wall: self.piece_of[c.wall],
             s: c.s,
             point_m: c.point_m,
             normal: c.normal,
@@ -280,7 +288,7 @@ impl QuasiStatic {
             .collect();
         let problem = StepProblem {
             chain: &self.chain,
-            walls: &self.walls,
+            walls: &self.contact_walls,
             tip_force_n: self.tip_force_n,
             base_m: self.base_m,
             hair_links: &hair_links,
@@ -290,6 +298,7 @@ impl QuasiStatic {
             hand_m: self.hand_offset_m.map(|o| self.base_m + o),
             tolerance_m: self.settings.tolerance_m,
             acceptable_m: self.settings.acceptable_m,
+            max_departure_rad: f64::INFINITY,
             max_iterations: 1,
         };
         let reduced = self.ssn.tangent_hessian(&problem, &x, &mut cands);
@@ -369,6 +378,13 @@ impl QuasiStatic {
         let min_m = full_m / f64::powi(2.0, self.settings.max_substep_depth as i32);
         let mut goals = vec![base_m];
         while let Some(&goal) = goals.last() {
+            if report.iterations > self.settings.max_step_iterations {
+                return Err(ContactError::no_convergence(
+                    goal,
+                    "the step took more Newton iterations than max_step_iterations",
+                    report.iterations,
+                ));
+            }
             match self.attempt(goal, None, &mut report) {
                 Ok(accepted) => {
                     report.residual_m = accepted.residual_m;
@@ -421,6 +437,9 @@ impl QuasiStatic {
         report.snapped = true;
         let mut gamma = 1.0;
         for _ in 0..self.settings.max_snap_steps {
+            if report.iterations > self.settings.max_step_iterations {
+                break;
+            }
             report.snap_steps += 1;
             let x_prev = self.coordinates();
             let r = self.attempt(goal, Some((gamma, &x_prev)), report);
@@ -464,7 +483,8 @@ impl QuasiStatic {
         let mut released = 0;
         for c in &mut self.contacts {
             if c.law.is_anchored() {
-                let wall = &self.walls[c.wall];
+                let piece = c.wall;
+                let wall = &self.walls[self.piece_of[piece]];
                 c.law = FrictionLaw::Coulomb {
                     mu: wall.surface_at(&wall.signed_distance(&c.point_m)).mu(),
                 };
@@ -491,7 +511,7 @@ impl QuasiStatic {
         let n = self.chain.n();
         self.start.update(&self.chain, self.base_m, &self.theta);
         self.probe.update(&self.chain, goal, &self.theta);
-        self.owners = link_owners(&self.walls, &self.probe, n);
+        self.owners = link_owners(&self.contact_walls, &self.probe, n);
         let mut cands = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
         let mut demoted: Vec<usize> = Vec::new();
         let mut promoted: Vec<usize> = Vec::new();
@@ -522,7 +542,7 @@ impl QuasiStatic {
             };
             let problem = StepProblem {
                 chain: &self.chain,
-                walls: &self.walls,
+                walls: &self.contact_walls,
                 tip_force_n: self.tip_force_n,
                 base_m: goal,
                 hair_links: &hair_links,
@@ -531,7 +551,14 @@ impl QuasiStatic {
                 owners: &self.owners,
                 hand_m: self.hand_offset_m.map(|o| goal + o),
                 tolerance_m: self.settings.tolerance_m,
-                acceptable_m: self.settings.acceptable_m,
+                // A pseudo-time step of a snap is a point on the way, not an equilibrium:
+                // it is accepted a hundred times looser.
+                acceptable_m: if proximal.is_some() {
+                    100.0 * self.settings.acceptable_m
+                } else {
+                    self.settings.acceptable_m
+                },
+                max_departure_rad: 2.0 * self.settings.jump_rad,
                 max_iterations: self.settings.max_iterations,
             };
             let x_start = x.clone();
@@ -563,8 +590,7 @@ impl QuasiStatic {
                 let v = n + hair_links.iter().position(|&l| l == link).unwrap_or(0);
                 let beta = x.get(v).copied().unwrap_or(hair.open_angle_rad);
                 let on_stop = beta >= hair.open_angle_rad - 1e-12;
-                let surface = self.walls[cand.wall]
-                    .surface_at(&self.walls[cand.wall].signed_distance(&cand.point_m));
+                let surface = self.surface_at(cand.wall, &cand.point_m);
                 match (cand.law, surface) {
                     (FrictionLaw::Anchored { hold_tension_n, .. }, _)
                         if !on_stop || cand.normal_force_n < -hold_tension_n =>
@@ -658,6 +684,8 @@ impl QuasiStatic {
         let mut out: Vec<Candidate> = Vec::new();
         for (w, wall) in self.walls.iter().enumerate() {
             self.check_base(w, wall, &self.probe, goal)?;
+        }
+        for (w, wall) in self.contact_walls.iter().enumerate() {
             for i in 0..=n {
                 if window_contact(wall, &self.owners[w], &self.probe, n, i)
                     .wall
@@ -696,7 +724,7 @@ impl QuasiStatic {
     /// the start of the step, and the surface's Coulomb law (a hair tip anchors only once
     /// it touches, see [`Self::attempt`]).
     fn candidate(&self, site: Site, wall: usize) -> Candidate {
-        let w = &self.walls[wall];
+        let w = &self.contact_walls[wall];
         let (link, s, start) = match site {
             Site::Window(i) => {
                 let (link, s) = located(&window_contact(
@@ -715,9 +743,17 @@ impl QuasiStatic {
                     .hair_tip(hair_of(&self.chain, link), link, self.beta[link]),
             ),
         };
-        let surface = w.surface_at(&w.signed_distance(&start));
-        let law = FrictionLaw::Coulomb { mu: surface.mu() };
+        let law = FrictionLaw::Coulomb {
+            mu: self.surface_at(wall, &start).mu(),
+        };
         Candidate::new(site, wall, law, link, s, start)
+    }
+
+    /// The surface of the wall that contact-wall piece `piece` belongs to, at the point of it
+    /// nearest to `point_m`.
+    fn surface_at(&self, piece: usize, point_m: &Vector2<f64>) -> Surface {
+        let wall = &self.walls[self.piece_of[piece]];
+        wall.surface_at(&wall.signed_distance(point_m))
     }
 
     /// Windows and hair tips inside a wall after a solve that are not candidates yet.
@@ -738,7 +774,7 @@ impl QuasiStatic {
         }
         let known = |site: Site, w: usize| cands.iter().any(|c| c.site == site && c.wall == w);
         let mut found = Vec::new();
-        for (w, wall) in self.walls.iter().enumerate() {
+        for (w, wall) in self.contact_walls.iter().enumerate() {
             for i in 0..=n {
                 if window_contact(wall, &self.owners[w], &self.probe, n, i)
                     .wall
@@ -902,6 +938,28 @@ fn solve_by_fixed_point(
     }
     outcome.converged &= jammed > 0;
     outcome
+}
+
+/// The walls as the contacts see them ([`QuasiStatic`]'s `contact_walls`) and the wall each
+/// piece belongs to.
+fn contact_pieces(walls: &[Wall]) -> (Vec<Wall>, Vec<usize>) {
+    let mut pieces = Vec::new();
+    let mut piece_of = Vec::new();
+    for (w, wall) in walls.iter().enumerate() {
+        match &wall.shape {
+            crate::WallShape::Polyline(polyline) => {
+                for piece in polyline.split_at_concave_corners() {
+                    pieces.push(Wall::new(piece, wall.surfaces.clone()));
+                    piece_of.push(w);
+                }
+            }
+            _ => {
+                pieces.push(wall.clone());
+                piece_of.push(w);
+            }
+        }
+    }
+    (pieces, piece_of)
 }
 
 /// Fixed-point iterations on the normal forces before a step is given up.

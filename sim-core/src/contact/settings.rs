@@ -28,8 +28,12 @@ pub struct ContactSettings {
     /// A penetration deeper than this after a step is a missed contact: it joins and the step
     /// is solved again, metres. Default `1e-9`.
     pub penetration_tolerance_m: f64,
-    /// Pseudo-time steps allowed to follow one snap downhill. Default 20000.
+    /// Pseudo-time steps allowed to follow one snap downhill. Default 2000.
     pub max_snap_steps: usize,
+    /// Newton iterations allowed for one call of `step_to`, substeps and snaps included: a
+    /// step that needs more fails with [`ContactError::NoConvergence`] rather than run on.
+    /// Default 100000.
+    pub max_step_iterations: usize,
 }
 
 impl Default for ContactSettings {
@@ -42,7 +46,8 @@ impl Default for ContactSettings {
             jump_rad: 0.05,
             margin_m: 2e-3,
             penetration_tolerance_m: 1e-9,
-            max_snap_steps: 20_000,
+            max_snap_steps: 2_000,
+            max_step_iterations: 100_000,
         }
     }
 }
@@ -72,6 +77,7 @@ impl ContactSettings {
         for (setting, value) in [
             ("max_iterations", self.max_iterations),
             ("max_snap_steps", self.max_snap_steps),
+            ("max_step_iterations", self.max_step_iterations),
         ] {
             if value == 0 {
                 return Err(ContactError::BadSetting {

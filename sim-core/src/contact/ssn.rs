@@ -149,6 +149,9 @@ pub(crate) struct StepProblem<'a> {
     pub tolerance_m: f64,
     /// The residual accepted from a solve that stalls above `tolerance_m`.
     pub acceptable_m: f64,
+    /// A solve whose joint angles wander farther than this from where it started gives up
+    /// (its step would be refused as a jump anyway), radians.
+    pub max_departure_rad: f64,
     pub max_iterations: usize,
 }
 
@@ -317,6 +320,10 @@ impl Ssn {
                     break;
                 }
                 continue;
+            }
+            let n = p.chain.n();
+            if (0..n).any(|a| (self.z[a] - x[a]).abs() > p.max_departure_rad) {
+                break;
             }
             // The Jacobian at the accepted point.
             merit = self.evaluate(p, m, cands, true);
@@ -1102,6 +1109,7 @@ mod tests {
                 owners: &owners,
                 tolerance_m: 1e-12,
                 acceptable_m: 1e-12,
+                max_departure_rad: 1.0,
                 max_iterations: 10,
             };
             let x = [0.2, 0.3, 0.25, 0.4, 0.6, 0.5];

@@ -110,6 +110,73 @@ impl Polyline {
         self.solid
     }
 
+    /// The polyline cut at its concave corners (where the free side has an angle under 180
+    /// degrees), each piece running on along its end edges: the solid is the union of the
+    /// pieces' solids near each cut, and a point pressed into a concave corner touches two
+    /// pieces, each with a smooth distance (the distance to the whole polyline has a kink
+    /// along the corner's bisector). Without concave corners, the polyline itself.
+    pub fn split_at_concave_corners(&self) -> Vec<Polyline> {
+        let mut pieces = Vec::new();
+        let mut first = 0;
+        for k in 1..self.tangents.len() {
+            let turn = cross(&self.tangents[k - 1], &self.tangents[k]);
+            let concave = match self.solid {
+                SolidSide::Left => turn < 0.0,
+                SolidSide::Right => turn > 0.0,
+            };
+            if concave {
+                pieces.push(self.piece(first, k));
+                first = k;
+            }
+        }
+        pieces.push(self.piece(first, self.vertices_m.len() - 1));
+        // A straight piece is an infinite line; two of them on one line (the trapezoid's
+        // top before and after its dip) are one wall, not two copies of every contact.
+        let mut unique: Vec<Polyline> = Vec::with_capacity(pieces.len());
+        for piece in pieces {
+            let duplicate = piece.straight_line().is_some_and(|line| {
+                unique.iter().any(|u| {
+                    u.straight_line().is_some_and(|other| {
+                        (line.0 - other.0).norm() < 1e-12 && (line.1 - other.1).abs() < 1e-12
+                    })
+                })
+            });
+            if !duplicate {
+                unique.push(piece);
+            }
+        }
+        unique
+    }
+
+    /// For a polyline whose edges all run one way: its line as (normal, offset), with
+    /// `normal . p = offset` on it.
+    fn straight_line(&self) -> Option<(Vector2<f64>, f64)> {
+        let n = self.normals[0];
+        let straight = self.normals.iter().all(|m| (m - n).norm() < 1e-12)
+            && self
+                .vertices_m
+                .iter()
+                .all(|v| (n.dot(v) - n.dot(&self.vertices_m[0])).abs() < 1e-12);
+        straight.then(|| (n, n.dot(&self.vertices_m[0])))
+    }
+
+    /// The piece from vertex `first` to vertex `last` (with its end rays).
+    fn piece(&self, first: usize, last: usize) -> Polyline {
+        let vertices_m = self.vertices_m[first..=last].to_vec();
+        let tangents = self.tangents[first..last].to_vec();
+        let normals = self.normals[first..last].to_vec();
+        let lengths_m = self.lengths_m[first..last].to_vec();
+        let arclengths_m = self.arclengths_m[first..=last].to_vec();
+        Polyline {
+            vertices_m,
+            tangents,
+            normals,
+            lengths_m,
+            arclengths_m,
+            solid: self.solid,
+        }
+    }
+
     /// The parameter range of edge `i` in metres from its first vertex (infinite for the end
     /// rays).
     fn range_m(&self, edge: usize) -> (f64, f64) {
@@ -210,19 +277,22 @@ impl Polyline {
     /// pairs of features, each checked in `O(edges)`), no allocation.
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
         let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
-        self.interior_candidates(a_m, b_m, ends.wall.gap_m)
+        self.interior_candidates(a_m, b_m, ends.wall.gap_m, false)
             .map_or(ends, |inner| better(ends, inner))
     }
 
-    /// The deepest of the segment's interior candidate points (`0 < s < 1`: corner feet and
-    /// the equidistance points of the module docs), or `None`; no allocation.
+    /// The deepest of the segment's interior candidate points (`0 < s < 1`: convex corners
+    /// against the segment, measured along the segment's normal, and the equidistance points
+    /// of the module docs), or `None`; no allocation. A contact solver's view: unlike
+    /// [`Self::segment_contact`] (the distance field's minimum), a corner pressed into the
+    /// segment keeps one smooth gap and normal.
     pub fn segment_interior_contact(
         &self,
         a_m: &Vector2<f64>,
         b_m: &Vector2<f64>,
     ) -> Option<SegmentContact> {
         let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
-        self.interior_candidates(a_m, b_m, ends.wall.gap_m)
+        self.interior_candidates(a_m, b_m, ends.wall.gap_m, true)
     }
 
     /// The point of `a -> b` at `s` with its wall point.
@@ -237,33 +307,49 @@ impl Polyline {
 
     /// The deepest interior candidate of `a -> b`; `ends_gap_m` is the smaller gap of its
     /// ends (the solid-side candidates matter only if part of the segment is in the solid).
+    /// With `corner_geometry`, a convex corner's contact is measured along the segment's
+    /// normal ([`Self::corner_contact`]), else by the signed distance of its foot.
     fn interior_candidates(
         &self,
         a_m: &Vector2<f64>,
         b_m: &Vector2<f64>,
         ends_gap_m: f64,
+        corner_geometry: bool,
     ) -> Option<SegmentContact> {
         let d = b_m - a_m;
-        let mut best: Option<SegmentContact> = None;
         // The solid-side candidates matter only if part of the segment is in the solid: an
         // end is, or the segment crosses the wall.
         let needs_solid_side = ends_gap_m <= 0.0 || self.crosses(a_m, b_m);
-        let mut consider = |s: f64| {
+        let best_cell = core::cell::Cell::new(None::<SegmentContact>);
+        let consider_contact = |c: SegmentContact| {
+            best_cell.set(Some(best_cell.get().map_or(c, |b| better(b, c))));
+        };
+        let consider = |s: f64| {
             if s > 0.0 && s < 1.0 {
-                let c = self.at(a_m, b_m, s);
-                best = Some(best.map_or(c, |b| better(b, c)));
+                consider_contact(self.at(a_m, b_m, s));
             }
         };
         let d2 = d.norm_squared();
         let edges = self.tangents.len();
         let interior = 1..edges; // interior vertices
         if d2 > 0.0 {
-            // Corners on the segment: their feet.
+            // Convex corners against the segment: the corner and its foot on the segment,
+            // the normal the segment's own (a corner has no normal of its own: the distance
+            // from a point just inside the corner jumps between its two edges).
             for k in interior.clone() {
-                consider(((self.vertices_m[k] - a_m).dot(&d) / d2).clamp(0.0, 1.0));
+                let s = (self.vertices_m[k] - a_m).dot(&d) / d2;
+                if s > 0.0 && s < 1.0 {
+                    let corner = if corner_geometry {
+                        self.corner_contact(k, a_m, b_m, s)
+                    } else {
+                        None
+                    };
+                    let c = corner.unwrap_or_else(|| self.at(a_m, b_m, s));
+                    consider_contact(c);
+                }
             }
             if !needs_solid_side {
-                return best;
+                return best_cell.get();
             }
             // Equidistant from two edge lines: (alpha_i + beta_i s) = +-(alpha_j + beta_j s).
             let line = |i: usize| {
@@ -287,7 +373,7 @@ impl Polyline {
                     let qa = bi * bi - d2;
                     let qb = 2.0 * (ai * bi - r.dot(&d));
                     let qc = ai * ai - r.norm_squared();
-                    for_roots(qa, qb, qc, &mut consider);
+                    for_roots(qa, qb, qc, &mut |s| consider(s));
                 }
             }
             // Equidistant from two corners: the perpendicular bisector.
@@ -303,7 +389,46 @@ impl Polyline {
                 }
             }
         }
-        best
+        best_cell.get()
+    }
+
+    /// The contact of the segment `a -> b` with corner `k` at the corner's foot `s`, if the
+    /// corner is convex (it pokes into free space): the gap along the segment's normal
+    /// (oriented into free space, as the corner's pseudo-normal), the corner as the wall point.
+    fn corner_contact(
+        &self,
+        k: usize,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        s: f64,
+    ) -> Option<SegmentContact> {
+        let turn = cross(&self.tangents[k - 1], &self.tangents[k]);
+        let convex = match self.solid {
+            SolidSide::Left => turn > 0.0,
+            SolidSide::Right => turn < 0.0,
+        };
+        if !convex {
+            return None;
+        }
+        let d = (b_m - a_m).normalize();
+        let pseudo = (self.normals[k - 1] + self.normals[k]).normalize();
+        let mut normal = Vector2::new(-d.y, d.x);
+        if normal.dot(&pseudo) < 0.0 {
+            normal = -normal;
+        }
+        let point_m = lerp(a_m, b_m, s);
+        let v = self.vertices_m[k];
+        Some(SegmentContact {
+            s,
+            point_m,
+            wall: WallPoint {
+                gap_m: normal.dot(&(point_m - v)),
+                closest_m: v,
+                normal,
+                tangent: self.solid.tangent_from_normal(&normal),
+                arclength_m: self.arclengths_m[k],
+            },
+        })
     }
 
     /// Whether the segment `a -> b` crosses an edge (end rays included).
