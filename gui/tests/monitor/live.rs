@@ -8,7 +8,7 @@
 use std::time::Duration;
 
 use crate::support::{
-    TOKEN, config, monitor, start_daemon, step_until, temp_dir, wait_for_history,
+    TOKEN, config, expect_label, monitor, start_daemon, step_until, temp_dir, wait_for_history,
 };
 use antenna_monitor::client::ConnectionState;
 use antenna_monitor::history::Health;
@@ -22,7 +22,7 @@ fn connect_shows_the_daemon_the_chain_and_the_rig_geometry() {
     let daemon = start_daemon(config(&dir));
     let mut harness = monitor(&daemon, "", dir.clone());
     wait_for_history(&mut harness, 0.3);
-    harness.get_by_label_contains("connected to antennad");
+    expect_label(&mut harness, "connected to antennad");
     {
         let state = harness.state().live().unwrap().lock();
         let rig = state.rig.as_ref().unwrap();
@@ -48,7 +48,7 @@ fn connect_shows_the_daemon_the_chain_and_the_rig_geometry() {
         assert_eq!(frame.joints_m.len(), 11);
         assert_eq!(frame.base_m, [0.0, 0.0]);
     }
-    harness.get_by_label_contains("all 9 segments healthy");
+    expect_label(&mut harness, "all 9 segments healthy");
     // The prediction is drawn for the same pose: the difference line appears once solved.
     step_until(&mut harness, "the prediction", 10.0, |h| {
         h.query_by_label_contains("measured vs predicted").is_some()
@@ -161,7 +161,7 @@ fn zoom_then_export_the_visible_range() {
     assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000);
     let svg = std::fs::read_to_string(&exports[exports.len() - 1].path).unwrap();
     assert!(svg.contains("<svg") && svg.contains("joint 9") && svg.contains("chain at t"));
-    harness.get_by_label_contains("exported");
+    expect_label(&mut harness, "exported");
     daemon.shutdown().unwrap();
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -197,7 +197,7 @@ fn control_is_refused_without_a_token_and_carried_out_with_it() {
         let button = harness.get_by_label(label);
         assert!(button.accesskit_node().is_disabled(), "{label} is enabled");
     }
-    harness.get_by_label_contains("enter the daemon's token");
+    expect_label(&mut harness, "enter the daemon's token");
     harness.get_by_label("Stop everything").click();
     harness.step();
     std::thread::sleep(Duration::from_millis(200));
@@ -224,7 +224,7 @@ fn control_is_refused_without_a_token_and_carried_out_with_it() {
         assert_eq!(reply.command.as_deref(), Some("move_stage"));
     }
     harness.step();
-    harness.get_by_label_contains("refused move_stage: [bad_token]");
+    expect_label(&mut harness, "refused move_stage: [bad_token]");
 
     // The right token: the stage moves to 100 mm.
     let mut harness_token = harness;
@@ -273,7 +273,7 @@ fn the_daemon_going_away_is_shown_and_the_monitor_reconnects() {
             ConnectionState::Disconnected { .. }
         )
     });
-    harness.get_by_label_contains("DISCONNECTED");
+    expect_label(&mut harness, "DISCONNECTED");
     // The samples received stay on screen.
     assert!(!harness.state().live().unwrap().lock().history.is_empty());
     let mut again = config(&dir);
@@ -284,7 +284,7 @@ fn the_daemon_going_away_is_shown_and_the_monitor_reconnects() {
         state.connections == 2 && matches!(state.connection, ConnectionState::Connected { .. })
     });
     harness.step();
-    harness.get_by_label_contains("connected to antennad");
+    expect_label(&mut harness, "connected to antennad");
     daemon.shutdown().unwrap();
 }
 
@@ -301,7 +301,7 @@ fn an_unhealthy_segment_is_shown_as_such() {
     let daemon = start_daemon(config);
     let mut harness = monitor(&daemon, "", dir.clone());
     wait_for_history(&mut harness, 0.2);
-    harness.get_by_label_contains("1 of 9 segments unhealthy");
+    expect_label(&mut harness, "1 of 9 segments unhealthy");
     {
         let state = harness.state().live().unwrap().lock();
         let rig = state.rig.as_ref().unwrap();

@@ -5,7 +5,7 @@
 
 use std::time::Duration;
 
-use crate::support::{config, harness, temp_dir};
+use crate::support::{config, expect_label, harness, temp_dir};
 use antenna_monitor::{AppOptions, MonitorApp};
 use egui::accesskit::Role;
 use egui_kittest::kittest::Queryable;
@@ -53,7 +53,7 @@ fn open_a_recorded_trial_play_and_scrub_it() {
         trial.history.first_t_s(),
         trial.history.latest_t_s().unwrap(),
     );
-    harness.get_by_label_contains("trial wall-sweep");
+    expect_label(&mut harness, "trial wall-sweep");
     // Opened at its start, the whole trial in view.
     assert_eq!(harness.state().view().cursor_s(Some(end_s)), start_s);
     let (t0, t1) = harness.state().view().window(Some(end_s)).unwrap();

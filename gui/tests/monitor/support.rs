@@ -88,3 +88,12 @@ pub fn wait_for_history(harness: &mut Harness<'_, MonitorApp>, seconds: f64) {
             .is_some_and(|(a, b)| b - a >= seconds)
     });
 }
+
+/// Steps the harness until a widget whose label contains `text` is on screen (the state a
+/// label shows can change after the frame that was last drawn); panics after 10 s.
+pub fn expect_label(harness: &mut Harness<'_, MonitorApp>, text: &str) {
+    use egui_kittest::kittest::Queryable;
+    step_until(harness, &format!("the label {text:?}"), 10.0, |h| {
+        h.query_by_label_contains(text).is_some()
+    });
+}

@@ -67,7 +67,13 @@ pub fn scratch(name: &str, text: &str) -> String {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("antenna-cli-tests");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
+    // Tests run in parallel and several write the same file: write aside, then rename, so a
+    // reader never sees a half-written file.
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let aside = dir.join(format!("{name}.{}.{n}.tmp", std::process::id()));
+    std::fs::write(&aside, text).unwrap();
+    std::fs::rename(&aside, &path).unwrap();
     path.display().to_string()
 }
 
