@@ -551,13 +551,10 @@ impl QuasiStatic {
                 owners: &self.owners,
                 hand_m: self.hand_offset_m.map(|o| goal + o),
                 tolerance_m: self.settings.tolerance_m,
-                // A pseudo-time step of a snap is a point on the way, not an equilibrium:
-                // it is accepted a hundred times looser.
-                acceptable_m: if proximal.is_some() {
-                    100.0 * self.settings.acceptable_m
-                } else {
-                    self.settings.acceptable_m
-                },
+                // A pseudo-time step of a snap is held to the same residual as a step: a
+                // looser one lets the flow creep by stalled solves where a contact sits on
+                // the edge of its friction cone, and never come to rest.
+                acceptable_m: self.settings.acceptable_m,
                 max_departure_rad: 2.0 * self.settings.jump_rad,
                 max_iterations: self.settings.max_iterations,
             };
