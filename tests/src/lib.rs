@@ -1,1 +1,3 @@
 //! Tests that span crates live in `tests/tests/`.
+
+pub mod reproduce;

@@ -147,7 +147,7 @@ pub enum SweepError {
     #[error("placement: {0}")]
     PlacementSolve(#[from] EquilibriumError),
     /// A step failed.
-    #[error("step {step} (t = {t_s} s): {source}")]
+    #[error("step {step} (t = {t_s:.3} s): {source}")]
     Step {
         /// The step number (1-based; 0 for the placement).
         step: usize,

@@ -1,0 +1,526 @@
+//! Runs the seed's experiments on sim-core, draws their figures in `docs/figures/` and writes
+//! `docs/reproduction.md` (`scripts/reproduce`; about 4 minutes on 2 cores, most of it the
+//! 4.2.2 sinusoids).
+//!
+//! ```text
+//! cargo run -p antenna-tests --release --example reproduce            # everything
+//! cargo run -p antenna-tests --release --example reproduce -- 4.2.1   # one experiment, printed
+//! ```
+#![allow(clippy::unwrap_used)]
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use antenna_tests::reproduce::mapping::MappingRun;
+use antenna_tests::reproduce::{self, flipping, mapping, tip_forces, wall_following};
+use flipping::{HairLayout, WallSurface};
+use plotters::prelude::*;
+use sim_core::StiffnessProfile;
+
+type Series = (String, Vec<(f64, f64)>);
+
+const COLORS: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(80, 80, 80),
+];
+
+/// A panel: title, axis labels, series (drawn as lines; a series of one point as a dot).
+struct Panel<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    y_label: &'a str,
+    series: Vec<Series>,
+    points: bool,
+}
+
+fn range(series: &[Series], axis: usize) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (_, s) in series {
+        for p in s {
+            let v = if axis == 0 { p.0 } else { p.1 };
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.05).max(1e-9);
+    (lo - pad, hi + pad)
+}
+
+fn draw_panels(path: &Path, panels: &[Panel<'_>]) -> Result<(), Box<dyn std::error::Error>> {
+    let height = 420 * panels.len() as u32;
+    let root = SVGBackend::new(path, (960, height)).into_drawing_area();
+    root.fill(&WHITE)?;
+    for (area, panel) in root.split_evenly((panels.len(), 1)).iter().zip(panels) {
+        let (x0, x1) = range(&panel.series, 0);
+        let (y0, y1) = range(&panel.series, 1);
+        let mut chart = ChartBuilder::on(area)
+            .caption(panel.title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        chart
+            .configure_mesh()
+            .x_desc(panel.x_label)
+            .y_desc(panel.y_label)
+            .draw()?;
+        for (k, (name, s)) in panel.series.iter().enumerate() {
+            let color = COLORS[k % COLORS.len()];
+            // Lines break at NaN (no contact, no angle).
+            let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+            for &(x, y) in s {
+                if y.is_finite() {
+                    pieces.last_mut().unwrap().push((x, y));
+                } else if !pieces.last().unwrap().is_empty() {
+                    pieces.push(Vec::new());
+                }
+            }
+            let mut first = true;
+            for piece in pieces.into_iter().filter(|p| !p.is_empty()) {
+                let drawn = if panel.points || piece.len() == 1 {
+                    chart.draw_series(
+                        piece
+                            .iter()
+                            .map(|&p| Circle::new(p, 4, color.filled()))
+                            .collect::<Vec<_>>(),
+                    )?
+                } else {
+                    chart.draw_series(LineSeries::new(piece, color.stroke_width(2)))?
+                };
+                if first {
+                    drawn.label(name.clone()).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(3))
+                    });
+                    first = false;
+                }
+            }
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+fn docs() -> PathBuf {
+    reproduce::example_path("..").join("docs")
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("-".into(), |v| format!("{v:.2}"))
+}
+
+fn wall_following(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error::Error>> {
+    let base = reproduce::load_scene("wall_following_4_2_1.toml")?;
+    let runs = wall_following::run_all(&base)?;
+    writeln!(
+        md,
+        "## 1. Seed 4.2.1 / Table 4.1: stiffness profiles along a wall\n"
+    )?;
+    writeln!(
+        md,
+        "`examples/wall_following_4_2_1.toml`, once per profile; test \
+         `tests/tests/reproduce_wall_following.rs`. Preview distance: how far ahead of the \
+         base the wall is touched (model.md 8); r and rho: Pearson and Spearman correlation \
+         with the base-to-wall distance over the steps in contact.\n"
+    )?;
+    writeln!(
+        md,
+        "| profile | bend r | bend rho | contact r | contact rho | preview mean +- sd (cm) | median (cm) | snaps | run time (ms; the 7 runs share the cores) |\n|---|---|---|---|---|---|---|---|---|"
+    )?;
+    for r in &runs {
+        let row = r.table_row();
+        writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {:.1} +- {:.1} | {:.1} | {} | {:.0} |",
+            r.profile.name(),
+            opt(row.bend_pearson),
+            opt(row.bend_spearman),
+            opt(row.contact_pearson),
+            opt(row.contact_spearman),
+            row.preview_mean_cm,
+            row.preview_sd_cm,
+            row.preview_median_cm,
+            r.snaps,
+            r.elapsed_s * 1e3
+        )?;
+    }
+    writeln!(
+        md,
+        "\nReproduced: every decreasing profile previews further than the constant one; the \
+         exponential and logarithmic ones beat linear, and linear beats both reciprocals \
+         (the seed's order of Table 4.1); the point of bend follows the wall distance better \
+         for every decreasing profile than for the constant one. Our preview distances are \
+         shorter than the seed's (the constant profile trails its contact behind the base: \
+         negative preview), the order is the seed's.\n\n\
+         ![4.2.1](figures/reproduce_4_2_1.svg)\n"
+    )?;
+    if figures {
+        let preview: Vec<Series> = runs
+            .iter()
+            .map(|r| {
+                (
+                    r.profile.name().to_owned(),
+                    r.t_s
+                        .iter()
+                        .zip(&r.preview_m)
+                        .step_by(10)
+                        .map(|(&t, &p)| (t, p * 100.0))
+                        .collect(),
+                )
+            })
+            .collect();
+        let bend: Vec<Series> = runs
+            .iter()
+            .filter(|r| {
+                matches!(
+                    r.profile,
+                    StiffnessProfile::Constant | StiffnessProfile::FastExponential
+                )
+            })
+            .map(|r| {
+                (
+                    r.profile.name().to_owned(),
+                    r.wall_distance_m
+                        .iter()
+                        .zip(&r.bend_joint)
+                        .step_by(10)
+                        .map(|(&d, &b)| (d * 100.0, b))
+                        .collect(),
+                )
+            })
+            .collect();
+        draw_panels(
+            &docs().join("figures/reproduce_4_2_1.svg"),
+            &[
+                Panel {
+                    title: "4.2.1: preview distance over the run, per profile",
+                    x_label: "t (s)",
+                    y_label: "preview (cm)",
+                    series: preview,
+                    points: false,
+                },
+                Panel {
+                    title: "4.2.1: point of bend against the base-to-wall distance",
+                    x_label: "base-to-wall distance (cm)",
+                    y_label: "point of bend (joint)",
+                    series: bend,
+                    points: true,
+                },
+            ],
+        )?;
+    }
+    Ok(())
+}
+
+fn flipping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error::Error>> {
+    let base = reproduce::load_scene("flipping_3_3_1.toml")?;
+    let seed_hair = base
+        .chain
+        .hairs()
+        .iter()
+        .flatten()
+        .next()
+        .copied()
+        .ok_or("the 3.3.1 scene has no hairs")?;
+    writeln!(
+        md,
+        "## 2. Seed 3.3.1: distally pointing hairs make the antenna flip\n"
+    )?;
+    writeln!(
+        md,
+        "`examples/flipping_3_3_1.toml`; test `tests/tests/reproduce_flipping.rs`. Flip: the \
+         distal segment beyond 90 deg to the wall.\n\n\
+         **Not reproduced with the seed's hair geometry.** With its {:.0} mm hairs, model.md \
+         7's anchored hair stops the distal segment where the segment's end meets the wall: \
+         the lock angle is {:.1} deg, short of a flip: at 10, 20 and 30 deg the distal \
+         segment rises to it and stays (at 60 deg it flips late, at 70 deg not at all). \
+         The seed's antenna flipped, so its hair (or its segment's end) must give way past \
+         that angle in a way the model does not have. With 30 mm hairs the lock lies beyond \
+         90 deg and the seed's claims hold, as the table shows.\n",
+        seed_hair.length_m * 1e3,
+        flipping::lock_angle_deg(&seed_hair)
+    )?;
+    writeln!(
+        md,
+        "| hair | wall | hairs | base angle (deg) | flip at (s) | max distal angle (deg) | steps anchored |\n|---|---|---|---|---|---|---|"
+    )?;
+    let mut angle_series: Vec<Series> = Vec::new();
+    for hair_m in [seed_hair.length_m, 0.03] {
+        let mut cases: Vec<(WallSurface, HairLayout, f64)> = Vec::new();
+        for surface in [WallSurface::Rough, WallSurface::Smooth] {
+            for layout in HairLayout::ALL {
+                cases.push((surface, layout, 30.0));
+            }
+        }
+        for deg in [10.0, 20.0, 60.0, 70.0] {
+            cases.push((WallSurface::Rough, HairLayout::Distal, deg));
+        }
+        for (surface, layout, deg) in cases {
+            let r = flipping::run(&base, surface, layout, deg, hair_m)?;
+            writeln!(
+                md,
+                "| {:.0} mm | {surface:?} | {} | {deg:.0} | {} | {:.1} | {} |",
+                hair_m * 1e3,
+                layout.name(),
+                r.flip_t_s.map_or("no flip".into(), |t| format!("{t:.2}")),
+                r.max_distal_angle_deg,
+                r.anchored_steps
+            )?;
+            if deg == 30.0 {
+                angle_series.push((
+                    format!("{:.0} mm, {surface:?}, {}", hair_m * 1e3, layout.name()),
+                    r.t_s
+                        .iter()
+                        .zip(&r.distal_angle_deg)
+                        .map(|(&t, &a)| (t, a))
+                        .collect(),
+                ));
+            }
+        }
+    }
+    writeln!(
+        md,
+        "\nAt 60 and 70 deg the 30 mm hairs flip as the antenna is put on the wall (t = \
+         0.01 s): the steep antenna meets the wall nearly head on.\n\n\
+         ![3.3.1](figures/reproduce_3_3_1.svg)\n"
+    )?;
+    if figures {
+        let (seed, long): (Vec<Series>, Vec<Series>) = angle_series
+            .into_iter()
+            .partition(|(name, _)| !name.starts_with("30 mm"));
+        draw_panels(
+            &docs().join("figures/reproduce_3_3_1.svg"),
+            &[
+                Panel {
+                    title: "3.3.1 with the seed's hairs: the distal segment locks short of 90 deg",
+                    x_label: "t (s)",
+                    y_label: "distal segment to wall (deg)",
+                    series: seed,
+                    points: false,
+                },
+                Panel {
+                    title: "3.3.1 with 30 mm hairs: only rough + distal flips",
+                    x_label: "t (s)",
+                    y_label: "distal segment to wall (deg)",
+                    series: long,
+                    points: false,
+                },
+            ],
+        )?;
+    }
+    Ok(())
+}
+
+fn tip_force_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error::Error>> {
+    let base = reproduce::load_scene("tip_forces_3_3_2.toml")?;
+    let runs = [tip_forces::run(&base, 30.0)?, tip_forces::run(&base, 60.0)?];
+    writeln!(md, "## 4. Seed 3.3.2: tip forces through a flip\n")?;
+    writeln!(
+        md,
+        "`examples/tip_forces_3_3_2.toml` (30 mm distal hairs, an abrasive strip from x = \
+         6 cm); test `tests/tests/reproduce_tip_forces.rs`. Forces of the strip on the distal \
+         segment (its tip and its hair), from first load to the flip.\n\n\
+         | base angle (deg) | flip at (s) | mean N / mean abs(T) |\n|---|---|---|"
+    )?;
+    for r in &runs {
+        writeln!(
+            md,
+            "| {:.0} | {} | {} |",
+            r.base_angle_deg,
+            r.flip_t_s.map_or("no flip".into(), |t| format!("{t:.2}")),
+            opt(r.normal_to_shear_ratio())
+        )?;
+    }
+    writeln!(
+        md,
+        "\nReproduced: the 60 deg flip has the higher normal-to-shear ratio.\n\n\
+         ![3.3.2](figures/reproduce_3_3_2.svg)\n"
+    )?;
+    if figures {
+        let mut forces: Vec<Series> = Vec::new();
+        for r in &runs {
+            let end = r.flip_t_s.unwrap_or(f64::INFINITY) + 0.5;
+            let keep = |t: f64| t <= end;
+            forces.push((
+                format!("{:.0} deg: normal", r.base_angle_deg),
+                r.t_s
+                    .iter()
+                    .zip(&r.normal_n)
+                    .filter(|(t, _)| keep(**t))
+                    .map(|(&t, &n)| (t, n * 1e3))
+                    .collect(),
+            ));
+            forces.push((
+                format!("{:.0} deg: shear", r.base_angle_deg),
+                r.t_s
+                    .iter()
+                    .zip(&r.shear_n)
+                    .filter(|(t, _)| keep(**t))
+                    .map(|(&t, &s)| (t, s * 1e3))
+                    .collect(),
+            ));
+        }
+        draw_panels(
+            &docs().join("figures/reproduce_3_3_2.svg"),
+            &[Panel {
+                title: "3.3.2: forces on the distal segment until half a second after the flip",
+                x_label: "t (s)",
+                y_label: "force (mN)",
+                series: forces,
+                points: false,
+            }],
+        )?;
+    }
+    Ok(())
+}
+
+fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error::Error>> {
+    let base = reproduce::load_scene("mapping_4_2_2.toml")?;
+    let profiles = [
+        StiffnessProfile::FastExponential,
+        StiffnessProfile::Constant,
+    ];
+    let jobs: Vec<(StiffnessProfile, f64)> = profiles
+        .iter()
+        .flat_map(|p| mapping::FREQUENCIES_PER_M.map(|f| (p.clone(), f)))
+        .collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results = std::sync::Mutex::new(Vec::<MappingRun>::new());
+    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some((p, f)) = jobs.get(i) else { break };
+                    if let Ok(r) = mapping::run(&base, p.clone(), *f) {
+                        eprintln!("4.2.2 {} {f}: {:.2} mm", p.name(), r.mean_error_mm);
+                        results.lock().unwrap().push(r);
+                    }
+                }
+            });
+        }
+    });
+    let mut runs = results.into_inner()?;
+    runs.sort_by(|a, b| {
+        (a.profile.name(), a.frequency_per_m)
+            .partial_cmp(&(b.profile.name(), b.frequency_per_m))
+            .unwrap()
+    });
+    writeln!(md, "## 3. Seed 4.2.2: mapping sinusoidal walls\n")?;
+    writeln!(
+        md,
+        "`examples/mapping_4_2_2.toml` (amplitude 1 cm) at each frequency, the \
+         fast-exponential against the constant profile. The contact points are estimated \
+         from the 12-bit joint angles and the touch bits (`sim_core::estimate_contacts`) \
+         and scored against the true wall.\n\n\
+         **Not reproduced.** Some of these sweeps stop early: a step's snap is not \
+         followed to rest (the contact solver's downhill flow stalls where a contact sits \
+         on the edge of its friction cone against the curved wall); the error is then over \
+         the steps before. Over the runs that finish, the mapping error does not grow with \
+         frequency and the decreasing profile does not beat the constant one everywhere. No \
+         test asserts the seed's claim; this table is regenerated with the figure.\n\n\
+         | profile | frequency (1/m) | mean error (mm) | points | steps run | stopped early |\n|---|---|---|---|---|---|"
+    )?;
+    for r in &runs {
+        writeln!(
+            md,
+            "| {} | {} | {:.2} | {} | {} | {} |",
+            r.profile.name(),
+            r.frequency_per_m,
+            r.mean_error_mm,
+            r.points,
+            r.steps,
+            r.failure.as_deref().unwrap_or("no")
+        )?;
+    }
+    writeln!(md, "\n![4.2.2](figures/reproduce_4_2_2.svg)\n")?;
+    if figures {
+        let series: Vec<Series> = profiles
+            .iter()
+            .flat_map(|p| {
+                let finished: Vec<(f64, f64)> = runs
+                    .iter()
+                    .filter(|r| r.profile == *p && r.failure.is_none())
+                    .map(|r| (r.frequency_per_m, r.mean_error_mm))
+                    .collect();
+                let stopped: Vec<(f64, f64)> = runs
+                    .iter()
+                    .filter(|r| r.profile == *p && r.failure.is_some())
+                    .map(|r| (r.frequency_per_m, r.mean_error_mm))
+                    .collect();
+                [
+                    (format!("{} (finished)", p.name()), finished),
+                    (format!("{} (stopped early)", p.name()), stopped),
+                ]
+            })
+            .collect();
+        draw_panels(
+            &docs().join("figures/reproduce_4_2_2.svg"),
+            &[Panel {
+                title: "4.2.2: mean mapping error against the wall's spatial frequency",
+                x_label: "spatial frequency (1/m)",
+                y_label: "mean error (mm)",
+                series,
+                points: true,
+            }],
+        )?;
+    }
+    Ok(())
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let what = std::env::args().nth(1).unwrap_or_else(|| "all".into());
+    // plotters draws text with ab_glyph from a registered font: the sans-serif egui ships.
+    plotters::style::register_font(
+        "sans-serif",
+        FontStyle::Normal,
+        epaint_default_fonts::UBUNTU_LIGHT,
+    )
+    .map_err(|_| "the figures' font did not load")?;
+    let all = what == "all";
+    let mut md = String::new();
+    writeln!(
+        md,
+        "# Reproducing the seed's experiments\n\n\
+         Generated by `scripts/reproduce` (`cargo run -p antenna-tests --release --example \
+         reproduce`), which also draws the figures in `docs/figures/`. The seed's claims that \
+         hold are asserted by the tests named in each section (`scripts/check` runs them); \
+         where the model cannot reproduce a claim, the section says so and why.\n"
+    )?;
+    if all || what == "4.2.1" {
+        wall_following(&mut md, all)?;
+    }
+    if all || what == "3.3.1" {
+        flipping_runs(&mut md, all)?;
+    }
+    if all || what == "4.2.2" {
+        mapping_runs(&mut md, all)?;
+    }
+    if all || what == "3.3.2" {
+        tip_force_runs(&mut md, all)?;
+    }
+    if all {
+        std::fs::write(docs().join("reproduction.md"), &md)?;
+        println!("wrote docs/reproduction.md and docs/figures/reproduce_*.svg");
+    } else {
+        print!("{md}");
+    }
+    Ok(())
+}
