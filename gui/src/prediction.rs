@@ -2,11 +2,10 @@
 //!
 //! The chain panel overlays the measured chain with [`Prediction`]s and draws their
 //! difference; it knows only [`Predictor`]. [`predictor_for`] is the one place that chooses
-//! the model: today [`TipPenaltyPredictor`], the simulated rig's own physics
-//! (`host_daemon::sim_rig::SimPhysics`: sim-core's equilibrium solver with a tip-only penalty
-//! contact against the flat wall, warm-started from the previous posture). When sim-core's
-//! quasi-static contact solver with friction lands, a second implementation of [`Predictor`]
-//! and a change to [`predictor_for`] switch every panel over.
+//! the model: today [`QuasiStaticPredictor`], the simulated rig's own physics
+//! (`host_daemon::sim_rig::SimPhysics`: sim-core's quasi-static contact solver with friction
+//! against the flat wall, stepping from the previous posture). Another model is another
+//! implementation of [`Predictor`] and a change to [`predictor_for`].
 //!
 //! Solving can take milliseconds for long chains, so the UI asks a [`PredictionWorker`]: a
 //! thread that always solves the latest requested pose and never makes the UI wait. It uses
@@ -60,18 +59,18 @@ pub trait Predictor: Send + std::fmt::Debug {
 
 /// The predictor the monitor uses for `rig`: the one switch point between models.
 pub fn predictor_for(rig: &RigGeometry) -> Result<Box<dyn Predictor>, MonitorError> {
-    Ok(Box::new(TipPenaltyPredictor::new(rig)?))
+    Ok(Box::new(QuasiStaticPredictor::new(rig)?))
 }
 
-/// sim-core's equilibrium with a tip-only penalty contact, exactly the simulated rig's
-/// physics (`host_daemon::sim_rig::SimPhysics`).
+/// sim-core's quasi-static contact solver, exactly the simulated rig's physics
+/// (`host_daemon::sim_rig::SimPhysics`).
 #[derive(Debug)]
-pub struct TipPenaltyPredictor {
+pub struct QuasiStaticPredictor {
     physics: SimPhysics,
     mount_rad: f64,
 }
 
-impl TipPenaltyPredictor {
+impl QuasiStaticPredictor {
     /// The predictor for `rig`, which needs a wall, a stiffness profile and equal link
     /// lengths (what the simulated rig supports).
     pub fn new(rig: &RigGeometry) -> Result<Self, MonitorError> {
@@ -103,6 +102,8 @@ impl TipPenaltyPredictor {
         config.sim.wall = WallConfig {
             distance_m: wall.distance_m,
             angle_deg: wall.angle_rad.to_degrees(),
+            // `hello` does not carry the wall's friction: the simulated rig's default.
+            mu: WallConfig::default().mu,
             stiffness_n_per_m: wall.stiffness_n_per_m,
         };
         let physics =
@@ -114,9 +115,9 @@ impl TipPenaltyPredictor {
     }
 }
 
-impl Predictor for TipPenaltyPredictor {
+impl Predictor for QuasiStaticPredictor {
     fn name(&self) -> &'static str {
-        "sim-core, tip penalty contact"
+        "sim-core, quasi-static contact"
     }
 
     fn predict(&mut self, pose: BasePose) -> Result<Prediction, MonitorError> {

@@ -378,7 +378,11 @@ pub struct WallConfig {
     /// Angle between the wall and the track, degrees (positive: the wall comes closer as the
     /// stage moves forward).
     pub angle_deg: f64,
-    /// Penalty stiffness of the wall, newtons per metre of penetration.
+    /// Coulomb friction coefficient of the wall against the antenna.
+    pub mu: f64,
+    /// Penalty stiffness of the wall, newtons per metre of penetration: the tip-only
+    /// stand-in's, before the rig used sim-core's contact solver (which keeps the antenna out
+    /// of the wall exactly). Still accepted and sent in `hello`; the physics ignores it.
     pub stiffness_n_per_m: f64,
 }
 
@@ -387,6 +391,7 @@ impl Default for WallConfig {
         Self {
             distance_m: 0.42,
             angle_deg: 30.0,
+            mu: 0.3,
             stiffness_n_per_m: 200.0,
         }
     }
@@ -644,6 +649,9 @@ impl Config {
                 "sim.wall.angle_deg",
                 "must be within (-80, 80) degrees".to_owned(),
             );
+        }
+        if !(wall.mu.is_finite() && wall.mu >= 0.0) {
+            return fail("sim.wall.mu", "must be finite and >= 0".to_owned());
         }
         if !positive(wall.stiffness_n_per_m) {
             return fail("sim.wall.stiffness_n_per_m", "must be positive".to_owned());

@@ -3,14 +3,13 @@
 //! that move in real time at their set speeds, and joint angles from sim-core's equilibrium
 //! solver as the stage carries the antenna along a configured wall.
 //!
-//! # Contact: a stand-in
-//! sim-core's contact solver does not exist yet. Until it lands, contact is a **tip-only
-//! penalty**: the wall pushes on the tip along its normal with `f = k_wall * penetration`,
-//! and the posture is the equilibrium under that load ([`sim_core::solve_equilibrium`],
-//! warm-started from the previous posture). The force is the root of
-//! `penetration(f) - f / k_wall`, found by safeguarded secant steps on `f >= 0`. Frictionless;
-//! links other than the tip may pass through the wall. A segment's touch switches close
-//! while the end of its link is within [`TOUCH_DISTANCE_M`] of the wall.
+//! # Contact
+//! sim-core's quasi-static contact solver ([`sim_core::contact::QuasiStatic`]): every link
+//! and joint kept out of the wall, Coulomb friction that sticks and slips (`mu` of
+//! `[sim.wall]`), snaps followed downhill. Each new stage position is a step of the sweep; a
+//! new base angle rebuilds the solver from the current posture, backed off the wall if the
+//! turn would put the antenna into it, and steps back. A segment's touch switches close
+//! where its link touches the wall (`sim_core::touch_bits_from_contacts`).
 
 use crate::acquisition::{
     AcquisitionEvent, MotionSettings, PollReport, PollSettings, Rig, Shared, event_channel,
@@ -25,13 +24,13 @@ use crate::{FakeServo, FakeStage, Servo};
 use antenna_protocol::TouchBits;
 use anyhow::{Context, Result, anyhow};
 use nalgebra::Vector2;
-use sim_core::{Chain, EquilibriumProblem, InitialGuess, SolveOptions, solve_equilibrium};
+use sim_core::contact::{ContactSettings, QuasiStatic};
+use sim_core::{
+    Chain, ChainContact, Line, SolidSide, Surface, SurfaceMap, Wall, touch_bits_from_contacts,
+};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-
-/// How close to the wall (metres) the end of a link must be for its touch switches to close.
-pub const TOUCH_DISTANCE_M: f64 = 0.002;
 
 /// The physical state the simulated segments sense.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -45,16 +44,16 @@ pub struct SimState {
 }
 
 /// The antenna against the wall: the posture for a stage position and base angle.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct SimPhysics {
-    chain: Chain,
-    wall: WallConfig,
-    theta: Vec<f64>,
-    force_n: f64,
+    sim: QuasiStatic,
+    contacts: Vec<ChainContact>,
+    touch_bits: Vec<u8>,
 }
 
 impl SimPhysics {
-    /// The antenna of `config.sim.antenna` (one link per segment) in front of its wall.
+    /// The antenna of `config.sim.antenna` (one link per segment) at rest in front of its
+    /// wall, the stage at 0.
     pub fn new(config: &Config) -> Result<Self> {
         let antenna = &config.sim.antenna;
         let lengths = vec![antenna.link_length_m; antenna.links + 1];
@@ -74,108 +73,101 @@ impl SimPhysics {
             .stiffnesses_nm_per_rad(k)
             .build()
             .context("sim.antenna")?;
-        Ok(Self {
-            theta: chain.rest_theta(),
+        let wall = wall_of(&config.sim.wall)?;
+        let theta = chain.rest_theta();
+        let sim = QuasiStatic::new(
             chain,
-            wall: config.sim.wall.clone(),
-            force_n: 0.0,
+            vec![wall],
+            Vector2::zeros(),
+            &theta,
+            ContactSettings::default(),
+        )
+        .context("sim.antenna at rest with the stage at 0 against sim.wall")?;
+        Ok(Self {
+            touch_bits: vec![0; theta.len()],
+            sim,
+            contacts: Vec::new(),
         })
-    }
-
-    /// The wall's unit normal, pointing into the wall.
-    fn normal(&self) -> Vector2<f64> {
-        let (s, c) = self.wall.angle_deg.to_radians().sin_cos();
-        Vector2::new(s, c)
-    }
-
-    /// How far `point` (metres, track frame) is inside the wall (negative: in front of it).
-    fn penetration_m(&self, point: Vector2<f64>) -> f64 {
-        (point - Vector2::new(0.0, self.wall.distance_m)).dot(&self.normal())
-    }
-
-    /// The equilibrium under a wall force `f` on the tip, from the current posture; returns
-    /// the angles and the tip's penetration with the base at `base_x_m`.
-    fn solve(&self, chain: &Chain, f: f64, base_x_m: f64) -> Result<(Vec<f64>, f64)> {
-        let problem = EquilibriumProblem::new(chain).with_tip_force_n(-f * self.normal());
-        let guess = InitialGuess::Angles(self.theta[1..].to_vec());
-        let eq = solve_equilibrium(&problem, &guess, &SolveOptions::default())
-            .context("equilibrium solve")?;
-        let tip = sim_core::tip_pose(chain, &eq.theta_rad).context("tip pose")?;
-        let pen = self.penetration_m(tip.position_m + Vector2::new(base_x_m, 0.0));
-        Ok((eq.theta_rad, pen))
     }
 
     /// The posture with the base at `base_x_m` along the track and the base link at
-    /// `base_angle_rad`, warm-started from the last one.
+    /// `base_angle_rad`: one quasi-static step from the last one.
     pub fn update(&mut self, base_x_m: f64, base_angle_rad: f64) -> Result<SimState> {
-        let chain = self
-            .chain
-            .with_base_angle_rad(base_angle_rad)
-            .context("base angle")?;
-        let k_wall = self.wall.stiffness_n_per_m;
-        let residual = |pen: f64, f: f64| pen - f / k_wall;
-        let (theta0, pen0) = self.solve(&chain, 0.0, base_x_m)?;
-        let (theta, force) = if pen0 <= 0.0 {
-            (theta0, 0.0)
-        } else {
-            // g(f) = pen(f) - f / k decreases from g(0) > 0 to g(k pen0) <= 0.
-            let (mut lo, mut g_lo) = (0.0, pen0);
-            let mut hi = k_wall * pen0;
-            let (theta_hi, pen_hi) = self.solve(&chain, hi, base_x_m)?;
-            let mut g_hi = residual(pen_hi, hi);
-            let mut f = self.force_n.clamp(lo, hi);
-            let mut best = (theta_hi, hi);
-            for _ in 0..60 {
-                if hi - lo <= 1e-9 * hi.max(1e-9) {
-                    break;
-                }
-                let (theta_f, pen_f) = self.solve(&chain, f, base_x_m)?;
-                let g = residual(pen_f, f);
-                best = (theta_f, f);
-                if g.abs() <= 1e-7 {
-                    break;
-                }
-                if g > 0.0 {
-                    (lo, g_lo) = (f, g);
-                } else {
-                    (hi, g_hi) = (f, g);
-                }
-                // Secant inside the bracket, bisection if it would leave it.
-                let secant = lo - g_lo * (hi - lo) / (g_hi - g_lo);
-                f = if secant.is_finite() && secant > lo && secant < hi {
-                    secant
-                } else {
-                    0.5 * (lo + hi)
-                };
-            }
-            best
-        };
-        self.theta = theta;
-        self.force_n = force;
-        let poses =
-            sim_core::frame_poses(&chain, &self.theta, sim_core::Frame::GROUND).context("poses")?;
-        let n = chain.n();
-        let touch = (1..=n)
-            .map(|j| {
-                let end = poses
-                    .position_m(sim_core::Frame::link(j))
-                    .unwrap_or_default()
-                    + Vector2::new(base_x_m, 0.0);
-                let near = self.penetration_m(end) > -TOUCH_DISTANCE_M;
-                let bits = match (near, j == n && force > 0.0) {
-                    (_, true) => 0b1100,
-                    (true, false) => 0b1000,
-                    (false, false) => 0,
-                };
-                TouchBits::from_bits_truncate(bits)
-            })
-            .collect();
+        if base_angle_rad != self.sim.chain().base_angle_rad() {
+            self.turn_base(base_angle_rad)?;
+        }
+        self.sim
+            .step_to(Vector2::new(base_x_m, 0.0))
+            .with_context(|| format!("the antenna with the stage at {:.1} mm", base_x_m * 1e3))?;
+        let contacts = self.sim.contacts();
+        self.contacts.clear();
+        self.contacts
+            .extend(contacts.iter().map(|c| c.chain_contact()));
+        touch_bits_from_contacts(&self.contacts, &mut self.touch_bits).context("touch bits")?;
+        let n = self.sim.chain().n();
         Ok(SimState {
-            joint_angles_rad: self.theta[1..].to_vec(),
-            touch,
-            tip_force_n: force,
+            joint_angles_rad: self.sim.theta_rad()[1..].to_vec(),
+            touch: self.touch_bits[1..]
+                .iter()
+                .map(|&b| TouchBits::from_bits_truncate(b))
+                .collect(),
+            tip_force_n: contacts
+                .iter()
+                .filter(|c| c.feature.link() == n)
+                .map(|c| c.normal_force_n)
+                .sum(),
         })
     }
+
+    /// Turns the base link to `base_angle_rad` keeping the joint angles: the solver is
+    /// rebuilt there, its base first backed off along the wall's normal by as much as the
+    /// turn would put the antenna into the wall (the next step brings it back on).
+    fn turn_base(&mut self, base_angle_rad: f64) -> Result<()> {
+        let chain = self
+            .sim
+            .chain()
+            .with_base_angle_rad(base_angle_rad)
+            .context("base angle")?;
+        let mut theta = self.sim.theta_rad().to_vec();
+        theta[0] = base_angle_rad;
+        let base = self.sim.base_m();
+        let walls = self.sim.walls().to_vec();
+        let poses = sim_core::frame_poses(&chain, &theta, sim_core::Frame::GROUND)
+            .context("poses after the turn")?;
+        let mut back_m = Vector2::zeros();
+        for wall in &walls {
+            for link in 0..=chain.n() {
+                let p = base
+                    + poses
+                        .position_m(sim_core::Frame::link(link))
+                        .unwrap_or_default();
+                let d = wall.signed_distance(&p);
+                let inside_m = -d.gap_m + TURN_CLEARANCE_M;
+                if inside_m > 0.0 && inside_m * d.normal.norm() > back_m.norm() {
+                    back_m = d.normal * inside_m;
+                }
+            }
+        }
+        self.sim = QuasiStatic::new(chain, walls, base + back_m, &theta, *self.sim.settings())
+            .context("the antenna turned on its base")?;
+        Ok(())
+    }
+}
+
+/// How far off the wall a turned antenna is put before it steps back, metres.
+const TURN_CLEARANCE_M: f64 = 1e-3;
+
+/// `[sim.wall]` as a sim-core wall: a line through `(0, distance_m)` at `-angle_deg` to the
+/// track (it comes closer as the stage moves forward), solid beyond it, smooth with `mu`.
+fn wall_of(config: &WallConfig) -> Result<Wall> {
+    let line = Line::new(
+        Vector2::new(0.0, config.distance_m),
+        -config.angle_deg.to_radians(),
+        SolidSide::Left,
+    )
+    .context("sim.wall")?;
+    let surface = SurfaceMap::uniform(Surface::Smooth { mu: config.mu }).context("sim.wall.mu")?;
+    Ok(Wall::new(line, surface))
 }
 
 /// The simulated stage and servo, moving in real time, with the antenna following them.
