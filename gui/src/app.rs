@@ -1,9 +1,12 @@
 //! [`MonitorApp`]: the whole monitor, laid out from the panels, for eframe and for tests.
 //!
-//! A source feeds it: [`LiveClient`] (antennad's stream) or a [`RecordedTrial`] (an MCAP
-//! file). Every frame it reads the source's [`History`] under the view's window, draws the
-//! chain at the view's cursor with the prediction for the same base pose, and carries out the
-//! user's view, export and control actions.
+//! A source feeds it: [`LiveClient`] (antennad's stream), a [`RecordedTrial`] (an MCAP
+//! file) or a [`SweepWorker`] (a scene file's simulated sweep, solved on its own thread).
+//! Every frame it reads the source's [`History`] under the view's window, draws the chain at
+//! the view's cursor (with the prediction for the same base pose, for the rig's sources), and
+//! carries out the user's view, export and control actions. A sweep is shown whole as it is
+//! solved (the chain at the newest step) until the user moves the view, then played, paused
+//! and scrubbed like a recording.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -23,6 +26,7 @@ use crate::panels::{
 use crate::prediction::{BasePose, PredictionWorker, predictor_for};
 use crate::recording::{RecordedTrial, open_trial};
 use crate::rig::RigGeometry;
+use crate::sweep_run::{MAX_SWEEP_STEPS, SweepPhase, SweepRunState, SweepWorker};
 use crate::view::ViewState;
 
 /// How the app starts.
@@ -34,6 +38,8 @@ pub struct AppOptions {
     pub token: String,
     /// Open this recorded trial instead.
     pub trial: Option<PathBuf>,
+    /// Run this scene file's sweep instead (when no trial is given).
+    pub scene: Option<PathBuf>,
     /// The live history window, seconds.
     pub history_s: f64,
     /// Where exports are written.
@@ -47,6 +53,7 @@ impl Default for AppOptions {
             connect: None,
             token: String::new(),
             trial: None,
+            scene: None,
             history_s: 60.0,
             export_dir: PathBuf::from("."),
         }
@@ -70,6 +77,7 @@ enum Source {
     Idle,
     Live(LiveClient),
     Trial(Box<RecordedTrial>),
+    Sweep(SweepWorker),
 }
 
 struct PredictionSlot {
@@ -86,6 +94,12 @@ pub struct MonitorApp {
     prediction: Option<PredictionSlot>,
     address: String,
     trial_path: String,
+    scene_path: String,
+    /// A sweep's view as the app last set it: while the user has not moved it since, the
+    /// app keeps the whole sweep in view (`None`: the user has).
+    sweep_view: Option<ViewState>,
+    /// Whether the end of the current sweep has been reported.
+    sweep_reported: bool,
     export_dir: PathBuf,
     exports: Vec<ExportRecord>,
     message: Option<(String, bool)>,
@@ -108,6 +122,10 @@ struct Panels {
 struct DataRef<'a> {
     history: &'a History,
     rig: Option<&'a RigGeometry>,
+    /// A simulated sweep: the chain is its step at the cursor (there is no rig).
+    sweep: Option<&'a SweepRunState>,
+    stage_range_m: Option<(f64, f64)>,
+    mount_angle_rad: f64,
     addresses: &'a [u8],
     counters: Option<&'a [SegmentStatus]>,
     trial: Option<String>,
@@ -150,6 +168,12 @@ impl MonitorApp {
                 .trial
                 .as_ref()
                 .map_or_else(String::new, |p| p.display().to_string()),
+            scene_path: options
+                .scene
+                .as_ref()
+                .map_or_else(String::new, |p| p.display().to_string()),
+            sweep_view: None,
+            sweep_reported: false,
             export_dir: options.export_dir,
             exports: Vec::new(),
             message: None,
@@ -158,6 +182,8 @@ impl MonitorApp {
         };
         if let Some(path) = &options.trial {
             app.open(path);
+        } else if let Some(path) = &options.scene {
+            app.open_scene(path);
         } else if let Some(address) = &options.connect {
             app.connect(address.clone());
         }
@@ -210,6 +236,32 @@ impl MonitorApp {
                 self.source = Source::Trial(Box::new(trial));
             }
             Err(e) => self.message = Some((e.to_string(), true)),
+        }
+    }
+
+    /// Reads the scene file at `path` and starts its sweep on a worker thread (replacing the
+    /// current source). A file that does not parse leaves the source as it was, with the
+    /// error (naming the key, line and column) in the status line.
+    pub fn open_scene(&mut self, path: &Path) {
+        match SweepWorker::start(path, MAX_SWEEP_STEPS) {
+            Ok(worker) => {
+                let planned_end_s = worker.lock().planned_end_s();
+                self.view = ViewState::new(planned_end_s.max(0.01));
+                self.sweep_view = Some(self.view.clone());
+                self.sweep_reported = false;
+                self.message = Some((format!("running the sweep of {}", path.display()), false));
+                self.playing = None;
+                self.source = Source::Sweep(worker);
+            }
+            Err(e) => self.message = Some((e.to_string(), true)),
+        }
+    }
+
+    /// The simulated sweep, if one is the source.
+    pub fn sweep(&self) -> Option<&SweepWorker> {
+        match &self.source {
+            Source::Sweep(w) => Some(w),
+            _ => None,
         }
     }
 
@@ -269,6 +321,12 @@ impl MonitorApp {
                     }
                 }
                 Source::Trial(_) => return true,
+                Source::Sweep(worker) => {
+                    if worker.lock().frame_count() > 0 {
+                        return true;
+                    }
+                    None
+                }
                 Source::Idle => return false,
             };
             if let Some((frame, rig)) = measured {
@@ -344,6 +402,7 @@ impl MonitorApp {
 
     /// Draws the whole app into `ui` (eframe's root `Ui`, or a test harness's).
     pub fn ui(&mut self, ui: &mut egui::Ui) {
+        self.follow_sweep();
         self.source_bar(ui);
         let mut source = std::mem::replace(&mut self.source, Source::Idle);
         let deferred = match &mut source {
@@ -352,6 +411,9 @@ impl MonitorApp {
                 let data = DataRef {
                     history: &state.history,
                     rig: state.rig.as_ref(),
+                    sweep: None,
+                    stage_range_m: state.rig.as_ref().and_then(|r| r.stage_range_m),
+                    mount_angle_rad: state.rig.as_ref().map_or(0.0, |r| r.base_mount_angle_rad),
                     addresses: &state.segment_addresses,
                     counters: state.status.as_ref().map(|s| s.segments.as_slice()),
                     trial: state.status.as_ref().and_then(|s| s.trial.clone()),
@@ -376,6 +438,9 @@ impl MonitorApp {
                 let data = DataRef {
                     history: &trial.history,
                     rig: Some(&trial.rig),
+                    sweep: None,
+                    stage_range_m: trial.rig.stage_range_m,
+                    mount_angle_rad: trial.rig.base_mount_angle_rad,
                     addresses: &trial.segment_addresses,
                     counters: None,
                     trial: Some(trial.name.clone()),
@@ -386,9 +451,45 @@ impl MonitorApp {
                 };
                 self.draw(ui, &data)
             }
+            Source::Sweep(worker) => {
+                let state = worker.lock();
+                if !state.is_finished() {
+                    // Steps arrive between locks: the chain drawn is the newest of this lock.
+                    keep_sweep_in_view(&mut self.view, &mut self.sweep_view, &state);
+                }
+                let data = DataRef {
+                    history: &state.history,
+                    rig: None,
+                    sweep: Some(&state),
+                    stage_range_m: state.track_m,
+                    mount_angle_rad: state.chain.base_angle_rad(),
+                    addresses: &[],
+                    counters: None,
+                    trial: Some(format!("sweep-{}", state.name)),
+                    note: state
+                        .placement_note
+                        .as_ref()
+                        .map(|n| format!("placement: {n}")),
+                    replies: &[],
+                    connected: false,
+                    live: false,
+                };
+                let deferred = self.draw(ui, &data);
+                if !state.is_finished() {
+                    // The progress and the newest step, as they come.
+                    ui.ctx().request_repaint_after(Duration::from_millis(30));
+                } else if !self.sweep_reported {
+                    // It ended during this frame: the next one says how.
+                    ui.ctx().request_repaint();
+                }
+                deferred
+            }
             Source::Idle => {
                 egui::CentralPanel::default().show(ui, |ui| {
-                    ui.label("Connect to antennad or open a recorded trial (.mcap) above.");
+                    ui.label(
+                        "Connect to antennad, open a recorded trial (.mcap) or run a scene \
+                         file's sweep (.toml) above.",
+                    );
                 });
                 Deferred::default()
             }
@@ -417,7 +518,9 @@ impl MonitorApp {
         egui::Panel::top("source_bar")
             .frame(unfilled(egui::Frame::side_top_panel(ui.style())))
             .show(ui, |ui| {
-                ui.horizontal(|ui| {
+                // Wrapped: the source's state (a sweep's progress, a connection's) is never cut
+                // off in a narrow window.
+                ui.horizontal_wrapped(|ui| {
                     let label = ui.label("antennad");
                     ui.add(egui::TextEdit::singleline(&mut self.address).desired_width(140.0))
                         .labelled_by(label.id);
@@ -427,11 +530,19 @@ impl MonitorApp {
                     }
                     ui.separator();
                     let label = ui.label("trial .mcap");
-                    ui.add(egui::TextEdit::singleline(&mut self.trial_path).desired_width(220.0))
+                    ui.add(egui::TextEdit::singleline(&mut self.trial_path).desired_width(180.0))
                         .labelled_by(label.id);
                     if ui.button("Open").clicked() {
                         let path = PathBuf::from(self.trial_path.trim());
                         self.open(&path);
+                    }
+                    ui.separator();
+                    let label = ui.label("scene .toml");
+                    ui.add(egui::TextEdit::singleline(&mut self.scene_path).desired_width(180.0))
+                        .labelled_by(label.id);
+                    if ui.button("Run sweep").clicked() {
+                        let path = PathBuf::from(self.scene_path.trim());
+                        self.open_scene(&path);
                     }
                     ui.separator();
                     match &self.source {
@@ -475,6 +586,23 @@ impl MonitorApp {
                         Source::Trial(t) => {
                             ui.label(format!("trial {} ({})", t.name, t.path.display()));
                         }
+                        Source::Sweep(worker) => {
+                            let state = worker.lock();
+                            let colour = match state.phase {
+                                SweepPhase::Placing | SweepPhase::Stepping => {
+                                    Color32::from_rgb(200, 140, 0)
+                                }
+                                SweepPhase::Done => Color32::from_rgb(0, 150, 0),
+                                SweepPhase::Failed(_) => Color32::RED,
+                            };
+                            // Whole: on the next row rather than broken.
+                            ui.add(
+                                egui::Label::new(
+                                    RichText::new(state.progress()).color(colour).strong(),
+                                )
+                                .wrap_mode(egui::TextWrapMode::Extend),
+                            );
+                        }
                         Source::Idle => {
                             ui.label("no source");
                         }
@@ -498,8 +626,13 @@ impl MonitorApp {
         let span = history.first_t_s().zip(latest);
         self.advance_playback(ui.ctx(), latest);
         let cursor_index = self.view.cursor_s(latest).and_then(|c| history.index_at(c));
-        let measured = match (data.rig, cursor_index) {
-            (Some(rig), Some(i)) => rig.frame_at(history, i).ok(),
+        let measured = match (data.sweep, data.rig, cursor_index) {
+            (Some(sweep), _, _) => self
+                .view
+                .cursor_s(latest)
+                .and_then(|c| sweep.frame_at(c))
+                .and_then(Result::ok),
+            (None, Some(rig), Some(i)) => rig.frame_at(history, i).ok(),
             _ => None,
         };
         let (predicted, prediction_note) = match (data.rig, &measured) {
@@ -584,14 +717,12 @@ impl MonitorApp {
                     let sample = cursor_index.and_then(|i| history.sample(i));
                     let info = StageInfo {
                         stage_position_m: sample.as_ref().and_then(|s| s.stage_position_m),
-                        stage_range_m: data.rig.and_then(|r| r.stage_range_m),
+                        stage_range_m: data.stage_range_m,
                         servo_angle_deg: sample
                             .as_ref()
                             .and_then(|s| s.servo_angle_rad)
                             .map(f64::to_degrees),
-                        mount_angle_deg: data
-                            .rig
-                            .map_or(0.0, |r| r.base_mount_angle_rad.to_degrees()),
+                        mount_angle_deg: data.mount_angle_rad.to_degrees(),
                         trial: data.trial.clone(),
                         note: data.note.clone(),
                     };
@@ -608,6 +739,16 @@ impl MonitorApp {
                     if let Some(rig) = data.rig {
                         ui.separator();
                         ui.label(RichText::new(format!("geometry: {}", rig.source)).small());
+                    }
+                    if let Some(sweep) = data.sweep {
+                        ui.separator();
+                        ui.label(
+                            RichText::new(format!(
+                                "geometry: the scene {} (simulated: no prediction)",
+                                sweep.path.display()
+                            ))
+                            .small(),
+                        );
                     }
                 });
             });
@@ -636,6 +777,50 @@ impl MonitorApp {
                 self.panels.raster.ui(ui, history, window, cursor);
             });
         deferred
+    }
+
+    /// Keeps a sweep that is being solved in view as a whole, with the chain at its newest
+    /// step, while the user has not moved the view; at its end, reports how it ended and
+    /// (the view still untouched) shows it from its start, or at its last step if it stopped
+    /// early.
+    fn follow_sweep(&mut self) {
+        let Source::Sweep(worker) = &self.source else {
+            return;
+        };
+        let state = worker.lock();
+        if !state.is_finished() {
+            keep_sweep_in_view(&mut self.view, &mut self.sweep_view, &state);
+            return;
+        }
+        if self.sweep_reported {
+            return;
+        }
+        self.sweep_reported = true;
+        self.message = Some(match state.error() {
+            Some(e) => (e.to_string(), true),
+            None => {
+                let mut text = format!(
+                    "ran {}: {} frames",
+                    state.path.display(),
+                    state.frame_count()
+                );
+                if let Some(note) = &state.placement_note {
+                    text.push_str(&format!("; placement: {note}"));
+                }
+                (text, false)
+            }
+        });
+        let untouched = self.sweep_view.as_ref() == Some(&self.view);
+        let span = state.history.first_t_s().zip(state.history.latest_t_s());
+        if let (true, Some((first, latest))) = (untouched, span) {
+            let cursor = if state.error().is_some() {
+                latest
+            } else {
+                first
+            };
+            self.view.show_range(first, latest, cursor);
+        }
+        self.sweep_view = None;
     }
 
     /// Moves the cursor of a playing recording on by the time since the last frame times
@@ -706,6 +891,21 @@ impl MonitorApp {
         };
         self.exports.push(record.clone());
         Ok(record)
+    }
+}
+
+/// While the user has not moved `view` since the app last set it (`sweep_view`): the whole
+/// sweep planned in view, the chain at the newest step of `state`.
+fn keep_sweep_in_view(
+    view: &mut ViewState,
+    sweep_view: &mut Option<ViewState>,
+    state: &SweepRunState,
+) {
+    let span = state.history.first_t_s().zip(state.history.latest_t_s());
+    if let (true, Some((first, latest))) = (sweep_view.as_ref() == Some(view), span) {
+        let end = (first + state.planned_end_s()).max(latest);
+        view.show_range(first, end, latest);
+        *sweep_view = Some(view.clone());
     }
 }
 

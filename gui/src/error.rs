@@ -68,6 +68,21 @@ pub enum MonitorError {
     /// A simulated sweep could not be run or drawn.
     #[error("sweep: {0}")]
     Sweep(String),
+    /// A scene file that cannot be read, does not parse or cannot be swept; the message names
+    /// the file, the key and, where known, its line and column.
+    #[error("scene file {0}")]
+    Scene(#[from] antenna_cli::SceneError),
+    /// A simulated sweep stopped before its end (its placement or a step failed); the steps
+    /// before it are kept.
+    #[error("the sweep stopped at t = {t_s:.3} s, {frames_kept} frames kept: {source}")]
+    SweepStopped {
+        /// When it stopped: the failed step's time (0 for the placement), seconds.
+        t_s: f64,
+        /// The frames computed before it (the placed posture counts as one).
+        frames_kept: usize,
+        /// What failed, worded with the scene file, the key or the step.
+        source: antenna_cli::sweep::SweepFailure,
+    },
     /// A control command was not sent.
     #[error("control: {0}")]
     Control(String),

@@ -63,6 +63,9 @@ pub struct ChainFrame {
     pub hairs: Vec<HairDrawing>,
     /// Walls, each a polyline.
     pub walls_m: Vec<Vec<PointM>>,
+    /// Where the chain touches a wall, when the source knows (a simulated sweep's contact
+    /// points; a measured chain has only its touch bits).
+    pub contacts_m: Vec<PointM>,
     /// The base attachment (the same as `joints_m[0]`).
     pub base_m: PointM,
     /// The stage's position, metres, if known.
@@ -152,6 +155,7 @@ mod tests {
             joints_m: points,
             hairs: Vec::new(),
             walls_m: Vec::new(),
+            contacts_m: Vec::new(),
             stage_position_m: None,
             base_angle_rad: 0.0,
             stage_range_m: Some((0.0, 0.3)),

@@ -1,16 +1,19 @@
-//! `antenna-monitor`: the egui desktop monitor for live and recorded antenna chains.
+//! `antenna-monitor`: the egui desktop monitor for live, recorded and simulated antenna
+//! chains.
 //!
-//! It connects to antennad's stream ([`client`], `docs/stream-protocol.md`) or opens a
-//! recorded MCAP trial ([`recording`]), keeps a bounded [`history`] of every poll, and draws
-//! ([`panels`]) the chain with its touches, walls, base and stage, sim-core's prediction for
-//! the same base pose ([`prediction`]) and the difference, joint-angle time series, a touch
-//! raster, segment health, stage and servo state, and the controls (with the daemon's
-//! token). The view ([`view`]) pauses, zooms and scrubs while acquisition goes on, follows
-//! the newest sample, and exports ([`export`]) the visible range to CSV and the view to
-//! PNG or SVG.
+//! It connects to antennad's stream ([`client`], `docs/stream-protocol.md`), opens a
+//! recorded MCAP trial ([`recording`]) or runs a scene file's simulated sweep on a worker
+//! thread ([`sweep_run`]), keeps a bounded [`history`] of every poll, and draws ([`panels`])
+//! the chain with its touches, walls, base and stage, sim-core's prediction for the same
+//! base pose ([`prediction`]) and the difference, joint-angle time series, a touch raster,
+//! segment health, stage and servo state, and the controls (with the daemon's token). The
+//! view ([`view`]) pauses, zooms and scrubs while acquisition goes on, follows the newest
+//! sample, plays a recording or a sweep, and exports ([`export`]) the visible range to CSV
+//! and the view to PNG or SVG.
 //!
-//! The chain panel draws only [`frame::ChainFrame`], whatever the source: live samples,
-//! recorded polls and simulated postures all become frames through [`rig::RigGeometry`].
+//! The chain panel draws only [`frame::ChainFrame`], whatever the source: live samples and
+//! recorded polls become frames through [`rig::RigGeometry`], a sweep's steps through
+//! [`sweep::frame_from_step`].
 //!
 //! # Example: a history and its frame
 //!
@@ -66,6 +69,7 @@ pub mod recording;
 pub mod rig;
 pub mod screenshot;
 pub mod sweep;
+pub mod sweep_run;
 pub mod view;
 
 pub use app::{AppOptions, MonitorApp, is_software_gl, tune_for_software_gl};

@@ -8,16 +8,18 @@ use antenna_monitor::{AppOptions, MonitorApp, is_software_gl, tune_for_software_
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 
-/// The egui desktop monitor for antennad's live chain and recorded trials.
+/// The egui desktop monitor for antennad's live chain, recorded trials and simulated sweeps.
 #[derive(Debug, Parser)]
 #[command(
     version,
     after_help = "Examples:\n  antenna-monitor --connect 127.0.0.1:7878\n  \
                   antenna-monitor --connect 127.0.0.1:7878 --token \"$ANTENNA_TOKEN\"\n  \
-                  antenna-monitor --trial data/wall-sweep.mcap"
+                  antenna-monitor --trial data/wall-sweep.mcap\n  \
+                  antenna-monitor --scene examples/sweep_line_wall.toml"
 )]
 struct Args {
-    /// antennad's stream, host:port (the default when no trial is given: 127.0.0.1:7878).
+    /// antennad's stream, host:port (the default when no trial or scene is given:
+    /// 127.0.0.1:7878).
     #[arg(long, value_name = "ADDR")]
     connect: Option<String>,
     /// The control token antennad printed at start (watching needs none). Without it, the
@@ -27,6 +29,10 @@ struct Args {
     /// Open a recorded trial (MCAP) to scrub instead of connecting.
     #[arg(long, value_name = "FILE", conflicts_with = "connect")]
     trial: Option<PathBuf>,
+    /// Run a scene file's sweep (sim-core, on a worker thread) and animate it instead of
+    /// connecting.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["connect", "trial"])]
+    scene: Option<PathBuf>,
     /// Seconds of live history kept (the plots' longest window).
     #[arg(long, default_value_t = 60.0)]
     history_s: f64,
@@ -59,9 +65,9 @@ fn main() -> Result<()> {
         .split_once('x')
         .and_then(|(w, h)| Some((w.parse::<f32>().ok()?, h.parse::<f32>().ok()?)))
         .with_context(|| format!("--size {:?}: expected WIDTHxHEIGHT", args.size))?;
-    let connect = match (&args.connect, &args.trial) {
-        (None, None) => Some("127.0.0.1:7878".to_owned()),
-        (c, _) => c.clone(),
+    let connect = match (&args.connect, &args.trial, &args.scene) {
+        (None, None, None) => Some("127.0.0.1:7878".to_owned()),
+        (c, _, _) => c.clone(),
     };
     let mut app = MonitorApp::new(AppOptions {
         connect,
@@ -70,6 +76,7 @@ fn main() -> Result<()> {
             .or_else(|| std::env::var("ANTENNA_TOKEN").ok())
             .unwrap_or_default(),
         trial: args.trial,
+        scene: args.scene,
         history_s: args.history_s,
         export_dir: args.export_dir,
     });

@@ -214,6 +214,7 @@ impl RigGeometry {
             segments,
             hairs: Vec::new(),
             walls_m,
+            contacts_m: Vec::new(),
             base_m,
             stage_position_m,
             base_angle_rad,

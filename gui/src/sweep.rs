@@ -2,12 +2,11 @@
 //! ready for the chain panel and the same playback as a recording.
 //!
 //! [`frame_from_step`] turns one [`SweepStep`] into a [`ChainFrame`]: joint positions from
-//! sim-core's kinematics shifted to the step's base, the step's touch bits per segment, the
-//! hair tips, and every wall drawn as a polyline around the antenna ([`wall_polyline_m`]).
-//! [`run_sweep`] runs a whole [`SweepScene`] into frames.
-//!
-//! Not yet reachable from the UI: a scene file has to become a [`SweepScene`] first, and that
-//! parser lives in `antenna-cli` (see `gui/README.md`).
+//! sim-core's kinematics shifted to the step's base, the step's touch bits per segment, its
+//! contact points, the hair tips, and every wall drawn as a polyline around the antenna
+//! ([`wall_polyline_m`]). [`run_sweep`] runs a whole [`SweepScene`] into frames at once;
+//! the monitor runs a scene file's sweep on a worker thread instead
+//! ([`crate::sweep_run::SweepWorker`]), step by step, with these frames drawn at the cursor.
 
 use nalgebra::Vector2;
 use sim_core::sweep::{Sweep, SweepScene, SweepStep};
@@ -35,19 +34,34 @@ impl SweepFrames {
     }
 }
 
+/// The stage track a sweep's base runs along, `(min, max)` x in metres: the base starting
+/// on the x axis and moving along it, as on the rig's stage. `None` for any other motion
+/// (the chain panel then draws no track).
+pub fn track_m(scene: &SweepScene) -> Option<(f64, f64)> {
+    let start_m = scene.base_start_m;
+    let velocity = scene.motion.velocity_m_per_s;
+    if start_m.y != 0.0 || velocity.y != 0.0 {
+        return None;
+    }
+    let end_x_m = start_m.x + velocity.x * scene.motion.duration_s;
+    (start_m.x.is_finite() && end_x_m.is_finite())
+        .then(|| (start_m.x.min(end_x_m), start_m.x.max(end_x_m)))
+}
+
 /// Runs `scene` to the end (at most `max_steps` steps after the placement) and returns its
 /// frames.
 pub fn run_sweep(scene: SweepScene, max_steps: usize) -> Result<SweepFrames, MonitorError> {
     let chain = scene.chain.clone();
     let walls = scene.walls.clone();
+    let track = track_m(&scene);
     let mut sweep = Sweep::new(scene).map_err(|e| MonitorError::Sweep(e.to_string()))?;
     let mut frames = Vec::new();
     if let Some(placed) = sweep.placed() {
-        frames.push(frame_from_step(&chain, &walls, placed)?);
+        frames.push(frame_from_step(&chain, &walls, track, placed)?);
     }
     while frames.len() <= max_steps {
         match sweep.next_step() {
-            Some(Ok(step)) => frames.push(frame_from_step(&chain, &walls, &step)?),
+            Some(Ok(step)) => frames.push(frame_from_step(&chain, &walls, track, &step)?),
             Some(Err(e)) => {
                 return Err(MonitorError::Sweep(format!(
                     "after {} steps: {e}",
@@ -63,10 +77,12 @@ pub fn run_sweep(scene: SweepScene, max_steps: usize) -> Result<SweepFrames, Mon
     })
 }
 
-/// One step of a sweep of `chain` among `walls` as a frame.
+/// One step of a sweep of `chain` among `walls` as a frame; `track_m` is the base's track
+/// ([`track_m`]), drawn as the stage's range, with the walls drawn along all of it.
 pub fn frame_from_step(
     chain: &Chain,
     walls: &[Wall],
+    track_m: Option<(f64, f64)>,
     step: &SweepStep,
 ) -> Result<ChainFrame, MonitorError> {
     let kinematics = |e: sim_core::KinematicsError| MonitorError::Sweep(e.to_string());
@@ -97,7 +113,8 @@ pub fn frame_from_step(
     } else {
         Vec::new()
     };
-    let reach = chain.total_length_m() * 1.5;
+    let track_length_m = track_m.map_or(0.0, |(lo, hi)| hi - lo);
+    let reach = chain.total_length_m() * 1.5 + track_length_m;
     let base_m = [base.x, base.y];
     Ok(ChainFrame {
         t_s: step.t_s,
@@ -105,13 +122,18 @@ pub fn frame_from_step(
             .iter()
             .map(|w| wall_polyline_m(w, base_m, reach))
             .collect(),
+        contacts_m: step
+            .contacts
+            .iter()
+            .map(|c| [c.point_m.x, c.point_m.y])
+            .collect(),
         joints_m,
         segments,
         hairs,
         base_m,
         stage_position_m: Some(base.x),
         base_angle_rad: step.theta_rad.first().copied().unwrap_or(0.0),
-        stage_range_m: None,
+        stage_range_m: track_m,
     })
 }
 
@@ -207,6 +229,12 @@ mod tests {
             let d = wall.signed_distance(&Vector2::new(tip[0], tip[1])).gap_m;
             assert!(d.abs() < 2e-3, "tip {d} m from the wall at {} s", frame.t_s);
             assert!(frame.segments.iter().any(SegmentState::touched));
+            assert!(
+                !frame.contacts_m.is_empty(),
+                "no contact at {} s",
+                frame.t_s
+            );
+            assert_eq!(frame.stage_range_m, Some((0.0, 0.2 * 0.0167)));
             for p in &frame.walls_m[0] {
                 let d = wall.signed_distance(&Vector2::new(p[0], p[1])).gap_m;
                 assert!(d.abs() < 1e-9);

@@ -1,6 +1,7 @@
-//! The chain: segments, joints, touch switches lit where they fire, hairs, walls, the base
-//! and the stage, the measured chain overlaid with sim-core's prediction for the same base
-//! pose and wall, and the difference between them.
+//! The chain: segments, joints, touch switches lit where they fire, contact points (a
+//! simulated sweep's), hairs, walls, the base and the stage, the measured chain overlaid
+//! with sim-core's prediction for the same base pose and wall, and the difference between
+//! them.
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, Vec2};
 
@@ -226,6 +227,10 @@ impl ChainPanel {
                 Stroke::new(1.5, CHAIN_COLOUR),
             );
         }
+        // Where the chain touches a wall (a simulation knows the points).
+        for p in &measured.contacts_m {
+            painter.circle_stroke(to.pos(*p), 5.0, Stroke::new(2.0, TOUCH_COLOUR));
+        }
         painter.circle_filled(base, 4.0, Color32::BLACK);
 
         let mut legend = format!(
@@ -237,6 +242,9 @@ impl ChainPanel {
             legend.push_str(&format!("   stage {:.1} mm", x * 1e3));
         }
         legend.push_str("\nblue: measured   red: touched   grey dashed: unhealthy");
+        if !measured.contacts_m.is_empty() {
+            legend.push_str("   red rings: contact points");
+        }
         if predicted.is_some() {
             legend.push_str(&format!("\norange dashed: predicted ({model})"));
         }

@@ -34,14 +34,25 @@ fn connect_shows_the_daemon_the_chain_and_the_rig_geometry() {
         assert_eq!(wall.distance_m, 0.42);
         assert_eq!(rig.stiffness.as_ref().unwrap().values_n_m_per_rad.len(), 9);
         assert_eq!(state.segment_addresses, (0x20..=0x28).collect::<Vec<u8>>());
-        // Polls arrive at 1 kHz, in order, all healthy.
+        // Polls arrive at 1 kHz, in order, all healthy, every one held or counted as dropped;
+        // a gap in `seq` is a deadline the daemon skipped, late on a loaded machine
+        // (docs/stream-protocol.md): a few at most.
         let n = state.history.len();
         let last = state.history.sample(n - 1).unwrap();
         let first = state.history.sample(0).unwrap();
-        assert_eq!(
-            last.seq.unwrap() - first.seq.unwrap(),
-            n as u64 - 1 + state.lagged_dropped
+        let seq_span = last.seq.unwrap() - first.seq.unwrap();
+        let held = n as u64 - 1 + state.lagged_dropped;
+        assert!(
+            (held..=held + 5).contains(&seq_span),
+            "seq {} to {}: {n} polls held, {} dropped",
+            first.seq.unwrap(),
+            last.seq.unwrap(),
+            state.lagged_dropped
         );
+        let seqs: Vec<u64> = (0..n)
+            .map(|i| state.history.sample(i).unwrap().seq.unwrap())
+            .collect();
+        assert!(seqs.windows(2).all(|w| w[0] < w[1]), "polls out of order");
         assert!(last.segments.iter().all(|s| s.health == Health::Ok));
         // The chain at the newest sample starts at the stage, along the mounting angle.
         let frame = rig.frame_at(&state.history, n - 1).unwrap();

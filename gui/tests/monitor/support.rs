@@ -45,6 +45,7 @@ pub fn monitor(
         connect: Some(daemon.local_addr().unwrap().to_string()),
         token: token.to_owned(),
         trial: None,
+        scene: None,
         history_s: 30.0,
         export_dir,
     });
