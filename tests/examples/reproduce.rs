@@ -430,10 +430,13 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
          fast-exponential against the constant profile. The contact points are estimated \
          from the 12-bit joint angles and the touch bits (`sim_core::estimate_contacts`) \
          and scored against the true wall.\n\n\
-         **Not reproduced.** Some of these sweeps stop early: a step's snap is not \
-         followed to rest (the contact solver's downhill flow stalls where a contact sits \
-         on the edge of its friction cone against the curved wall); the error is then over \
-         the steps before. Over the runs that finish, the mapping error does not grow with \
+         **Not reproduced.** Some of these sweeps stop early, the error then over the \
+         steps before: a step is not solved and the snap that follows does not come to \
+         rest. The one we traced (fast-exponential at 2.8 1/m, t = 14.29 s) is a limit of \
+         the contact solver, not of the model: the distal link rests on a crest while its \
+         proximal end touches the wall too, the solver gives each joint's window of the \
+         chain one contact point, here the window has two, and Newton's method alternates \
+         between them (a jump in the equations, no descent direction). Over the runs that finish, the mapping error does not grow with \
          frequency and the decreasing profile does not beat the constant one everywhere. No \
          test asserts the seed's claim; this table is regenerated with the figure.\n\n\
          | profile | frequency (1/m) | mean error (mm) | points | steps run | stopped early |\n|---|---|---|---|---|---|"
