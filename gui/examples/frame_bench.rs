@@ -255,6 +255,7 @@ fn main() -> Result<()> {
                             address: (k % 256) as u8,
                             angle_rad: Some(a),
                             contact: Some(t),
+                            touch_bits: Some(if t { 0x0F } else { 0 }),
                             counter: None,
                             error: None,
                             stale: false,

@@ -376,10 +376,10 @@ impl MonitorApp {
         match worker.latest() {
             Some(Ok(p)) => {
                 let states = p
-                    .touched
+                    .touch_bits
                     .iter()
-                    .map(|&t| SegmentState {
-                        touch_bits: if t { 0x0F } else { 0 },
+                    .map(|&touch_bits| SegmentState {
+                        touch_bits,
                         ..SegmentState::QUIET
                     })
                     .collect();

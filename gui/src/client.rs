@@ -8,8 +8,9 @@
 //! control requests to a channel that the reader thread writes out: nothing here waits on the
 //! network from the UI thread.
 //!
-//! The stream carries one `contact` flag per segment, not the four touch bits (a recording
-//! has them): a contact is stored as all four bits set.
+//! Each segment's four touch bits come as the stream's `touch_bits` and are stored as they
+//! are. An older daemon sends only the `contact` flag: its contact is stored as all four bits
+//! set (the switch that fired is not known).
 
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, ErrorKind, Write};
@@ -26,6 +27,8 @@ use crate::error::MonitorError;
 use crate::history::{Health, History, Sample, SegmentReading};
 use crate::rig::RigGeometry;
 
+/// A segment's four touch bits.
+const TOUCH_BITS_MASK: u8 = 0x0F;
 /// Replies kept for the controls panel.
 const REPLIES_KEPT: usize = 64;
 /// How long a read waits before the thread looks at its stop flag and its outgoing queue.
@@ -185,6 +188,23 @@ pub struct LiveState {
 }
 
 impl LiveState {
+    /// Nothing received yet; `history_s` is the history window, seconds.
+    fn new(history_s: f64) -> Self {
+        Self {
+            connection: ConnectionState::Connecting { attempt: 1 },
+            history: History::new(0, 1),
+            rig: None,
+            segment_addresses: Vec::new(),
+            status: None,
+            lagged_dropped: 0,
+            replies: Vec::new(),
+            connections: 0,
+            bad_lines: (0, None),
+            history_s,
+            pending: BTreeMap::new(),
+        }
+    }
+
     /// The history window, seconds.
     pub fn history_s(&self) -> f64 {
         self.history_s
@@ -210,19 +230,7 @@ pub struct LiveClient {
 impl LiveClient {
     /// Starts the reader thread; returns at once (the connection is made on that thread).
     pub fn connect(options: ClientOptions) -> Result<Self, MonitorError> {
-        let state = LiveState {
-            connection: ConnectionState::Connecting { attempt: 1 },
-            history: History::new(0, 1),
-            rig: None,
-            segment_addresses: Vec::new(),
-            status: None,
-            lagged_dropped: 0,
-            replies: Vec::new(),
-            connections: 0,
-            bad_lines: (0, None),
-            history_s: options.history_s,
-            pending: BTreeMap::new(),
-        };
+        let state = LiveState::new(options.history_s);
         let shared = Arc::new(Mutex::new(state));
         let stop = Arc::new(AtomicBool::new(false));
         let (outgoing, requests) = channel();
@@ -569,9 +577,15 @@ fn reading(s: &SegmentSample) -> SegmentReading {
         Some("pec") => Health::Pec,
         Some(_) => Health::Bus,
     };
+    // The four bits as the segment sent them; from an older daemon, which sends only
+    // `contact`, a contact as all four.
+    let touch_bits = match (s.touch_bits, s.contact) {
+        (Some(bits), _) => Some(bits & TOUCH_BITS_MASK),
+        (None, contact) => contact.map(|c| if c { TOUCH_BITS_MASK } else { 0 }),
+    };
     SegmentReading {
         angle_rad: s.angle_rad,
-        touch_bits: s.contact.map(|c| if c { 0x0F } else { 0 }),
+        touch_bits,
         health,
     }
 }
@@ -579,6 +593,76 @@ fn reading(s: &SegmentSample) -> SegmentReading {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Feeds stream lines to a fresh state as the reader thread does.
+    fn receive(lines: &[&str]) -> LiveState {
+        let mut state = LiveState::new(1.0);
+        let mut greeted = false;
+        for line in lines {
+            let message: StreamMessage = serde_json::from_str(line).unwrap();
+            on_message(&mut state, message, &mut greeted).unwrap();
+        }
+        state
+    }
+
+    /// An older daemon's lines (no `rig` in `hello`; no `touch_bits`, no `stale` in
+    /// `samples`) still parse and fill the history, a contact as all four bits.
+    #[test]
+    fn an_older_daemons_samples_without_touch_bits_still_parse() {
+        let state = receive(&[
+            r#"{"type":"hello","protocol_version":1,"daemon":"antennad 0.0.9","segment_count":2,"segment_addresses":[33,34]}"#,
+            r#"{"type":"samples","seq":7,"t_ns":7000000,"segments":[{"address":33,"angle_rad":0.1,"contact":true,"counter":null,"error":null},{"address":34,"angle_rad":null,"contact":null,"counter":null,"error":"nack"}],"stage_position_m":null,"base_angle_deg":null}"#,
+            r#"{"type":"samples","seq":8,"t_ns":8000000,"segments":[{"address":33,"angle_rad":0.1,"contact":false,"counter":null,"error":null},{"address":34,"angle_rad":0.2,"contact":false,"counter":null,"error":null}],"stage_position_m":null,"base_angle_deg":null}"#,
+        ]);
+        assert_eq!(state.bad_lines.0, 0);
+        assert_eq!(state.history.len(), 2);
+        let first = state.history.sample(0).unwrap();
+        assert_eq!(first.segments[0].touch_bits, Some(0x0F));
+        assert_eq!(first.segments[0].health, Health::Ok);
+        assert_eq!(first.segments[1].touch_bits, None);
+        assert_eq!(first.segments[1].health, Health::Nack);
+        let second = state.history.sample(1).unwrap();
+        assert_eq!(second.segments[0].touch_bits, Some(0));
+        assert_eq!(second.segments[1].touch_bits, Some(0));
+    }
+
+    /// A sample whose second segment sends `touch_bits` 4 (`0b0100`) lights exactly switch 2
+    /// of that segment in the chain frame, 5/8 of the way along its link; `touch_bits` wins
+    /// over `contact`.
+    #[test]
+    fn touch_bits_0b0100_light_exactly_switch_2_of_their_segment() {
+        let state = receive(&[
+            r#"{"type":"hello","protocol_version":1,"daemon":"antennad 0.1.0","segment_count":3,"segment_addresses":[33,34,35]}"#,
+            r#"{"type":"samples","seq":1,"t_ns":1000000,"segments":[{"address":33,"angle_rad":0.1,"contact":false,"touch_bits":0,"counter":null,"error":null,"stale":false},{"address":34,"angle_rad":-0.2,"contact":true,"touch_bits":4,"counter":null,"error":null,"stale":false},{"address":35,"angle_rad":0.0,"contact":true,"touch_bits":0,"counter":null,"error":null,"stale":false}],"stage_position_m":0.1,"base_angle_deg":0.0}"#,
+        ]);
+        let sample = state.history.sample(0).unwrap();
+        assert_eq!(
+            sample
+                .segments
+                .iter()
+                .map(|s| s.touch_bits)
+                .collect::<Vec<_>>(),
+            [Some(0), Some(0b0100), Some(0)]
+        );
+        let rig = state.rig.as_ref().unwrap();
+        let frame = rig.frame_at(&state.history, 0).unwrap();
+        let lit = frame.lit_switches();
+        assert_eq!(
+            lit.iter()
+                .map(|l| (l.segment, l.switch))
+                .collect::<Vec<_>>(),
+            [(1, 2)]
+        );
+        // On segment 2's link (link 2, from joint 2 to joint 3), 5/8 of the way along it.
+        let (a, b) = frame.link_m(2).unwrap();
+        let expected = [a[0] + 0.625 * (b[0] - a[0]), a[1] + 0.625 * (b[1] - a[1])];
+        let p = lit[0].point_m;
+        assert!(
+            (p[0] - expected[0]).hypot(p[1] - expected[1]) < 1e-12,
+            "{p:?} {expected:?}"
+        );
+        assert!(frame.segments[1].touched() && !frame.segments[2].touched());
+    }
 
     #[test]
     fn request_lines_follow_the_protocol() {

@@ -256,6 +256,16 @@ fn draw_chain<DB: DrawingBackend>(
             ))
             .map_err(e)?;
     }
+    // The switches that fire, at their places along their links, as in the chain panel.
+    chart
+        .draw_series(measured.lit_switches().iter().map(|lit| {
+            Circle::new(
+                (mm(lit.point_m[0]), mm(lit.point_m[1])),
+                4,
+                TOUCHED.filled(),
+            )
+        }))
+        .map_err(e)?;
     chart
         .configure_series_labels()
         .border_style(BLACK)

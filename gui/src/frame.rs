@@ -5,6 +5,13 @@
 //! frame, touch bits and health per segment, hair tips, walls as polylines, and the base and
 //! stage position. Positions are metres in the track frame: x along the stage's track from
 //! home, y towards the wall, the antenna's base attachment at `(stage_position_m, 0)`.
+//!
+//! Where a touch switch sits is the frame's to say, the same for every source:
+//! [`ChainFrame::lit_switches`] places each switch that fires at sim-core's place for it,
+//! [`TouchLayout::switch_fraction`] of its segment's link from the proximal joint (switch `i`
+//! covers the quarter `[i/4, (i+1)/4)` of the link, [`sim_core::switch_for_fraction`]).
+
+use sim_core::{SWITCHES_PER_SEGMENT, TouchLayout};
 
 use crate::history::Health;
 
@@ -36,6 +43,18 @@ impl SegmentState {
     pub fn touched(&self) -> bool {
         self.touch_bits != 0
     }
+}
+
+/// One touch switch that fires, where it sits on its link ([`ChainFrame::lit_switches`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LitSwitch {
+    /// The segment's index in [`ChainFrame::segments`] (0: the segment nearest the base); it
+    /// rides on link `segment + 1`.
+    pub segment: usize,
+    /// The switch, 0 (the most proximal) to 3: bit `switch` of the segment's touch bits.
+    pub switch: usize,
+    /// Where it sits, track frame, metres.
+    pub point_m: PointM,
 }
 
 /// A hair drawn from its root on a link to its tip.
@@ -101,6 +120,40 @@ impl ChainFrame {
     /// Link `k`'s end points (0: the base link), if it exists.
     pub fn link_m(&self, k: usize) -> Option<(PointM, PointM)> {
         Some((*self.joints_m.get(k)?, *self.joints_m.get(k + 1)?))
+    }
+
+    /// Where switch `switch` (0 the most proximal .. 3) of the segment at `segment` (an index
+    /// into [`ChainFrame::segments`]) sits: [`TouchLayout::switch_fraction`] of the way along
+    /// its link from the proximal joint. `None` past the last switch or segment.
+    pub fn switch_m(&self, segment: usize, switch: usize) -> Option<PointM> {
+        if switch >= SWITCHES_PER_SEGMENT || segment >= self.segments.len() {
+            return None;
+        }
+        let (a, b) = self.link_m(segment + 1)?;
+        let f = TouchLayout::switch_fraction(switch);
+        Some([a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])])
+    }
+
+    /// Every touch switch that fires, segment by segment from the base, each segment's from
+    /// its proximal end: one per set bit of each segment's touch bits, at [`Self::switch_m`].
+    /// A failed read (touch bits 0) lights none.
+    pub fn lit_switches(&self) -> Vec<LitSwitch> {
+        self.segments
+            .iter()
+            .enumerate()
+            .flat_map(|(segment, state)| {
+                (0..SWITCHES_PER_SEGMENT)
+                    .filter(move |&switch| state.touch_bits & (1 << switch) != 0)
+                    .map(move |switch| (segment, switch))
+            })
+            .filter_map(|(segment, switch)| {
+                self.switch_m(segment, switch).map(|point_m| LitSwitch {
+                    segment,
+                    switch,
+                    point_m,
+                })
+            })
+            .collect()
     }
 
     /// The smallest box holding the chain, the base and the stage's track, as
@@ -173,5 +226,33 @@ mod tests {
         assert_eq!(b.bounds_m(), ([0.0, 0.0], [0.3, 0.03]));
         assert_eq!(a.link_m(1), Some(([0.04, 0.0], [0.08, 0.0])));
         assert_eq!(a.link_m(2), None);
+    }
+
+    /// Bit `i` lights switch `i` alone, `(i + 1/2) / 4` of the way along its segment's link;
+    /// the base link carries no switch.
+    #[test]
+    fn each_touch_bit_lights_its_own_switch_along_the_link() {
+        // Two segments: the base link along x, link 1 up y, link 2 along x again.
+        let mut f = frame(vec![[0.0, 0.0], [0.04, 0.0], [0.04, 0.04], [0.08, 0.04]]);
+        let near = |p: Option<PointM>, q: PointM| {
+            p.is_some_and(|p| (p[0] - q[0]).abs() < 1e-12 && (p[1] - q[1]).abs() < 1e-12)
+        };
+        assert!(f.lit_switches().is_empty());
+        f.segments[0].touch_bits = 0b0100;
+        let lit = f.lit_switches();
+        assert_eq!(lit.len(), 1, "{lit:?}");
+        assert_eq!((lit[0].segment, lit[0].switch), (0, 2));
+        assert!(near(Some(lit[0].point_m), [0.04, 0.025]), "{lit:?}");
+        f.segments[1].touch_bits = 0b1001;
+        let lit: Vec<(usize, usize)> = f
+            .lit_switches()
+            .iter()
+            .map(|l| (l.segment, l.switch))
+            .collect();
+        assert_eq!(lit, [(0, 2), (1, 0), (1, 3)]);
+        assert!(near(f.switch_m(1, 0), [0.045, 0.04]));
+        assert!(near(f.switch_m(1, 3), [0.075, 0.04]));
+        assert_eq!(f.switch_m(1, 4), None);
+        assert_eq!(f.switch_m(2, 0), None);
     }
 }

@@ -42,8 +42,9 @@ pub struct Prediction {
     pub pose: BasePose,
     /// Joint angles, one per segment, base to tip, radians.
     pub joint_angles_rad: Vec<f64>,
-    /// Whether each segment's touch switches would close.
-    pub touched: Vec<bool>,
+    /// Each segment's touch bits as its switches would close, base to tip (bit `i`: switch
+    /// `i`, bit 0 the most proximal), 0..=15.
+    pub touch_bits: Vec<u8>,
     /// The wall's force on the tip, newtons.
     pub tip_force_n: f64,
 }
@@ -127,7 +128,7 @@ impl Predictor for QuasiStaticPredictor {
             .map_err(|e| MonitorError::Prediction(format!("{e:#}")))?;
         Ok(Prediction {
             pose,
-            touched: state.touch.iter().map(|t| t.any()).collect(),
+            touch_bits: state.touch.iter().map(|t| t.bits()).collect(),
             joint_angles_rad: state.joint_angles_rad,
             tip_force_n: state.tip_force_n,
         })
@@ -276,7 +277,8 @@ mod tests {
         };
         assert_eq!(p.pose, pressed);
         assert!(p.tip_force_n > 0.0);
-        assert!(p.touched[8]);
+        assert_ne!(p.touch_bits[8], 0);
+        assert!(p.touch_bits.iter().all(|&b| b <= 0x0F));
         assert!(p.joint_angles_rad.iter().all(|a| a.abs() > 0.01));
     }
 

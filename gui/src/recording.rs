@@ -163,6 +163,41 @@ mod tests {
         let last = trial.history.sample(299).unwrap();
         assert!((last.stage_position_m.unwrap() - 0.029).abs() < 1e-6);
         assert!(trial.truncated.is_none());
+        // The recording keeps each segment's four touch bits: every poll's come back as
+        // written (none for a failed read), and its frame lights one switch per bit set.
+        for i in 0..300 {
+            let written: Vec<Option<u8>> = synthetic_segments(i, 9)
+                .segments
+                .iter()
+                .map(|s| s.touch)
+                .collect();
+            let read: Vec<Option<u8>> = trial
+                .history
+                .sample(i as usize)
+                .unwrap()
+                .segments
+                .iter()
+                .map(|s| s.touch_bits)
+                .collect();
+            assert_eq!(read, written, "poll {i}");
+            let lit = trial.rig.frame_at(&trial.history, i as usize).unwrap();
+            let lit: Vec<(usize, usize)> = lit
+                .lit_switches()
+                .iter()
+                .map(|l| (l.segment, l.switch))
+                .collect();
+            let expected: Vec<(usize, usize)> = written
+                .iter()
+                .enumerate()
+                .flat_map(|(k, bits)| {
+                    let bits = bits.unwrap_or(0);
+                    (0..4)
+                        .filter(move |b| bits & (1 << b) != 0)
+                        .map(move |b| (k, b))
+                })
+                .collect();
+            assert_eq!(lit, expected, "poll {i}");
+        }
     }
 
     #[test]

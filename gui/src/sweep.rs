@@ -234,6 +234,22 @@ mod tests {
                 "no contact at {} s",
                 frame.t_s
             );
+            // Every switch lit is one a contact closed: within an eighth of its 40 mm link of
+            // a contact point (switch i covers the quarter [i/4, (i+1)/4) of the link).
+            let lit = frame.lit_switches();
+            assert!(!lit.is_empty(), "no switch lit at {} s", frame.t_s);
+            for l in &lit {
+                let nearest_m = frame
+                    .contacts_m
+                    .iter()
+                    .map(|c| (c[0] - l.point_m[0]).hypot(c[1] - l.point_m[1]))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    nearest_m <= 0.005 + 1e-6,
+                    "{l:?}: {nearest_m} m at {} s",
+                    frame.t_s
+                );
+            }
             assert_eq!(frame.stage_range_m, Some((0.0, 0.2 * 0.0167)));
             for p in &frame.walls_m[0] {
                 let d = wall.signed_distance(&Vector2::new(p[0], p[1])).gap_m;

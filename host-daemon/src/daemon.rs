@@ -1210,6 +1210,7 @@ fn net_sample(reading: &crate::SegmentReading, c: Calibration, stale: bool) -> N
             address: reading.address,
             angle_rad: Some(c.angle_rad(word.angle_counts())),
             contact: Some(word.touch().any()),
+            touch_bits: Some(word.touch().bits()),
             counter: None,
             error: None,
             stale,
@@ -1218,6 +1219,7 @@ fn net_sample(reading: &crate::SegmentReading, c: Calibration, stale: bool) -> N
             address: reading.address,
             angle_rad: None,
             contact: None,
+            touch_bits: None,
             counter: None,
             error: Some(
                 match e {

@@ -51,15 +51,27 @@ fn request(client: &mut Client, id: u64, body: &str) -> ControlReply {
     reply
 }
 
-/// Reads samples until `done(stage_m, base_deg)` holds (at most 20 s); returns every stage
-/// position seen.
-fn watch(client: &mut Client, mut done: impl FnMut(Option<f64>, Option<f64>) -> bool) -> Vec<f64> {
+/// What [`watch`] saw.
+struct Watched {
+    /// Every stage position, metres.
+    stage: Vec<f64>,
+    /// Per segment, base to tip, the OR of every poll's touch bits.
+    touch_bits_seen: Vec<u8>,
+}
+
+/// Reads samples until `done(stage_m, base_deg)` holds (at most 20 s), checking that every
+/// segment of every poll reads, with its four touch bits, and that `contact` is any of them.
+fn watch(client: &mut Client, mut done: impl FnMut(Option<f64>, Option<f64>) -> bool) -> Watched {
     let deadline = Instant::now() + Duration::from_secs(20);
-    let mut stage = Vec::new();
+    let mut seen = Watched {
+        stage: Vec::new(),
+        touch_bits_seen: vec![0; 9],
+    };
     loop {
         assert!(
             Instant::now() < deadline,
-            "condition not reached; stage {stage:?}"
+            "condition not reached; stage {:?}",
+            seen.stage
         );
         if let StreamMessage::Samples {
             stage_position_m,
@@ -70,9 +82,17 @@ fn watch(client: &mut Client, mut done: impl FnMut(Option<f64>, Option<f64>) -> 
         {
             assert_eq!(segments.len(), 9);
             assert!(segments.iter().all(|s| s.error.is_none() && !s.stale));
-            stage.extend(stage_position_m);
+            for (s, or) in segments.iter().zip(&mut seen.touch_bits_seen) {
+                let bits = s
+                    .touch_bits
+                    .unwrap_or_else(|| panic!("no touch_bits: {s:?}"));
+                assert!(bits <= 0x0F, "{s:?}");
+                assert_eq!(s.contact, Some(bits != 0), "{s:?}");
+                *or |= bits;
+            }
+            seen.stage.extend(stage_position_m);
             if done(stage_position_m, base_angle_deg) {
-                return stage;
+                return seen;
             }
         }
     }
@@ -122,14 +142,16 @@ fn every_command_needs_the_token_and_malformed_ones_get_clear_errors() {
         assert_eq!(reply.error, Some(code), "{body}: {reply:?}");
     }
     // Nothing moved, and the daemon still streams every poll.
-    let stage = watch(&mut client, {
+    let seen = watch(&mut client, {
         let mut n = 0;
         move |_, _| {
             n += 1;
             n > 200
         }
     });
-    assert!(stage.iter().all(|&m| m == 0.0), "{stage:?}");
+    assert!(seen.stage.iter().all(|&m| m == 0.0), "{:?}", seen.stage);
+    // At home the straight antenna is clear of the wall: no switch fires.
+    assert_eq!(seen.touch_bits_seen, [0; 9]);
     let summary = daemon.shutdown().unwrap();
     assert!(summary.trials.is_empty());
     assert_eq!(summary.dropped, 0);
@@ -163,8 +185,12 @@ fn moves_and_angles_work_between_trials_and_never_pass_the_soft_limits() {
         r#""cmd":"move_stage","position_m":0.09,"speed_m_per_s":0.05"#,
     );
     assert!(reply.ok, "{reply:?}");
-    let stage = watch(&mut client, |s, _| s == Some(0.09));
-    assert!(stage.windows(2).all(|w| w[1] >= w[0]));
+    let seen = watch(&mut client, |s, _| s == Some(0.09));
+    assert!(seen.stage.windows(2).all(|w| w[1] >= w[0]));
+    // On the way the antenna met the wall (it is 20 mm from the straight tip at home and
+    // comes closer as the stage moves forward): the tip segment's switches fired, each
+    // poll's `contact` being any of its four bits (checked in `watch`).
+    assert_ne!(seen.touch_bits_seen[8], 0, "{:?}", seen.touch_bits_seen);
     // From 90 mm, +20 mm would end at 110 mm: refused; the stage stays at 90 mm.
     let reply = request(&mut client, 4, r#""cmd":"move_stage","relative_m":0.02"#);
     assert!(
@@ -175,7 +201,8 @@ fn moves_and_angles_work_between_trials_and_never_pass_the_soft_limits() {
     assert!(reply.ok, "{reply:?}");
     let stage = watch(&mut client, |_, b| {
         b.is_some_and(|b| (b - 12.5).abs() < 1e-9)
-    });
+    })
+    .stage;
     assert!(stage.iter().all(|&m| m <= 0.1), "{stage:?}");
     assert!(stage.iter().rev().take(10).all(|&m| m == 0.09), "{stage:?}");
     let reply = request(&mut client, 6, r#""cmd":"set_base_angle","angle_deg":170"#);
@@ -196,7 +223,8 @@ fn moves_and_angles_work_between_trials_and_never_pass_the_soft_limits() {
             n += 1;
             n > 300
         }
-    });
+    })
+    .stage;
     for &s in stage.iter().skip(30) {
         // Stopped where it was: no more motion after the kill.
         assert!(last.is_none_or(|l| l == s), "{stage:?}");

@@ -74,6 +74,14 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
                 last_seq = Some(seq);
                 samples += 1;
                 for s in &segments {
+                    // A failed read has no touch bits; a read has all four, `contact` any.
+                    match s.error {
+                        Some(_) => assert_eq!((s.contact, s.touch_bits), (None, None)),
+                        None => {
+                            let bits = s.touch_bits.unwrap_or_else(|| panic!("no bits: {s:?}"));
+                            assert_eq!(s.contact, Some(bits != 0), "{s:?}");
+                        }
+                    }
                     match (s.address, s.error.as_deref(), s.stale) {
                         (0x22, Some("nack"), false) => nacks += 1,
                         (0x24, Some("pec"), false) => pecs += 1,

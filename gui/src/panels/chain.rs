@@ -2,6 +2,11 @@
 //! simulated sweep's), hairs, walls, the base and the stage, the measured chain overlaid
 //! with sim-core's prediction for the same base pose and wall, and the difference between
 //! them.
+//!
+//! Touches are drawn from the frame alone, so live, recorded and simulated chains show them
+//! the same way: a link whose segment has any touch bit set is drawn red, and each switch
+//! that fires is a dot at its place along the link ([`ChainFrame::lit_switches`]); the
+//! prediction's switches are rings.
 
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, Vec2};
 
@@ -147,13 +152,7 @@ impl ChainPanel {
                 8.0,
                 4.0,
             ));
-            for (k, s) in p.segments.iter().enumerate() {
-                if s.touched()
-                    && let Some((_, b)) = p.link_m(k + 1)
-                {
-                    painter.circle_stroke(to.pos(b), 6.0, Stroke::new(2.0, PREDICTED_COLOUR));
-                }
-            }
+            paint_lit_switches(&painter, &to, p, SwitchMark::Ring(PREDICTED_COLOUR));
             if self.show_difference {
                 for (a, b) in measured.joints_m.iter().zip(&p.joints_m) {
                     painter.line_segment(
@@ -201,14 +200,9 @@ impl ChainPanel {
                 };
                 painter.line_segment([pa, pb], Stroke::new(width, colour));
             }
-            // The four touch switches along the link, lit where they fire.
-            for bit in 0..4u8 {
-                if segment.touch_bits & (1 << bit) != 0 {
-                    let at = pa.lerp(pb, 0.2 + 0.2 * f32::from(bit));
-                    painter.circle_filled(at, width * 0.9 + 1.0, TOUCH_COLOUR);
-                }
-            }
         }
+        // The touch switches along the links, lit where they fire.
+        paint_lit_switches(&painter, &to, measured, SwitchMark::Dot(width * 0.9 + 1.0));
         // Joint circles only where they do not crowd each other.
         let spacing_px = measured
             .link_m(1)
@@ -241,7 +235,9 @@ impl ChainPanel {
         if let Some(x) = measured.stage_position_m {
             legend.push_str(&format!("   stage {:.1} mm", x * 1e3));
         }
-        legend.push_str("\nblue: measured   red: touched   grey dashed: unhealthy");
+        legend.push_str(
+            "\nblue: measured   red: touched, dots: the switches that fire   grey dashed: unhealthy",
+        );
         if !measured.contacts_m.is_empty() {
             legend.push_str("   red rings: contact points");
         }
@@ -255,5 +251,31 @@ impl ChainPanel {
             FontId::proportional(12.0),
             ui.visuals().text_color(),
         );
+    }
+}
+
+/// How [`paint_lit_switches`] marks a switch that fires.
+#[derive(Debug, Clone, Copy)]
+enum SwitchMark {
+    /// A filled dot of this radius, points, in [`TOUCH_COLOUR`] (the measured chain).
+    Dot(f32),
+    /// A ring in this colour (the prediction).
+    Ring(Color32),
+}
+
+/// Marks every touch switch of `frame` that fires at its place along its link
+/// ([`ChainFrame::lit_switches`]), whatever the frame's source.
+fn paint_lit_switches(
+    painter: &egui::Painter,
+    to: &ToScreen,
+    frame: &ChainFrame,
+    mark: SwitchMark,
+) {
+    for lit in frame.lit_switches() {
+        let at = to.pos(lit.point_m);
+        match mark {
+            SwitchMark::Dot(radius) => painter.circle_filled(at, radius, TOUCH_COLOUR),
+            SwitchMark::Ring(colour) => painter.circle_stroke(at, 5.0, Stroke::new(2.0, colour)),
+        };
     }
 }

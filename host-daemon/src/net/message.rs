@@ -102,15 +102,21 @@ pub struct RigWall {
     pub stiffness_n_per_m: f64,
 }
 
-/// One segment in one poll. A failed read has `error` set and no angle or contact.
+/// One segment in one poll. A failed read has `error` set and no angle, contact or touch bits.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SegmentSample {
     /// 7-bit I2C address.
     pub address: u8,
     /// Joint angle in radians (calibrated).
     pub angle_rad: Option<f64>,
-    /// Contact switch closed.
+    /// Any of the segment's touch switches closed: `touch_bits != 0`.
     pub contact: Option<bool>,
+    /// The segment's four touch switches as its sample word carries them, 0..=15: bit `i` is
+    /// switch `i`, bit 0 the most proximal on the segment's link (`antenna_protocol::TouchBits`).
+    /// Added in 0.1 beside `contact` (which it refines); absent from older daemons' lines,
+    /// read as `None`.
+    #[serde(default)]
+    pub touch_bits: Option<u8>,
     /// The segment's own sample counter (stale if it stops advancing).
     pub counter: Option<u32>,
     /// Why the read failed, e.g. `"nack"` or `"pec"`.
@@ -236,7 +242,7 @@ mod tests {
     }
 
     /// The `samples` example in docs/stream-protocol.md, byte for byte; a line from a daemon
-    /// that did not send `stale` still reads, as not stale.
+    /// that did not send `stale` or `touch_bits` still reads, as not stale and without bits.
     #[test]
     fn documented_samples_line_and_stale_compatibility() {
         let doc = include_str!("../../../docs/stream-protocol.md");
@@ -253,8 +259,21 @@ mod tests {
             segments.iter().map(|s| s.stale).collect::<Vec<_>>(),
             [false, false, true]
         );
-        let old = r#"{"address":33,"angle_rad":0.5,"contact":false,"counter":17,"error":null}"#;
+        // `contact` is any touch bit; a failed read has neither.
+        assert_eq!(
+            segments
+                .iter()
+                .map(|s| (s.contact, s.touch_bits))
+                .collect::<Vec<_>>(),
+            [
+                (Some(false), Some(0)),
+                (None, None),
+                (Some(true), Some(0b0100))
+            ]
+        );
+        let old = r#"{"address":33,"angle_rad":0.5,"contact":true,"counter":17,"error":null}"#;
         let sample: SegmentSample = serde_json::from_str(old).unwrap();
         assert!(!sample.stale);
+        assert_eq!((sample.contact, sample.touch_bits), (Some(true), None));
     }
 }

@@ -98,6 +98,7 @@ pub fn samples(seq: u64) -> StreamMessage {
             address: 0x21 + i,
             angle_rad: Some(0.001 * seq as f64 + f64::from(i)),
             contact: Some(seq.is_multiple_of(2)),
+            touch_bits: Some(if seq.is_multiple_of(2) { 0b0100 } else { 0 }),
             counter: Some((seq % 65_536) as u32),
             error: None,
             stale: i == 4 && seq.is_multiple_of(3),
