@@ -138,8 +138,10 @@ fn slow_client_gets_exact_lag_counts_and_stays_connected() {
     });
     let mut slow = Client::connect(server.local_addr());
     wait_for_clients(&server, 1);
-    // Far more than the socket buffers and the queue hold while the client is not reading.
-    const N: u64 = 50_000;
+    // Far more than the socket buffers and the queue hold while the client is not reading:
+    // about 0.85 kB a message, and loopback buffers autotune up to 4 MB to send plus 32 MB to
+    // receive (`tcp_wmem`, `tcp_rmem`), so 50,000 messages could all fit; 200,000 cannot.
+    const N: u64 = 200_000;
     for seq in 0..N {
         server.publish(&samples(seq));
     }
