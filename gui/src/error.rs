@@ -87,3 +87,17 @@ pub enum MonitorError {
     #[error("control: {0}")]
     Control(String),
 }
+
+impl From<antenna_cli::figure::FigureError> for MonitorError {
+    fn from(e: antenna_cli::figure::FigureError) -> Self {
+        use antenna_cli::figure::FigureError;
+        match e {
+            FigureError::Write { path, source } => MonitorError::Write { path, source },
+            FigureError::Encode { path, message } => MonitorError::Draw { path, message },
+            FigureError::Font => MonitorError::Draw {
+                path: std::path::PathBuf::new(),
+                message: e.to_string(),
+            },
+        }
+    }
+}

@@ -9,7 +9,6 @@
 
 use std::io::Write;
 use std::path::Path;
-use std::sync::OnceLock;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -17,6 +16,7 @@ use plotters::prelude::*;
 use crate::error::MonitorError;
 use crate::frame::ChainFrame;
 use crate::history::History;
+use antenna_cli::figure::{register_font, write_png};
 
 /// Writes the samples of `t0_s..=t1_s` as CSV (see the module documentation); returns the
 /// number of rows.
@@ -114,7 +114,7 @@ pub fn export_figure(input: &FigureInput<'_>, path: &Path) -> Result<(), Monitor
         path: path.to_path_buf(),
         message,
     };
-    register_font().map_err(draw_error)?;
+    register_font().map_err(|e| draw_error(e.to_string()))?;
     match extension.as_deref() {
         Some("svg") => {
             let root = SVGBackend::new(path, FIGURE_SIZE).into_drawing_area();
@@ -129,45 +129,12 @@ pub fn export_figure(input: &FigureInput<'_>, path: &Path) -> Result<(), Monitor
                 draw_figure(&root, input).map_err(draw_error)?;
                 root.present().map_err(|e| draw_error(e.to_string()))?;
             }
-            write_png(path, w, h, &rgb)
+            write_png(path, w, h, &rgb).map_err(MonitorError::from)
         }
         _ => Err(draw_error(
             "the file name must end in .svg or .png".to_owned(),
         )),
     }
-}
-
-fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), MonitorError> {
-    let io = |source| MonitorError::Write {
-        path: path.to_path_buf(),
-        source,
-    };
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let draw = |e: png::EncodingError| MonitorError::Draw {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    let mut writer = encoder.write_header().map_err(draw)?;
-    writer.write_image_data(rgb).map_err(draw)?;
-    writer.finish().map_err(draw)
-}
-
-/// plotters draws text with ab_glyph from a registered font: egui's own sans-serif.
-fn register_font() -> Result<(), String> {
-    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
-    REGISTERED
-        .get_or_init(|| {
-            plotters::style::register_font(
-                "sans-serif",
-                FontStyle::Normal,
-                epaint_default_fonts::UBUNTU_LIGHT,
-            )
-            .map_err(|_| "egui's font did not load into plotters".to_owned())
-        })
-        .clone()
 }
 
 const MEASURED: RGBColor = RGBColor(0, 90, 200);

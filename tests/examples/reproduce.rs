@@ -490,13 +490,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let what = std::env::args().nth(1).unwrap_or_else(|| "all".into());
-    // plotters draws text with ab_glyph from a registered font: the sans-serif egui ships.
-    plotters::style::register_font(
-        "sans-serif",
-        FontStyle::Normal,
-        epaint_default_fonts::UBUNTU_LIGHT,
-    )
-    .map_err(|_| "the figures' font did not load")?;
+    antenna_cli::figure::register_font()?;
     let all = what == "all";
     let mut md = String::new();
     writeln!(

@@ -2,7 +2,7 @@
 //! equilibria ([`solve`], and [`solve_walls`] for scenes with walls), sweeps along walls
 //! ([`sweep`]), studies of many sweeps ([`study`]), Nitinol wire designs ([`design`]),
 //! stiffness identification from recordings ([`recording`], [`identify`]) and the export of
-//! recorded trials ([`export`]).
+//! recorded trials ([`export`]); what every figure shares ([`figure`]: its font, PNG files).
 //!
 //! The binary (`src/bin/antenna/`) parses the command line, prints and picks the exit status;
 //! everything it computes is here so that it can be tested and documented.
@@ -10,6 +10,7 @@
 pub mod design;
 pub mod error;
 pub mod export;
+pub mod figure;
 pub mod identify;
 pub mod progress;
 pub mod recording;

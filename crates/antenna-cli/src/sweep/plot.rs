@@ -8,7 +8,6 @@
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 
 use nalgebra::Vector2;
 use plotters::coord::Shift;
@@ -16,6 +15,7 @@ use plotters::prelude::*;
 use sim_core::{Surface, Wall, WallShape};
 
 use super::SweepState;
+use crate::figure::{FigureError, register_font, write_png};
 
 /// Figure size, pixels (PNG) or user units (SVG).
 pub const FIGURE_SIZE: (u32, u32) = (1200, 1100);
@@ -56,6 +56,19 @@ pub enum PlotError {
         /// The I/O error.
         source: std::io::Error,
     },
+}
+
+impl From<FigureError> for PlotError {
+    fn from(e: FigureError) -> Self {
+        match e {
+            FigureError::Write { path, source } => PlotError::Write { path, source },
+            FigureError::Encode { path, message } => PlotError::Draw { path, message },
+            FigureError::Font => PlotError::Draw {
+                path: PathBuf::new(),
+                message: e.to_string(),
+            },
+        }
+    }
 }
 
 /// One chain snapshot.
@@ -142,7 +155,7 @@ impl SweepPlot {
             path: path.to_path_buf(),
             message,
         };
-        register_font().map_err(draw_error)?;
+        register_font().map_err(|e| draw_error(e.to_string()))?;
         let extension = path
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase());
@@ -168,7 +181,7 @@ impl SweepPlot {
                     self.draw(&root, walls, title).map_err(draw_error)?;
                     root.present().map_err(|e| draw_error(e.to_string()))?;
                 }
-                write_png(path, w, h, &rgb)
+                write_png(path, w, h, &rgb).map_err(PlotError::from)
             }
             _ => Err(PlotError::Extension {
                 path: path.to_path_buf(),
@@ -632,37 +645,4 @@ fn surface_runs(wall: &Wall, run: &[Vector2<f64>]) -> Vec<(bool, Vec<Vector2<f64
         }
     }
     out
-}
-
-fn write_png(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), PlotError> {
-    let write = |source| PlotError::Write {
-        path: path.to_path_buf(),
-        source,
-    };
-    let draw = |e: png::EncodingError| PlotError::Draw {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
-    let file = std::fs::File::create(path).map_err(write)?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(draw)?;
-    writer.write_image_data(rgb).map_err(draw)?;
-    writer.finish().map_err(draw)
-}
-
-/// plotters draws text with ab_glyph from a registered font: the sans-serif egui ships.
-fn register_font() -> Result<(), String> {
-    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
-    REGISTERED
-        .get_or_init(|| {
-            plotters::style::register_font(
-                "sans-serif",
-                FontStyle::Normal,
-                epaint_default_fonts::UBUNTU_LIGHT,
-            )
-            .map_err(|_| "the plot's font did not load into plotters".to_owned())
-        })
-        .clone()
 }
