@@ -24,15 +24,11 @@ fn table_4_1_orders_the_profiles_as_the_seed_does() {
         run.table_row()
     };
     let constant = row(StiffnessProfile::Constant);
-    let decreasing = [
-        StiffnessProfile::FastExponential,
-        StiffnessProfile::Logarithmic,
-        StiffnessProfile::SlowExponential,
-        StiffnessProfile::Linear,
-        StiffnessProfile::SlowReciprocal,
-        StiffnessProfile::FastReciprocal,
-    ];
-    for p in decreasing.clone() {
+    // Table 4.1's rows after the constant one: the decreasing profiles.
+    let decreasing = reproduce::TABLE_4_1_PROFILES
+        .iter()
+        .filter(|p| **p != StiffnessProfile::Constant);
+    for p in decreasing {
         let r = row(p.clone());
         assert!(
             r.preview_mean_cm > constant.preview_mean_cm,
