@@ -140,3 +140,32 @@ fn a_link_lying_flat_on_a_wall_bears_at_both_ends() {
         check.penetration_m
     );
 }
+
+#[test]
+fn a_sweep_across_the_trapezoid_keeps_every_link_out_of_it() {
+    // `examples/wall_polyline.toml` run past the whole bump (two convex and two concave
+    // corners, corners sliding along links and across joints), every step checked.
+    let scene = antenna_tests::reproduce::load_scene("wall_polyline.toml").unwrap();
+    let steps = scene.motion.steps();
+    let mut sweep = sim_core::sweep::Sweep::new(scene).unwrap();
+    let (mut mid_link, mut run) = (0, 0);
+    while let Some(step) = sweep.next_step() {
+        let step = step.unwrap();
+        run += 1;
+        let check = sweep.sim().check();
+        assert!(
+            check.holds(1e-9, 1e-9, 1e-9),
+            "step {}: {check:?}",
+            step.step
+        );
+        if step
+            .contacts
+            .iter()
+            .any(|c| matches!(c.feature, Feature::Link { .. }))
+        {
+            mid_link += 1;
+        }
+    }
+    assert_eq!(run, steps);
+    assert!(mid_link > 100, "a corner inside a link in {mid_link} steps");
+}

@@ -213,6 +213,34 @@ proptest! {
         check_segment(&wall, a, b, 2000);
     }
 
+    /// A contact solver's interior point of a segment that stays in free space is never
+    /// deeper than the segment comes to the wall: a corner off to the side of the segment
+    /// is not measured along the segment's normal.
+    #[test]
+    fn polyline_interior_contact_of_a_free_segment_is_no_deeper_than_it(
+        (vertices, left) in polyline_strategy(),
+        (a, b) in segment_strategy(0.08),
+    ) {
+        let wall = Polyline::new(vertices, side(left)).unwrap();
+        let samples = 2000;
+        let sampled = (0..=samples)
+            .map(|i| wall.signed_distance(&(a + (b - a) * (i as f64 / samples as f64))).gap_m)
+            .fold(f64::INFINITY, f64::min);
+        let spacing = (b - a).norm() / samples as f64;
+        let lowest = sampled - 0.5 * spacing - 1e-12;
+        if let Some(c) = wall.segment_interior_contact(&a, &b) {
+            prop_assert!(c.s > 0.0 && c.s < 1.0);
+            prop_assert!((c.point_m - (a + (b - a) * c.s)).norm() < 1e-15);
+            if lowest > 0.0 {
+                prop_assert!(
+                    c.wall.gap_m >= lowest,
+                    "{} < {lowest} for {a:?} -> {b:?}",
+                    c.wall.gap_m
+                );
+            }
+        }
+    }
+
     #[test]
     fn sinusoid_segment_contact_beats_sampling(
         (wall, amplitude, _, _) in sinusoid_strategy(),

@@ -61,6 +61,28 @@ fn line_signed_distance_is_analytic() {
     assert!((w.normal + n).norm() < 1e-15 && (w.tangent - t).norm() < 1e-15);
 }
 
+/// A link standing steeply beside the bump, left of it: the bump's bottom-right corner
+/// projects onto the link, but the link's normal is outside the corner's normal cone, so the
+/// corner is not measured along it (that would put the corner 0.11 m deep into the link).
+#[test]
+fn a_corner_off_to_the_side_of_a_segment_is_not_a_contact_of_it() {
+    let wall = trapezoid();
+    let (a, b) = (v(0.05, 0.0), v(0.05, 0.09));
+    let c = wall.segment_interior_contact(&a, &b).unwrap();
+    let again = wall.signed_distance(&c.point_m);
+    assert!(c.wall.gap_m > 0.0, "{c:?}");
+    assert!(
+        close(c.wall.gap_m, again.gap_m, 1e-14),
+        "{c:?} vs {again:?}"
+    );
+    // Resting on the corner from below, the link's normal is in the cone: the corner's
+    // contact is measured along the link's normal (1 mm below the corner).
+    let (a, b) = (v(0.12, 0.069), v(0.20, 0.069));
+    let c = wall.segment_interior_contact(&a, &b).unwrap();
+    assert!(close(c.wall.gap_m, 0.001, 1e-12), "{c:?}");
+    assert!((c.point_m - v(0.16, 0.069)).norm() < 1e-12, "{c:?}");
+}
+
 #[test]
 fn trapezoid_signed_distance_is_analytic() {
     let wall = trapezoid();

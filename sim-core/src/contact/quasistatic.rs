@@ -11,8 +11,8 @@ use super::feature::{Contact, Feature, FrictionLaw};
 use super::posture::Posture;
 use super::settings::ContactSettings;
 use super::ssn::{
-    Candidate, Proximal, Site, Ssn, SsnOutcome, StepProblem, hair_of, link_owners, located,
-    window_contact,
+    Candidate, InteriorOwner, Proximal, Site, Ssn, SsnOutcome, StepProblem, hair_of,
+    interior_contact, interior_owners, located, window_contact,
 };
 use crate::{Chain, Surface, Wall};
 
@@ -89,8 +89,8 @@ pub struct QuasiStatic {
     hand_force_n: Vector2<f64>,
     /// No hair anchors during the rest of this step (set after anchors were torn out).
     anchoring_blocked: bool,
-    /// Which window owns each link's interior in the current step, per wall.
-    owners: Vec<Vec<usize>>,
+    /// Who holds each link's interior contact in the current step, per wall.
+    owners: Vec<Vec<InteriorOwner>>,
 }
 
 impl QuasiStatic {
@@ -511,7 +511,7 @@ impl QuasiStatic {
         let n = self.chain.n();
         self.start.update(&self.chain, self.base_m, &self.theta);
         self.probe.update(&self.chain, goal, &self.theta);
-        self.owners = link_owners(&self.contact_walls, &self.probe, n);
+        self.owners = interior_owners(&self.contact_walls, &self.probe, n);
         let mut cands = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
         let mut demoted: Vec<usize> = Vec::new();
         let mut promoted: Vec<usize> = Vec::new();
@@ -672,49 +672,119 @@ impl QuasiStatic {
         });
     }
 
-    /// The candidate contacts of a step to the base at `goal`: every window of the chain and
-    /// hair tip within the margin of a wall with the posture carried to `goal`, and the
-    /// contacts of the last step (their forces and friction state as the start).
+    /// The candidate contacts of a step to the base at `goal`: every link end, link interior
+    /// and hair tip within the margin of a wall with the posture carried to `goal`, and the
+    /// contacts of the last step (their forces and friction state as the start). A contact
+    /// follows its link interior contact from site to site ([`interior_owners`]): into the
+    /// window of an end it came near (or left the link by), out to the link's own site when
+    /// it moved away from the end; where the new site already has a contact, that one takes
+    /// on its forces.
     fn candidates(&self, goal: Vector2<f64>) -> Result<Vec<Candidate>, ContactError> {
         let margin = self.settings.margin_m;
-        let n = self.chain.n();
         let mut out: Vec<Candidate> = Vec::new();
         for (w, wall) in self.walls.iter().enumerate() {
             self.check_base(w, wall, &self.probe, goal)?;
         }
-        for (w, wall) in self.contact_walls.iter().enumerate() {
-            for i in 0..=n {
-                if window_contact(wall, &self.owners[w], &self.probe, n, i)
-                    .wall
-                    .gap_m
-                    < margin
-                {
-                    out.push(self.candidate(Site::Window(i), w));
-                }
-            }
-            for link in 1..=n {
-                if let Some(Some(hair)) = self.chain.hairs().get(link) {
-                    let tip = self.probe.hair_tip(hair, link, self.beta[link]);
-                    if wall.signed_distance(&tip).gap_m < margin {
-                        out.push(self.candidate(Site::HairTip(link), w));
-                    }
-                }
+        for w in 0..self.contact_walls.len() {
+            for site in self.touching_sites(w, &self.probe, &self.beta, margin) {
+                out.push(self.candidate(site, w));
             }
         }
+        // Where each contact of the last step goes now: a link interior contact that came
+        // within reach of an end joins that end's window, one that moved away from it gets
+        // a site of its own.
+        let mut merged: Vec<(Site, &Candidate)> = Vec::new();
         for old in &self.contacts {
+            let owners = &self.owners[old.wall];
+            let site = match (old.site, old.feature) {
+                (Site::Window(_), Feature::Link { link }) if owners[link] == InteriorOwner::Own => {
+                    Site::Interior(link)
+                }
+                (Site::Interior(link), _) => match owners[link] {
+                    InteriorOwner::Window(i) => Site::Window(i),
+                    InteriorOwner::Own => {
+                        let wall = &self.contact_walls[old.wall];
+                        let now = interior_contact(wall, &self.probe, link, old.s);
+                        match (now.inside, now.s < 0.5) {
+                            (true, _) => old.site,
+                            (false, true) => Site::Window(link - 1),
+                            (false, false) => Site::Window(link),
+                        }
+                    }
+                },
+                (site, _) => site,
+            };
+            if site == old.site {
+                match out
+                    .iter_mut()
+                    .find(|c| c.site == site && c.wall == old.wall)
+                {
+                    Some(c) => carry(c, old),
+                    None => {
+                        let mut c = self.candidate(site, old.wall);
+                        carry(&mut c, old);
+                        out.push(c);
+                    }
+                }
+            } else {
+                merged.push((site, old));
+            }
+        }
+        for (site, old) in merged {
             match out
                 .iter_mut()
-                .find(|c| c.site == old.site && c.wall == old.wall)
+                .find(|c| c.site == site && c.wall == old.wall)
             {
+                // The site kept a contact of its own: it takes on the other's forces.
+                Some(c) if c.normal_active || c.normal_force_n != 0.0 => {
+                    c.normal_force_n += old.normal_force_n;
+                    c.shear_force_n += old.shear_force_n;
+                }
                 Some(c) => carry(c, old),
                 None => {
-                    let mut c = self.candidate(old.site, old.wall);
+                    let mut c = self.candidate(site, old.wall);
                     carry(&mut c, old);
                     out.push(c);
                 }
             }
         }
         Ok(out)
+    }
+
+    /// The sites of the chain in `posture` (hair angles `beta`) nearer than `within_m` to
+    /// contact-wall piece `w`: windows, link interiors holding their own contact, and hair
+    /// tips.
+    fn touching_sites(
+        &self,
+        w: usize,
+        posture: &Posture,
+        beta: &[f64],
+        within_m: f64,
+    ) -> Vec<Site> {
+        let wall = &self.contact_walls[w];
+        let owners = &self.owners[w];
+        let n = self.chain.n();
+        let mut sites = Vec::new();
+        for i in 0..=n {
+            if window_contact(wall, owners, posture, n, i).wall.gap_m < within_m {
+                sites.push(Site::Window(i));
+            }
+        }
+        for link in 1..=n {
+            if owners[link] == InteriorOwner::Own {
+                let inside = interior_contact(wall, posture, link, 0.5);
+                if inside.inside && inside.wall.gap_m < within_m {
+                    sites.push(Site::Interior(link));
+                }
+            }
+            if let Some(Some(hair)) = self.chain.hairs().get(link) {
+                let tip = posture.hair_tip(hair, link, beta[link]);
+                if wall.signed_distance(&tip).gap_m < within_m {
+                    sites.push(Site::HairTip(link));
+                }
+            }
+        }
+        sites
     }
 
     /// A fresh candidate: its material point where the site touches (or comes nearest) at
@@ -731,6 +801,19 @@ impl QuasiStatic {
                     self.chain.n(),
                     i,
                 ));
+                (link, s, self.start.link_point(link, s))
+            }
+            Site::Interior(link) => {
+                // Where the crest or corner is at the start of the step; one that had not
+                // reached the link yet then (a contact found after a solve) enters it by
+                // the end nearer to where it is in the probe posture.
+                let at_start = interior_contact(w, &self.start, link, 0.5);
+                let s = if at_start.inside {
+                    at_start.s
+                } else {
+                    let now = interior_contact(w, &self.probe, link, 0.5);
+                    if now.s < 0.5 { 0.0 } else { 1.0 }
+                };
                 (link, s, self.start.link_point(link, s))
             }
             Site::HairTip(link) => (
@@ -771,23 +854,10 @@ impl QuasiStatic {
         }
         let known = |site: Site, w: usize| cands.iter().any(|c| c.site == site && c.wall == w);
         let mut found = Vec::new();
-        for (w, wall) in self.contact_walls.iter().enumerate() {
-            for i in 0..=n {
-                if window_contact(wall, &self.owners[w], &self.probe, n, i)
-                    .wall
-                    .gap_m
-                    < -tol
-                    && !known(Site::Window(i), w)
-                {
-                    found.push((Site::Window(i), w));
-                }
-            }
-            for link in 1..=n {
-                if let Some(Some(hair)) = self.chain.hairs().get(link) {
-                    let tip = self.probe.hair_tip(hair, link, beta[link]);
-                    if wall.signed_distance(&tip).gap_m < -tol && !known(Site::HairTip(link), w) {
-                        found.push((Site::HairTip(link), w));
-                    }
+        for w in 0..self.contact_walls.len() {
+            for site in self.touching_sites(w, &self.probe, &beta, -tol) {
+                if !known(site, w) {
+                    found.push((site, w));
                 }
             }
         }

@@ -41,15 +41,32 @@ use crate::{Chain, Hair, Wall, WallPoint};
 /// Where on the chain a candidate contact is looked for: its identity from step to step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub(crate) enum Site {
-    /// The window around the link end `p_i` (`i = 0..=n`): the distal half of link `i` and
-    /// the proximal half of link `i + 1` (the ones that exist and move). The windows tile
-    /// the flagellum without overlapping, so a wall touching the chain at a joint, or next
-    /// to it on either link, or sliding across it, is one contact, never two copies (see
+    /// The window around the link end `p_i` (`i = 0..=n`): the end itself and, when the
+    /// step gives it to this window ([`interior_owners`]), the interior contact of link `i`
+    /// or `i + 1` next to it. A wall touching the chain at a joint, or just beside it on
+    /// either link, or sliding across it, is one contact, never two nearly equal copies (see
     /// [`window_contact`]).
     Window(usize),
+    /// The inside of link `link`, when its interior contact is away from both its ends
+    /// ([`InteriorOwner::Own`]): a crest or corner pressing on the middle of the link while
+    /// its ends touch elsewhere is a contact of its own (see [`interior_contact`]).
+    Interior(usize),
     /// The tip of the hair on a link.
     HairTip(usize),
 }
+
+/// Who holds a link's interior contact during one step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum InteriorOwner {
+    /// The window of this link end (`link - 1` or `link`).
+    Window(usize),
+    /// The link's own [`Site::Interior`].
+    Own,
+}
+
+/// How near a link end (as a fraction of the link) an interior contact is given to that
+/// end's window rather than a site of its own: two contacts closer than this are one.
+pub(crate) const NEAR_END: f64 = 0.1;
 
 /// A candidate contact during one step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,6 +116,7 @@ impl Candidate {
                 Site::Window(_) => Feature::Link {
                     link: material_link,
                 },
+                Site::Interior(link) => Feature::Link { link },
             },
             wall,
             law,
@@ -141,8 +159,8 @@ pub(crate) struct StepProblem<'a> {
     /// coordinate, keep theirs).
     pub hair_beta_rad: &'a [f64],
     pub proximal: Option<Proximal<'a>>,
-    /// Which window owns each link's interior, per wall ([`link_owners`]).
-    pub owners: &'a [Vec<usize>],
+    /// Who holds each link's interior contact, per wall ([`interior_owners`]).
+    pub owners: &'a [Vec<InteriorOwner>],
     /// A hand holding the tip near this point (ground frame) with a stiff spring: the force
     /// `k_hand (target - p_n)` acts on the tip, `k_hand = 1000 c`.
     pub hand_m: Option<Vector2<f64>>,
@@ -440,7 +458,7 @@ impl Ssn {
                         self.posture
                             .hair_tip_rate(hair_of(chain, link), link, self.beta[link]),
                     )),
-                    Site::Window(_) => None,
+                    Site::Window(_) | Site::Interior(_) => None,
                 };
                 let cols = &mut self.jac[k_idx * m..(k_idx + 1) * m];
                 point_columns(&self.posture, cand.feature.link(), cand.point_m, cols);
@@ -673,23 +691,33 @@ impl Ssn {
         let mut x: Vec<f64> = (0..m).map(|a| self.z[a]).collect();
         let mut plus = vec![0.0; m];
         let mut minus = vec![0.0; m];
+        let mut center = vec![0.0; m];
+        self.contact_force_into(p, n, &x, cands, &mut center);
         for b in 0..m {
             let h = FD_STEP_RAD;
             let saved = x[b];
             x[b] = saved + h;
-            self.contact_force_into(p, n, &x, cands, &mut plus);
+            let plus_same = self.contact_force_into(p, n, &x, cands, &mut plus);
             x[b] = saved - h;
-            self.contact_force_into(p, n, &x, cands, &mut minus);
+            let minus_same = self.contact_force_into(p, n, &x, cands, &mut minus);
             x[b] = saved;
+            // A contact next to a kink of its window (a corner or crest crossing a joint:
+            // the window's deepest point changes links) is differenced on the side where
+            // it stays on its link: the derivative of the piece Newton's method is on.
             for a in 0..m {
-                self.hess[(a, b)] += (plus[a] - minus[a]) / (2.0 * h);
+                self.hess[(a, b)] += match (plus_same, minus_same) {
+                    (true, false) => (plus[a] - center[a]) / h,
+                    (false, true) => (center[a] - minus[a]) / h,
+                    _ => (plus[a] - minus[a]) / (2.0 * h),
+                };
             }
         }
         // Not symmetrized: the shear forces' terms (a tangent that turns with the contact
         // point on a curved wall) are not a potential's, and their Jacobian is not symmetric.
     }
 
-    /// `-sum_k J_k^T F_k` over the candidates at coordinates `x`, forces held, into `out`.
+    /// `-sum_k J_k^T F_k` over the candidates at coordinates `x`, forces held, into `out`;
+    /// whether every candidate touches with the same feature as in `cands`.
     fn contact_force_into(
         &mut self,
         p: &StepProblem<'_>,
@@ -697,7 +725,8 @@ impl Ssn {
         x: &[f64],
         cands: &[Candidate],
         out: &mut [f64],
-    ) {
+    ) -> bool {
+        let mut same = true;
         let mut theta = std::mem::take(&mut self.theta);
         let mut beta = std::mem::take(&mut self.beta);
         theta[1..=n].copy_from_slice(&x[..n]);
@@ -710,6 +739,7 @@ impl Ssn {
         for cand in cands {
             let mut c = *cand;
             geometry(p, &posture, &beta, &mut c);
+            same &= c.feature == cand.feature;
             let force = c.normal * c.normal_force_n + c.tangent * c.shear_force_n;
             let link = c.feature.link();
             for j in 1..=link {
@@ -725,6 +755,7 @@ impl Ssn {
         self.fd_posture = posture;
         self.theta = theta;
         self.beta = beta;
+        same
     }
 
     /// The hand spring's force on the tip (zero without a hand); valid after the posture
@@ -840,6 +871,13 @@ fn geometry(p: &StepProblem<'_>, posture: &Posture, beta: &[f64], cand: &mut Can
             cand.material_m = posture.link_point(cand.material_link, cand.material_s);
             (contact.point_m, contact.wall)
         }
+        Site::Interior(link) => {
+            let contact = interior_contact(wall, posture, link, cand.s);
+            cand.s = contact.s;
+            cand.feature = Feature::Link { link };
+            cand.material_m = posture.link_point(cand.material_link, cand.material_s);
+            (contact.point_m, contact.wall)
+        }
         Site::HairTip(link) => {
             let hair = hair_of(p.chain, link);
             let x = posture.hair_tip(hair, link, beta[link]);
@@ -867,25 +905,37 @@ pub(crate) struct WindowContact {
     pub wall: WallPoint,
 }
 
-/// Which window owns each link's interior for one step, per wall: `owners[w][link]` is
-/// `link - 1` or `link` (the windows at its two ends). Decided once at the start of a step
-/// from where the link's deepest point is (its proximal half: the proximal window), so a
-/// contact sliding along a link stays with one window for the whole step: the windows'
+/// Who holds each link's interior contact for one step, per wall: `owners[w][link]`.
+/// Decided once at the start of a step from where the link's interior contact is: within
+/// [`NEAR_END`] of an end, that end's window; farther in, the link's own site; with none,
+/// the window of the end nearer the wall (where a crest or corner enters the link). A
+/// contact sliding along a link stays with one site for the whole step, so the sites'
 /// contact points move continuously and no contact is handed over mid-solve.
-pub(crate) fn link_owners(walls: &[Wall], posture: &Posture, n: usize) -> Vec<Vec<usize>> {
+pub(crate) fn interior_owners(
+    walls: &[Wall],
+    posture: &Posture,
+    n: usize,
+) -> Vec<Vec<InteriorOwner>> {
     walls
         .iter()
         .map(|wall| {
             (0..=n)
                 .map(|link| {
                     if link == 0 {
-                        return 0;
+                        return InteriorOwner::Window(0);
                     }
-                    match wall
-                        .segment_interior_contact(&posture.start_of(link), &posture.end_m[link])
-                    {
-                        Some(sc) if sc.s >= 0.5 => link,
-                        _ => link - 1,
+                    let (a_m, b_m) = (posture.start_of(link), posture.end_m[link]);
+                    match wall.segment_interior_contact(&a_m, &b_m) {
+                        Some(sc) if sc.s < NEAR_END => InteriorOwner::Window(link - 1),
+                        Some(sc) if sc.s > 1.0 - NEAR_END => InteriorOwner::Window(link),
+                        Some(_) => InteriorOwner::Own,
+                        None => {
+                            if wall.signed_distance(&a_m).gap_m < wall.signed_distance(&b_m).gap_m {
+                                InteriorOwner::Window(link - 1)
+                            } else {
+                                InteriorOwner::Window(link)
+                            }
+                        }
                     }
                 })
                 .collect()
@@ -894,14 +944,14 @@ pub(crate) fn link_owners(walls: &[Wall], posture: &Posture, n: usize) -> Vec<Ve
 }
 
 /// The deepest point of window `i` against `wall`: the link end `p_i`, or a point strictly
-/// inside one of its two links where that link's deepest point is, if this window owns that
-/// link's interior ([`link_owners`]) and it is deeper (a wall corner or crest poking into
-/// the link). A link whose deepest point is one of its ends (a flat wall) adds nothing
-/// beyond the end itself: on a flat wall every window's contact is its link end, and a link
-/// lying flat on a wall bears on the windows of its two ends.
+/// inside one of its two links where that link's interior contact is, if this window holds
+/// it ([`interior_owners`]) and it is deeper (a wall corner or crest poking into the link
+/// beside the joint). A link whose deepest point is one of its ends (a flat wall) adds
+/// nothing beyond the end itself: on a flat wall every window's contact is its link end,
+/// and a link lying flat on a wall bears on the windows of its two ends.
 pub(crate) fn window_contact(
     wall: &Wall,
-    owners: &[usize],
+    owners: &[InteriorOwner],
     posture: &Posture,
     n: usize,
     i: usize,
@@ -914,7 +964,7 @@ pub(crate) fn window_contact(
         wall: wall.signed_distance(&joint),
     };
     for link in [i, i + 1] {
-        if link == 0 || link > n || owners.get(link) != Some(&i) {
+        if link == 0 || link > n || owners.get(link) != Some(&InteriorOwner::Window(i)) {
             continue;
         }
         if let Some(sc) =
@@ -938,6 +988,49 @@ pub(crate) fn located(contact: &WindowContact) -> (usize, f64) {
     match contact.feature {
         Feature::Vertex { link } => (link, 1.0),
         Feature::Link { link } | Feature::HairTip { link } => (link, contact.s),
+    }
+}
+
+/// Where the inside of a link meets a wall (see [`Site::Interior`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct InteriorContact {
+    /// The fraction along the link.
+    pub s: f64,
+    pub point_m: Vector2<f64>,
+    pub wall: WallPoint,
+    /// Whether the link has an interior contact; if not, the point is the link end nearer
+    /// the `s` the site had.
+    pub inside: bool,
+}
+
+/// The interior contact of `link` against `wall` (the deepest interior minimum of the gap
+/// along the link: a crest, a convex corner), or, where the link has none (a degenerate
+/// case mid-solve: the crest has moved past an end), the end nearer `last_s`, so that the
+/// site's point stays continuous. The next step gives the contact to that end's window
+/// (see `QuasiStatic::candidates`).
+pub(crate) fn interior_contact(
+    wall: &Wall,
+    posture: &Posture,
+    link: usize,
+    last_s: f64,
+) -> InteriorContact {
+    let (a_m, b_m) = (posture.start_of(link), posture.end_m[link]);
+    match wall.segment_interior_contact(&a_m, &b_m) {
+        Some(sc) => InteriorContact {
+            s: sc.s,
+            point_m: sc.point_m,
+            wall: sc.wall,
+            inside: true,
+        },
+        None => {
+            let (s, point_m) = if last_s < 0.5 { (0.0, a_m) } else { (1.0, b_m) };
+            InteriorContact {
+                s,
+                point_m,
+                wall: wall.signed_distance(&point_m),
+                inside: false,
+            }
+        }
     }
 }
 
@@ -1071,7 +1164,13 @@ mod tests {
             .unwrap(),
         );
         let walls = [wall];
-        let owners = vec![vec![0, 0, 1, 2, 3]];
+        let owners = vec![vec![
+            InteriorOwner::Window(0),
+            InteriorOwner::Window(0),
+            InteriorOwner::Window(1),
+            InteriorOwner::Window(2),
+            InteriorOwner::Window(3),
+        ]];
         let hair_links = [3, 4];
         let beta = vec![0.0, 0.0, 0.0, 0.6, 0.5];
         for (law_tip, law_hair, normal_n, shear_n) in [
@@ -1105,8 +1204,8 @@ mod tests {
                 hair_links: &hair_links,
                 hair_beta_rad: &beta,
                 proximal: None,
-                hand_m: Some(Vector2::new(0.1, 0.1)),
                 owners: &owners,
+                hand_m: Some(Vector2::new(0.1, 0.1)),
                 tolerance_m: 1e-12,
                 acceptable_m: 1e-12,
                 max_departure_rad: 1.0,
@@ -1183,8 +1282,9 @@ mod tests {
                 SurfaceMap::uniform(Surface::Smooth { mu: 0.3 }).unwrap(),
             );
             let walls = [wall];
-            let owners = link_owners(&walls, &posture, chain.n());
-            let window = owners[0][3];
+            // The crest 70% along link 3: the link's own site.
+            let owners = interior_owners(&walls, &posture, chain.n());
+            assert_eq!(owners[0][3], InteriorOwner::Own);
             let p = StepProblem {
                 chain: &chain,
                 walls: &walls,
@@ -1193,15 +1293,15 @@ mod tests {
                 hair_links: &[],
                 hair_beta_rad: &[0.0; 5],
                 proximal: None,
-                hand_m: None,
                 owners: &owners,
+                hand_m: None,
                 tolerance_m: 1e-12,
                 acceptable_m: 1e-12,
                 max_departure_rad: 1.0,
                 max_iterations: 10,
             };
             let mut cands = vec![Candidate::new(
-                Site::Window(window),
+                Site::Interior(3),
                 0,
                 FrictionLaw::Coulomb { mu: 0.3 },
                 3,

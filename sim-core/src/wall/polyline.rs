@@ -416,13 +416,29 @@ impl Polyline {
         if normal.dot(&pseudo) < 0.0 {
             normal = -normal;
         }
+        // The segment can rest on the corner only if its normal lies in the corner's normal
+        // cone (between the normals of its two edges); otherwise the corner is off to the
+        // side of it (a segment standing steeply beside a corner would be measured along
+        // its own normal, across the corner's edges, to a corner metres away).
+        let (n1, n2) = (self.normals[k - 1], self.normals[k]);
+        let det = cross(&n1, &n2);
+        let (alpha, beta) = (cross(&normal, &n2) / det, cross(&n1, &normal) / det);
+        if !(alpha >= 0.0 && beta >= 0.0) {
+            return None;
+        }
         let point_m = lerp(a_m, b_m, s);
         let v = self.vertices_m[k];
+        let gap_m = normal.dot(&(point_m - v));
+        // A corner pressing through the segment puts the segment's point at its foot inside
+        // the solid; a corner far off that merely lies behind the segment's line does not.
+        if gap_m < 0.0 && self.signed_distance(&point_m).gap_m >= 0.0 {
+            return None;
+        }
         Some(SegmentContact {
             s,
             point_m,
             wall: WallPoint {
-                gap_m: normal.dot(&(point_m - v)),
+                gap_m,
                 closest_m: v,
                 normal,
                 tangent: self.solid.tangent_from_normal(&normal),

@@ -1,8 +1,9 @@
 //! Seed 4.2.2: wall shape against wall following. Sinusoidal walls of spatial frequency
-//! 2.8, 4.2, 6.3, 9.5 and 14.2 1/m; a distally decreasing profile against the constant one;
-//! the contact points the robot would estimate from its 12-bit joint angles and touch bits,
-//! scored against the true wall (mean spatial error, mm). `examples/mapping_4_2_2.toml` is
-//! the base scene (its wall's frequency and the profile are varied here).
+//! 2.8, 4.2, 6.3, 9.5 and 14.2 1/m, and the trapezoid; a distally decreasing profile against
+//! the constant one; the contact points the robot would estimate from its 12-bit joint
+//! angles and touch bits, scored against the true wall (mean spatial error, mm).
+//! `examples/mapping_4_2_2.toml` is the base scene of the sinusoids (its wall's frequency and
+//! the profile are varied here), `examples/mapping_trapezoid_4_2_2.toml` the trapezoid's.
 
 use sim_core::sweep::{Sweep, SweepScene};
 use sim_core::{
@@ -20,8 +21,8 @@ pub const FREQUENCIES_PER_M: [f64; 5] = [2.8, 4.2, 6.3, 9.5, 14.2];
 pub struct MappingRun {
     /// The profile.
     pub profile: StiffnessProfile,
-    /// The wall's spatial frequency, 1/m.
-    pub frequency_per_m: f64,
+    /// The sinusoid's spatial frequency, 1/m (`None`: the trapezoid).
+    pub frequency_per_m: Option<f64>,
     /// The mean spatial error of the estimated contact points, mm.
     pub mean_error_mm: f64,
     /// How many estimated points it averages.
@@ -72,12 +73,46 @@ pub fn run(
     profile: StiffnessProfile,
     frequency_per_m: f64,
 ) -> Result<MappingRun, ReproduceError> {
-    let label = format!("4.2.2 {} {frequency_per_m} 1/m", profile.name());
     let scene = SweepScene {
         chain: with_profile(&base.chain, profile.clone())?,
         walls: with_frequency(base, frequency_per_m)?,
         ..base.clone()
     };
+    map(
+        format!("4.2.2 {} {frequency_per_m} 1/m", profile.name()),
+        scene,
+        profile,
+        Some(frequency_per_m),
+    )
+}
+
+/// Runs `profile` along the trapezoid of `base` (`examples/mapping_trapezoid_4_2_2.toml`).
+///
+/// # Errors
+/// As [`run`].
+pub fn run_trapezoid(
+    base: &SweepScene,
+    profile: StiffnessProfile,
+) -> Result<MappingRun, ReproduceError> {
+    let scene = SweepScene {
+        chain: with_profile(&base.chain, profile.clone())?,
+        ..base.clone()
+    };
+    map(
+        format!("4.2.2 {} trapezoid", profile.name()),
+        scene,
+        profile,
+        None,
+    )
+}
+
+/// Sweeps `scene`, estimating the contacts from what the robot senses at every step.
+fn map(
+    label: String,
+    scene: SweepScene,
+    profile: StiffnessProfile,
+    frequency_per_m: Option<f64>,
+) -> Result<MappingRun, ReproduceError> {
     let walls = scene.walls.clone();
     let chain = scene.chain.clone();
     let mut sweep = Sweep::new(scene).map_err(|source| ReproduceError::Sweep {
