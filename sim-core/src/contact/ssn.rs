@@ -924,6 +924,10 @@ pub(crate) fn interior_owners(
                     if link == 0 {
                         return InteriorOwner::Window(0);
                     }
+                    if matches!(wall.shape, crate::WallShape::Line(_)) {
+                        // No interior contacts on a line: nothing to hold.
+                        return InteriorOwner::Window(link - 1);
+                    }
                     let (a_m, b_m) = (posture.start_of(link), posture.end_m[link]);
                     match wall.segment_interior_contact(&a_m, &b_m) {
                         Some(sc) if sc.s < NEAR_END => InteriorOwner::Window(link - 1),

@@ -327,7 +327,7 @@ impl Sinusoid {
     /// The deepest (or closest) point of `a -> b` (see the module docs); no allocation.
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
         let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
-        self.interior_candidates(a_m, b_m, &ends)
+        self.interior_candidates(a_m, b_m, ends.wall.gap_m, false)
             .map_or(ends, |inner| better(ends, inner))
     }
 
@@ -338,8 +338,14 @@ impl Sinusoid {
         a_m: &Vector2<f64>,
         b_m: &Vector2<f64>,
     ) -> Option<SegmentContact> {
-        let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
-        self.interior_candidates(a_m, b_m, &ends)
+        // The ends' vertical gaps bound their distances from above: a looser search bound
+        // than the distances, without a nearest-point search at each end.
+        let free = self.free_sign();
+        let vertical = |p: &Vector2<f64>| {
+            let (x, y) = self.local(p);
+            free * (y - self.g(x))
+        };
+        self.interior_candidates(a_m, b_m, vertical(a_m).min(vertical(b_m)), true)
     }
 
     /// The point of `a -> b` at `s` with its wall point.
@@ -352,12 +358,17 @@ impl Sinusoid {
         }
     }
 
-    /// The deepest interior candidate of `a -> b` given its better end `ends`.
+    /// The deepest interior candidate of `a -> b`; `ends_gap_m` is the smaller gap of its
+    /// ends, or an upper bound on it. With `local_foot`, a stationary point's wall point is
+    /// the foot it was found from (the curve point whose normal it lies on: the contact
+    /// solver's view, continuous and without a nearest-point search), else the nearest point
+    /// of the whole curve.
     fn interior_candidates(
         &self,
         a_m: &Vector2<f64>,
         b_m: &Vector2<f64>,
-        ends: &SegmentContact,
+        ends_gap_m: f64,
+        local_foot: bool,
     ) -> Option<SegmentContact> {
         let mut best: Option<SegmentContact> = None;
         if self.amplitude_m == 0.0 {
@@ -404,7 +415,7 @@ impl Sinusoid {
         // |t - x(s*)| <= |F(s*)|: at most the best end gap if the segment stays free, at most
         // the deepest vertical penetration otherwise.
         let reach = if lowest >= 0.0 {
-            ends.wall.gap_m.max(0.0)
+            ends_gap_m.max(0.0)
         } else {
             -lowest
         };
@@ -433,7 +444,18 @@ impl Sinusoid {
                     if denom != 0.0 && d_len2 > 0.0 {
                         let s = (cx * ny - cy * nx) / denom;
                         if s > 0.0 && s < 1.0 {
-                            let c = self.at(a_m, b_m, s);
+                            let c = if local_foot {
+                                let point_m = lerp(a_m, b_m, s);
+                                let (x, y) = self.local(&point_m);
+                                let d2 = (t - x) * (t - x) + (g - y) * (g - y);
+                                SegmentContact {
+                                    s,
+                                    point_m,
+                                    wall: self.wall_point(t, x, y, d2),
+                                }
+                            } else {
+                                self.at(a_m, b_m, s)
+                            };
                             best = Some(best.map_or(c, |b| better(b, c)));
                         }
                     }
