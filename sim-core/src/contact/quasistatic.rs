@@ -665,7 +665,10 @@ impl QuasiStatic {
             accepted
                 .cands
                 .into_iter()
-                .filter(|c| c.normal_active || c.normal_force_n != 0.0),
+                // Touching ones only: a contact that let go ends its solve with a normal
+                // force of rounding size (1e-25 N), not zero, and would be carried (and
+                // reported, with its touch bit) however far the chain moves from the wall.
+                .filter(|c| c.normal_active),
         );
         self.contacts.sort_by(|a, b| {
             (a.feature.link(), a.feature, a.wall).cmp(&(b.feature.link(), b.feature, b.wall))
