@@ -691,8 +691,8 @@ impl Ssn {
         let mut x: Vec<f64> = (0..m).map(|a| self.z[a]).collect();
         let mut plus = vec![0.0; m];
         let mut minus = vec![0.0; m];
-        let mut center = vec![0.0; m];
-        self.contact_force_into(p, n, &x, cands, &mut center);
+        // At `x` itself, evaluated only if a one-sided difference needs it.
+        let mut center: Option<Vec<f64>> = None;
         for b in 0..m {
             let h = FD_STEP_RAD;
             let saved = x[b];
@@ -704,11 +704,25 @@ impl Ssn {
             // A contact next to a kink of its window (a corner or crest crossing a joint:
             // the window's deepest point changes links) is differenced on the side where
             // it stays on its link: the derivative of the piece Newton's method is on.
+            if plus_same == minus_same {
+                for a in 0..m {
+                    self.hess[(a, b)] += (plus[a] - minus[a]) / (2.0 * h);
+                }
+                continue;
+            }
+            let at_x = match &center {
+                Some(at_x) => at_x,
+                None => {
+                    let mut at_x = vec![0.0; m];
+                    self.contact_force_into(p, n, &x, cands, &mut at_x);
+                    center.insert(at_x)
+                }
+            };
             for a in 0..m {
-                self.hess[(a, b)] += match (plus_same, minus_same) {
-                    (true, false) => (plus[a] - center[a]) / h,
-                    (false, true) => (center[a] - minus[a]) / h,
-                    _ => (plus[a] - minus[a]) / (2.0 * h),
+                self.hess[(a, b)] += if plus_same {
+                    (plus[a] - at_x[a]) / h
+                } else {
+                    (at_x[a] - minus[a]) / h
                 };
             }
         }
