@@ -696,7 +696,7 @@ impl QuasiStatic {
         // Where each contact of the last step goes now: a link interior contact that came
         // within reach of an end joins that end's window, one that moved away from it gets
         // a site of its own.
-        let mut merged: Vec<(Site, &Candidate)> = Vec::new();
+        let mut moves: Vec<(Site, &Candidate)> = Vec::with_capacity(self.contacts.len());
         for old in &self.contacts {
             let owners = &self.owners[old.wall];
             let site = match (old.site, old.feature) {
@@ -717,29 +717,17 @@ impl QuasiStatic {
                 },
                 (site, _) => site,
             };
-            if site == old.site {
-                match out
-                    .iter_mut()
-                    .find(|c| c.site == site && c.wall == old.wall)
-                {
-                    Some(c) => carry(c, old),
-                    None => {
-                        let mut c = self.candidate(site, old.wall);
-                        carry(&mut c, old);
-                        out.push(c);
-                    }
-                }
-            } else {
-                merged.push((site, old));
-            }
+            moves.push((site, old));
         }
-        for (site, old) in merged {
+        // Contacts staying at their site first, so that one moving in finds it taken.
+        moves.sort_by_key(|(site, old)| *site != old.site);
+        for (site, old) in moves {
             match out
                 .iter_mut()
                 .find(|c| c.site == site && c.wall == old.wall)
             {
                 // The site kept a contact of its own: it takes on the other's forces.
-                Some(c) if c.normal_active || c.normal_force_n != 0.0 => {
+                Some(c) if c.normal_active => {
                     c.normal_force_n += old.normal_force_n;
                     c.shear_force_n += old.shear_force_n;
                 }
