@@ -66,8 +66,9 @@ pub enum ContactError {
     },
     /// The start posture puts a link or a hair tip inside a wall.
     #[error(
-        "the start posture puts link {link}{hair} inside wall {wall} by {depth_m} m; \
-         place the antenna against the wall first (see sim_core::sweep::Placement)"
+        "the start posture puts link {link}{hair} inside wall {wall} by {depth_m:.3e} m at \
+         ({at_x_m:.4}, {at_y_m:.4}) m; place the antenna against the wall first (see \
+         sim_core::sweep::Placement)"
     )]
     StartInsideWall {
         /// The wall's index.
@@ -78,6 +79,10 @@ pub enum ContactError {
         hair: &'static str,
         /// How deep, metres.
         depth_m: f64,
+        /// Where, x (ground frame, metres): the link's deepest point or the hair tip.
+        at_x_m: f64,
+        /// Where, y.
+        at_y_m: f64,
     },
     /// A step could not be solved, even in the smallest substeps and by following the
     /// downhill path.

@@ -140,6 +140,9 @@ pub struct Contact {
     /// How far the contact point slid along the wall during the step, metres (signed along
     /// `tangent`; exactly what the solver found, `0` to rounding when stuck).
     pub slip_m: f64,
+    /// Whether the contact jammed and slid without friction for the step (a relaxation,
+    /// counted in [`super::StepReport::jams`]).
+    pub friction_dropped: bool,
 }
 
 impl Contact {

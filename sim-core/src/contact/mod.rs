@@ -64,16 +64,29 @@
 //! # }
 //! ```
 
+mod anchoring;
+mod candidates;
 mod check;
+mod equations;
 mod error;
 mod feature;
+mod geometry;
+mod newton_system;
+mod pair;
+mod pieces;
 mod posture;
 mod quasistatic;
+mod report;
 mod settings;
+mod snap;
 mod ssn;
+mod stability;
+mod substep;
+mod tresca;
 
 pub use check::EquilibriumCheck;
 pub use error::ContactError;
 pub use feature::{Contact, Feature, FrictionLaw, Slip};
-pub use quasistatic::{QuasiStatic, StepReport};
+pub use quasistatic::QuasiStatic;
+pub use report::StepReport;
 pub use settings::ContactSettings;

@@ -79,10 +79,4 @@ impl Posture {
     pub fn hair_tip_rate(&self, hair: &Hair, link: usize, beta_rad: f64) -> Vector2<f64> {
         rotate(self.phi_rad[link], hair.tip_rate_in_link_m(beta_rad))
     }
-
-    /// The Jacobian column of a point `x_m` fixed to link `link` for joint `joint`
-    /// (`1..=link`): `R90 (x - p_(joint-1))`.
-    pub fn column(&self, joint: usize, x_m: Vector2<f64>) -> Vector2<f64> {
-        perp(x_m - self.end_m[joint - 1])
-    }
 }

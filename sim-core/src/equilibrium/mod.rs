@@ -49,6 +49,7 @@
 //! # }
 //! ```
 
+pub(crate) mod bordered;
 pub mod error;
 pub mod escape;
 pub mod minima;

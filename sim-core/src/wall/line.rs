@@ -63,6 +63,7 @@ impl Line {
             normal: self.normal,
             tangent: self.tangent,
             arclength_m: self.tangent.dot(&r),
+            curvature_per_m: 0.0,
         }
     }
 

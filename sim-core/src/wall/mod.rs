@@ -103,6 +103,95 @@ pub struct WallPoint {
     /// Arclength of `closest_m` along the curve from the curve's origin, metres (see each
     /// shape; negative before the origin).
     pub arclength_m: f64,
+    /// The wall's signed curvature at `closest_m`, 1/m: positive where the wall bulges into
+    /// free space (a crest seen from the free side), negative where it is hollow, `0` on a
+    /// straight piece and `+inf` (`-inf`) at a convex (concave) polyline corner. The normal
+    /// turns as the query point moves by `dp`: `d normal = k (t . dp) t` with
+    /// `k = curvature / (1 + curvature gap)` (`1 / gap` at a corner), see
+    /// [`WallPoint::normal_turn_rate_per_m`].
+    pub curvature_per_m: f64,
+}
+
+impl WallPoint {
+    /// How fast the normal turns as the query point moves along the tangent, radians per
+    /// metre: the curvature of the level set of the signed distance through the query point,
+    /// `curvature / (1 + curvature gap)` (`1 / gap` at a corner, where the level set is a
+    /// circle about it). Zero on a straight piece; `0` also where the query point sits on the
+    /// wall at a corner (there the distance has no curvature to speak of).
+    pub fn normal_turn_rate_per_m(&self) -> f64 {
+        let k = self.curvature_per_m;
+        if k.is_infinite() {
+            if self.gap_m != 0.0 {
+                1.0 / self.gap_m
+            } else {
+                0.0
+            }
+        } else if k == 0.0 {
+            0.0
+        } else {
+            let denominator = 1.0 + k * self.gap_m;
+            if denominator.abs() > 1e-12 {
+                k / denominator
+            } else {
+                k / 1e-12_f64.copysign(denominator)
+            }
+        }
+    }
+}
+
+/// A convex feature of a wall that can press on a link between its ends: a polyline corner
+/// that bulges into free space, or a sinusoid's crest (the part of each period that bulges
+/// into free space). Identifies the same feature from step to step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ConvexFeature {
+    /// A convex corner of a polyline: its vertex index.
+    Corner {
+        /// The vertex.
+        vertex: usize,
+    },
+    /// The crest of period `index` of a sinusoid (the one whose phase `k t + phase` lies in
+    /// `[2 pi index, 2 pi (index + 1))` shifted to its crest).
+    Crest {
+        /// The period.
+        index: i64,
+    },
+}
+
+/// A segment resting on a [`ConvexFeature`]: the wall point where the segment's direction is
+/// a tangent of the wall (the corner itself, or the crest's tangent point), and the gap from
+/// it to the segment's line along the segment's normal. Unlike [`SegmentContact`], `s` is not
+/// clamped to the segment: the caller decides whether the foot lies on it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeatureContact {
+    /// Which feature.
+    pub feature: ConvexFeature,
+    /// The foot of the wall point on the segment's line: `point_m = a + s (b - a)`.
+    pub s: f64,
+    /// That point of the segment's line, metres.
+    pub point_m: Vector2<f64>,
+    /// The wall point (the corner, or the crest's tangent point), metres.
+    pub wall_m: Vector2<f64>,
+    /// The gap from the wall point to the segment's line along `normal`, metres (negative
+    /// when the feature pokes through the line).
+    pub gap_m: f64,
+    /// The segment's unit normal, oriented into free space (the direction the wall pushes
+    /// the segment).
+    pub normal: Vector2<f64>,
+    /// The unit tangent tied to `normal` as [`SolidSide::free_normal`] says.
+    pub tangent: Vector2<f64>,
+    /// Arclength of the wall point along the curve, metres.
+    pub arclength_m: f64,
+    /// How far the wall point moves along the segment's direction per radian the segment
+    /// turns, metres (`0` at a corner; at a crest the tangent point rolls along the curve).
+    pub roll_m_per_rad: f64,
+    /// The wall's signed curvature at the wall point, 1/m (`+inf` at a corner).
+    pub curvature_per_m: f64,
+    /// Whether the segment can rest on the feature: at a corner, whether the segment's
+    /// normal lies in the corner's normal cone (between the normals of its two edges); a
+    /// segment standing steeply beside a corner rests on one of the corner's edges instead,
+    /// and its gap here (measured along its own normal, across that edge) means nothing.
+    /// Always `true` at a crest.
+    pub supported: bool,
 }
 
 /// The point of a segment `a -> b` with the smallest signed gap to a wall: its deepest
@@ -198,6 +287,44 @@ impl WallShape {
         }
         let contact = self.segment_contact(a_m, b_m);
         (contact.wall.gap_m <= max_gap_m).then_some(contact)
+    }
+
+    /// The convex features of the wall that could press on the inside of the segment
+    /// `a -> b` with a gap below `within_m` (every one is evaluated: the caller filters by
+    /// `s`), appended to `out`. A line has none.
+    pub fn features_near_segment(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        within_m: f64,
+        out: &mut Vec<FeatureContact>,
+    ) {
+        match self {
+            WallShape::Line(_) => {}
+            WallShape::Polyline(w) => w.features_near_segment(a_m, b_m, within_m, out),
+            WallShape::Sinusoid(w) => w.features_near_segment(a_m, b_m, within_m, out),
+        }
+    }
+
+    /// The segment `a -> b` resting on `feature` (see [`FeatureContact`], whose `supported`
+    /// says whether the corner's cone holds the segment's normal), or `None` where it cannot
+    /// be measured (a corner that is not convex, a segment steeper than the crest can be
+    /// tangent to, a feature of another shape).
+    pub fn feature_contact(
+        &self,
+        feature: ConvexFeature,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+    ) -> Option<FeatureContact> {
+        match (self, feature) {
+            (WallShape::Polyline(w), ConvexFeature::Corner { vertex }) => {
+                w.corner_feature_contact(vertex, a_m, b_m)
+            }
+            (WallShape::Sinusoid(w), ConvexFeature::Crest { index }) => {
+                w.crest_feature_contact(index, a_m, b_m)
+            }
+            _ => None,
+        }
     }
 
     /// Moves the curve by `offset_m`, in place.

@@ -12,7 +12,7 @@
 use nalgebra::Vector2;
 
 use super::error::{WallError, finite};
-use super::{SegmentContact, SolidSide, WallPoint, better, lerp};
+use super::{ConvexFeature, FeatureContact, SegmentContact, SolidSide, WallPoint, better, lerp};
 
 /// An open polyline wall. Tangent from the first vertex toward the last; arclength from the
 /// first vertex (negative along the first ray).
@@ -248,6 +248,7 @@ impl Polyline {
                     normal: self.normals[edge],
                     tangent: self.tangents[edge],
                     arclength_m: self.arclengths_m[edge] + u_m,
+                    curvature_per_m: 0.0,
                 }
             }
             (Nearest::Vertex(vertex), d2) => {
@@ -268,6 +269,11 @@ impl Polyline {
                     normal,
                     tangent: self.solid.tangent_from_normal(&normal),
                     arclength_m: self.arclengths_m[vertex],
+                    curvature_per_m: if self.is_convex(vertex) {
+                        f64::INFINITY
+                    } else {
+                        f64::NEG_INFINITY
+                    },
                 }
             }
         }
@@ -443,8 +449,96 @@ impl Polyline {
                 normal,
                 tangent: self.solid.tangent_from_normal(&normal),
                 arclength_m: self.arclengths_m[k],
+                curvature_per_m: f64::INFINITY,
             },
         })
+    }
+
+    /// Whether interior vertex `k` bulges into free space (its free-side angle is over 180
+    /// degrees).
+    fn is_convex(&self, k: usize) -> bool {
+        if k == 0 || k >= self.tangents.len() {
+            return false;
+        }
+        let turn = cross(&self.tangents[k - 1], &self.tangents[k]);
+        match self.solid {
+            SolidSide::Left => turn > 0.0,
+            SolidSide::Right => turn < 0.0,
+        }
+    }
+
+    /// The segment `a -> b` resting on convex corner `vertex` (see [`FeatureContact`]): the
+    /// gap along the segment's normal, oriented into free space, and whether the segment's
+    /// normal lies in the corner's normal cone (between the normals of its two edges: a
+    /// segment standing steeply beside a corner rests on one of its edges, not on it). `None`
+    /// if the corner is not convex or the segment has no length.
+    pub fn corner_feature_contact(
+        &self,
+        vertex: usize,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+    ) -> Option<FeatureContact> {
+        if !self.is_convex(vertex) {
+            return None;
+        }
+        let d = b_m - a_m;
+        let length2 = d.norm_squared();
+        if !(length2 > 0.0 && length2.is_finite()) {
+            return None;
+        }
+        let dir = d / length2.sqrt();
+        let (n1, n2) = (self.normals[vertex - 1], self.normals[vertex]);
+        let pseudo = (n1 + n2).normalize();
+        let mut normal = Vector2::new(-dir.y, dir.x);
+        if normal.dot(&pseudo) < 0.0 {
+            normal = -normal;
+        }
+        let det = cross(&n1, &n2);
+        let (alpha, beta) = (cross(&normal, &n2) / det, cross(&n1, &normal) / det);
+        let supported = alpha >= 0.0 && beta >= 0.0;
+        let v = self.vertices_m[vertex];
+        let s = (v - a_m).dot(&d) / length2;
+        let point_m = a_m + d * s;
+        Some(FeatureContact {
+            feature: ConvexFeature::Corner { vertex },
+            s,
+            point_m,
+            wall_m: v,
+            gap_m: normal.dot(&(point_m - v)),
+            normal,
+            tangent: self.solid.tangent_from_normal(&normal),
+            arclength_m: self.arclengths_m[vertex],
+            roll_m_per_rad: 0.0,
+            curvature_per_m: f64::INFINITY,
+            supported,
+        })
+    }
+
+    /// The convex corners that could press on the segment `a -> b` with a gap below
+    /// `within_m` (feet anywhere on the segment's line within `within_m` of it), appended to
+    /// `out`; `O(vertices)`.
+    pub fn features_near_segment(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        within_m: f64,
+        out: &mut Vec<FeatureContact>,
+    ) {
+        let (lo, hi) = (a_m.inf(b_m), a_m.sup(b_m));
+        let reach = within_m.max(0.0);
+        for vertex in 1..self.tangents.len() {
+            let v = self.vertices_m[vertex];
+            if v.x < lo.x - reach || v.x > hi.x + reach || v.y < lo.y - reach || v.y > hi.y + reach
+            {
+                continue;
+            }
+            if let Some(c) = self.corner_feature_contact(vertex, a_m, b_m)
+                && c.supported
+                && c.gap_m < within_m
+            {
+                out.push(c);
+            }
+        }
     }
 
     /// Whether the segment `a -> b` crosses an edge (end rays included).

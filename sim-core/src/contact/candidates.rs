@@ -1,0 +1,186 @@
+//! Which pairs take part in a step (the broad phase), which were missed, which let go.
+//!
+//! A step's pairs are every chain point within [`super::ContactSettings::margin_m`] of a
+//! wall piece and every convex feature of a piece within the margin of a link (its foot on
+//! the link, its cone holding the link's normal), with the posture carried to the step's
+//! goal; and the contacts of the last step, with their forces and friction state as the
+//! start. After a solve, a point or feature inside a wall that was not a pair joins, and a
+//! feature pair whose foot has left its link (a corner crossing a joint) lets go; the step
+//! is then solved again.
+
+use nalgebra::Vector2;
+
+use super::ContactError;
+use super::geometry::{FOOT_TOLERANCE, chain_point, evaluate};
+use super::pair::{ChainPoint, Pair, PairKey, PairKind};
+use super::posture::Posture;
+use super::quasistatic::{QuasiStatic, theta_of};
+use crate::FeatureContact;
+
+impl QuasiStatic {
+    /// The pairs of a step to the base at `goal` (see the module docs).
+    pub(super) fn candidates(&self, goal: Vector2<f64>) -> Result<Vec<Pair>, ContactError> {
+        for (w, wall) in self.walls.iter().enumerate() {
+            self.check_base(w, wall, &self.probe, goal)?;
+        }
+        let mut out: Vec<Pair> = self
+            .touching(&self.probe, &self.beta, self.settings.margin_m)
+            .into_iter()
+            .map(|key| self.fresh_pair(key))
+            .collect();
+        for old in &self.pairs {
+            if let Some(c) = out.iter_mut().find(|c| c.key == old.key) {
+                carry(c, old);
+                continue;
+            }
+            // A contact that is no longer within the margin stays a pair while it can be
+            // measured (the solve lets it go if it must).
+            let mut c = self.fresh_pair(old.key);
+            let mut geo = c.geo;
+            evaluate(
+                &self.chain,
+                &self.pieces.walls[old.key.piece],
+                &self.probe,
+                &self.beta,
+                &old.key,
+                &mut geo,
+            );
+            if geo.valid {
+                carry(&mut c, old);
+                out.push(c);
+            } else if let Some(next) = out
+                .iter_mut()
+                .filter(|c| c.key.piece == old.key.piece && c.normal_force_n == 0.0)
+                .min_by(|a, b| {
+                    let da = (a.start_m - old.geo.point_m).norm();
+                    let db = (b.start_m - old.geo.point_m).norm();
+                    da.total_cmp(&db)
+                })
+            {
+                // Its feature left the link: the nearest pair on the piece starts from its
+                // forces (a corner crossing a joint hands its load to the joint's pairs).
+                next.normal_force_n = old.normal_force_n;
+                next.shear_force_n = old.shear_force_n;
+                next.normal_active = old.normal_active;
+            }
+        }
+        Ok(out)
+    }
+
+    /// The pairs of `posture` (hair angles `beta`) with a gap below `within_m`.
+    pub(super) fn touching(&self, posture: &Posture, beta: &[f64], within_m: f64) -> Vec<PairKey> {
+        let n = self.chain.n();
+        let mut keys = Vec::new();
+        let mut features: Vec<FeatureContact> = Vec::new();
+        for (w, piece) in self.pieces.walls.iter().enumerate() {
+            for link in 1..=n {
+                let point = ChainPoint::Vertex(link);
+                let (_, _, x) = chain_point(&self.chain, posture, beta, point);
+                if piece.signed_distance(&x).gap_m < within_m {
+                    keys.push(PairKey::point(point, w));
+                }
+                if self.chain.hairs().get(link).is_some_and(Option::is_some) {
+                    let point = ChainPoint::HairTip(link);
+                    let (_, _, x) = chain_point(&self.chain, posture, beta, point);
+                    if piece.signed_distance(&x).gap_m < within_m {
+                        keys.push(PairKey::point(point, w));
+                    }
+                }
+                features.clear();
+                piece.shape.features_near_segment(
+                    &posture.start_of(link),
+                    &posture.end_m[link],
+                    within_m,
+                    &mut features,
+                );
+                for fc in &features {
+                    if fc.supported && fc.s >= -FOOT_TOLERANCE && fc.s <= 1.0 + FOOT_TOLERANCE {
+                        keys.push(PairKey::link(link, fc.feature, w));
+                    }
+                }
+            }
+        }
+        keys
+    }
+
+    /// A fresh pair `key`: its material point where it touches (or comes nearest) at the
+    /// start of the step, the surface's Coulomb law, no force.
+    pub(super) fn fresh_pair(&self, key: PairKey) -> Pair {
+        let start = &self.start;
+        let (link, s, point) = match key.kind {
+            PairKind::Point(point) => chain_point(&self.chain, start, &self.beta, point),
+            PairKind::Link { link, feature } => {
+                let piece = &self.pieces.walls[key.piece];
+                let at = |posture: &Posture| {
+                    piece.shape.feature_contact(
+                        feature,
+                        &posture.start_of(link),
+                        &posture.end_m[link],
+                    )
+                };
+                // Where the feature's foot is at the start of the step; one that had not
+                // reached the link yet enters it by the end nearer to where it is now.
+                let s = at(start)
+                    .or_else(|| at(&self.probe))
+                    .map_or(0.5, |fc| fc.s)
+                    .clamp(0.0, 1.0);
+                (link, s, start.link_point(link, s))
+            }
+        };
+        let law = self.coulomb_at(key.piece, &point);
+        Pair::new(key, law, link, s, point)
+    }
+
+    /// The pairs inside a wall after a solve to `x` (hair coordinates `hair_links`) at the
+    /// base `goal` that are not pairs yet.
+    pub(super) fn missed_pairs(
+        &mut self,
+        x: &[f64],
+        hair_links: &[usize],
+        pairs: &[Pair],
+        goal: Vector2<f64>,
+    ) -> Vec<Pair> {
+        let n = self.chain.n();
+        let tol = self.settings.penetration_tolerance_m;
+        let theta = theta_of(&self.theta, x);
+        let mut probe = std::mem::take(&mut self.probe);
+        probe.update(&self.chain, goal, &theta);
+        let mut beta = self.beta.clone();
+        for (h, &l) in hair_links.iter().enumerate() {
+            beta[l] = x[n + h];
+        }
+        let found: Vec<PairKey> = self
+            .touching(&probe, &beta, -tol)
+            .into_iter()
+            .filter(|key| !pairs.iter().any(|c| c.key == *key))
+            .collect();
+        self.probe = probe;
+        found.into_iter().map(|key| self.fresh_pair(key)).collect()
+    }
+
+    /// Removes the feature pairs that are not what touches at the solution (a feature whose
+    /// foot has left its link, or whose cone no longer holds the link's normal); whether one
+    /// of them was active (the step must then be solved again).
+    pub(super) fn drop_stale_pairs(&self, pairs: &mut Vec<Pair>) -> bool {
+        let before = pairs.len();
+        let mut active = false;
+        pairs.retain(|c| {
+            let keep = c.geo.valid;
+            if !keep && (c.normal_active || c.normal_force_n != 0.0) {
+                active = true;
+            }
+            keep
+        });
+        active && pairs.len() < before
+    }
+}
+
+/// A contact of the last step carries its forces, law and modes into the next step's pair
+/// (the friction state the model remembers).
+fn carry(c: &mut Pair, old: &Pair) {
+    c.normal_force_n = old.normal_force_n;
+    c.shear_force_n = old.shear_force_n;
+    c.law = old.law;
+    c.normal_active = old.normal_active;
+    c.slip = old.slip;
+}

@@ -1,0 +1,163 @@
+//! Contact pairs: what of the chain can touch what of a wall, each with its own normal force
+//! and its own friction (feature pairs).
+//!
+//! - [`PairKind::Point`]: a point of the chain (a link end, or a hair tip) against the
+//!   surface of a wall piece, measured by the signed distance (its normal turns around a
+//!   corner and along a curve).
+//! - [`PairKind::Link`]: a convex feature of a wall piece (a polyline corner, a sinusoid
+//!   crest) against the inside of a link, measured along the link's normal.
+//!
+//! A wall corner at a joint is then up to four pairs (the joint against the piece, the corner
+//! against each of the joint's two links), so the force the wall exerts there can point
+//! anywhere in the cone between the links' normals and the corner's; a link lying on a crest
+//! while its end touches the wall elsewhere is two pairs. Walls are seen in *pieces*
+//! ([`super::pieces`]): polylines cut at their concave corners, so that each piece's signed
+//! distance is smooth in free space.
+
+use nalgebra::Vector2;
+
+use super::feature::{Feature, FrictionLaw, Slip};
+use super::geometry::PairGeometry;
+use crate::ConvexFeature;
+
+/// A point of the chain that can touch a wall surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub(crate) enum ChainPoint {
+    /// The distal end `p_i` of link `i` (`1..=n`): joint `i + 1`, or the tip.
+    Vertex(usize),
+    /// The tip of the hair on link `i`.
+    HairTip(usize),
+}
+
+/// What touches what (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub(crate) enum PairKind {
+    /// A chain point against the piece's surface.
+    Point(ChainPoint),
+    /// A convex feature of the piece against the inside of `link`.
+    Link {
+        /// The link.
+        link: usize,
+        /// The feature.
+        feature: ConvexFeature,
+    },
+}
+
+/// A pair's identity, from step to step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub(crate) struct PairKey {
+    /// The link the pair acts on (first, so that pairs sort by link).
+    pub link: usize,
+    /// What touches.
+    pub kind: PairKind,
+    /// The wall piece.
+    pub piece: usize,
+}
+
+impl PairKey {
+    /// A chain point against piece `piece`.
+    pub fn point(point: ChainPoint, piece: usize) -> PairKey {
+        let link = match point {
+            ChainPoint::Vertex(i) | ChainPoint::HairTip(i) => i,
+        };
+        PairKey {
+            link,
+            kind: PairKind::Point(point),
+            piece,
+        }
+    }
+
+    /// A convex feature of piece `piece` against the inside of `link`.
+    pub fn link(link: usize, feature: ConvexFeature, piece: usize) -> PairKey {
+        PairKey {
+            link,
+            kind: PairKind::Link { link, feature },
+            piece,
+        }
+    }
+
+    /// The reported feature of the chain.
+    pub fn feature(&self) -> Feature {
+        match self.kind {
+            PairKind::Point(ChainPoint::Vertex(link)) => Feature::Vertex { link },
+            PairKind::Point(ChainPoint::HairTip(link)) => Feature::HairTip { link },
+            PairKind::Link { link, .. } => Feature::Link { link },
+        }
+    }
+
+    /// The hair whose tip this is, if any.
+    pub fn hair_link(&self) -> Option<usize> {
+        match self.kind {
+            PairKind::Point(ChainPoint::HairTip(link)) => Some(link),
+            _ => None,
+        }
+    }
+}
+
+/// A contact pair during a step: its identity, its friction law and state, the material
+/// point that touched at the start of the step, its forces, and its geometry at the current
+/// coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Pair {
+    pub key: PairKey,
+    pub law: FrictionLaw,
+    /// The link and fraction along it of the material point that touched at the start of the
+    /// step (a link end: `s = 1`; a hair tip: its link and its pivot's fraction).
+    pub material_link: usize,
+    pub material_s: f64,
+    /// That material point's position at the start of the step.
+    pub start_m: Vector2<f64>,
+    /// The normal force on the chain, newtons.
+    pub normal_force_n: f64,
+    /// The shear force on the chain along the tangent, newtons.
+    pub shear_force_n: f64,
+    /// The geometry at the current coordinates (filled by the evaluation).
+    pub geo: PairGeometry,
+    /// The material point's position now.
+    pub material_m: Vector2<f64>,
+    /// Its slip along the tangent since the start of the step, metres.
+    pub slip_m: f64,
+    /// Whether the normal constraint is active (touching).
+    pub normal_active: bool,
+    /// Stuck or slipping.
+    pub slip: Slip,
+    /// When set, the shear bound is `mu` times this normal force instead of the current one
+    /// (the Tresca problem of model.md 6's fixed point on the normal forces).
+    pub tresca_n: Option<f64>,
+    /// Whether the pair jammed in this step's fixed point and slid without friction.
+    pub jammed: bool,
+}
+
+impl Pair {
+    /// A fresh pair with no force, its material point at `material_link`/`material_s`,
+    /// `start_m` at the start of the step.
+    pub fn new(
+        key: PairKey,
+        law: FrictionLaw,
+        material_link: usize,
+        material_s: f64,
+        start_m: Vector2<f64>,
+    ) -> Pair {
+        Pair {
+            key,
+            law,
+            material_link,
+            material_s,
+            start_m,
+            normal_force_n: 0.0,
+            shear_force_n: 0.0,
+            geo: PairGeometry::at(key.link, material_s, start_m),
+            material_m: start_m,
+            slip_m: 0.0,
+            normal_active: false,
+            slip: Slip::Stuck,
+            tresca_n: None,
+            jammed: false,
+        }
+    }
+
+    /// The force the wall exerts on the chain, ground frame, newtons.
+    pub fn force_n(&self) -> Vector2<f64> {
+        self.geo.normal * self.normal_force_n + self.geo.tangent * self.shear_force_n
+    }
+}

@@ -1,0 +1,149 @@
+//! One (sub)step: the pairs that take part, the semismooth Newton solve (or the fixed point
+//! on the normal forces where it fails), pairs missed or let go re-solved, hairs anchored
+//! or let go, and the jump test.
+
+use nalgebra::Vector2;
+
+use super::equations::{Proximal, StepProblem};
+use super::quasistatic::QuasiStatic;
+use super::report::StepReport;
+use super::tresca::solve_by_fixed_point;
+
+/// Why one attempt at a (sub)step was not accepted.
+pub(super) enum Reject {
+    /// Newton did not converge.
+    NoConvergence,
+    /// It converged, but a joint moved more than the jump threshold.
+    Jump,
+}
+
+/// An accepted (sub)step, not yet committed.
+pub(super) struct Accepted {
+    pub x: Vec<f64>,
+    pub hair_links: Vec<usize>,
+    pub pairs: Vec<super::pair::Pair>,
+    pub residual_m: f64,
+    pub hand_force_n: Vector2<f64>,
+}
+
+/// Rounds of re-solving (pairs missed or let go, hairs anchoring) before a (sub)step is
+/// refined instead.
+const ROUNDS: usize = 8;
+
+impl QuasiStatic {
+    /// Tries one (sub)step from the committed state to the base at `goal` (with a proximal
+    /// term when following a snap).
+    pub(super) fn attempt(
+        &mut self,
+        goal: Vector2<f64>,
+        proximal: Option<(f64, &[f64])>,
+        report: &mut StepReport,
+    ) -> Result<Accepted, Reject> {
+        let n = self.chain.n();
+        self.start.update(&self.chain, self.base_m, &self.theta);
+        self.probe.update(&self.chain, goal, &self.theta);
+        let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
+        let mut anchoring = super::anchoring::AnchorRounds::default();
+        for _round in 0..ROUNDS {
+            let mut hair_links: Vec<usize> =
+                pairs.iter().filter_map(|c| c.key.hair_link()).collect();
+            hair_links.sort_unstable();
+            hair_links.dedup();
+            let mut x: Vec<f64> = self.theta[1..].to_vec();
+            // A secant predictor: the last plain step's change of the joint angles, scaled
+            // to this step's base displacement.
+            if proximal.is_none()
+                && let Some((delta, dtheta)) = &self.secant
+            {
+                let d2 = delta.norm_squared();
+                let scale = if d2 > 0.0 {
+                    (goal - self.base_m).dot(delta) / d2
+                } else {
+                    0.0
+                };
+                if scale > 0.0 && scale <= 2.0 {
+                    let limits = self.chain.joint_limits();
+                    for j in 0..n {
+                        x[j] = (x[j] + scale * dtheta[j])
+                            .clamp(limits[j + 1].cw_rad, limits[j + 1].ccw_rad);
+                    }
+                }
+            }
+            x.extend(hair_links.iter().map(|&l| self.beta[l]));
+            let prox_x: Vec<f64>;
+            let prox = match proximal {
+                Some((gamma, x_prev)) => {
+                    prox_x = x_prev
+                        .iter()
+                        .copied()
+                        .chain(hair_links.iter().map(|&l| self.beta[l]))
+                        .collect();
+                    Some(Proximal {
+                        gamma,
+                        x_prev: &prox_x,
+                    })
+                }
+                None => None,
+            };
+            let problem = StepProblem {
+                chain: &self.chain,
+                pieces: &self.pieces.walls,
+                tip_force_n: self.tip_force_n,
+                base_m: goal,
+                hair_links: &hair_links,
+                hair_beta_rad: &self.beta,
+                proximal: prox,
+                hand_m: self.hand_offset_m.map(|o| goal + o),
+                tolerance_m: self.settings.tolerance_m,
+                // A pseudo-time step of a snap is held to the same residual as a step: a
+                // looser one lets the flow creep by stalled solves where a contact sits on
+                // the edge of its friction cone, and never come to rest.
+                acceptable_m: self.settings.acceptable_m,
+                max_departure_rad: 2.0 * self.settings.jump_rad,
+                max_iterations: self.settings.max_iterations,
+            };
+            let x_start = x.clone();
+            let pairs_start = pairs.clone();
+            let mut outcome = self.ssn.solve(&problem, &mut x, &mut pairs);
+            report.iterations += outcome.iterations;
+            if !outcome.converged {
+                // Coulomb's law makes the step's equations non-monotone: solve the Tresca
+                // problems of the fixed point instead ([`super::tresca`]).
+                x.clone_from(&x_start);
+                pairs.clone_from(&pairs_start);
+                outcome = solve_by_fixed_point(&mut self.ssn, &problem, &mut x, &mut pairs, report);
+                if !outcome.converged {
+                    return Err(Reject::NoConvergence);
+                }
+            }
+            // Pairs that are no longer what touches (a feature's foot past its link's end)
+            // let go, and any point now inside a wall joins: the step is solved again.
+            let mut changed = self.drop_stale_pairs(&mut pairs);
+            let missed = self.missed_pairs(&x, &hair_links, &pairs, goal);
+            changed |= !missed.is_empty();
+            pairs.extend(missed);
+            // Hair anchoring on rough surfaces (model.md 7).
+            changed |= self.update_anchors(&x, &hair_links, &mut pairs, &mut anchoring);
+            if changed {
+                report.resolves += 1;
+                continue;
+            }
+            let jump = x
+                .iter()
+                .zip(&self.theta[1..])
+                .take(n)
+                .fold(0.0_f64, |a, (x, t)| a.max((x - t).abs()));
+            if jump > self.settings.jump_rad {
+                return Err(Reject::Jump);
+            }
+            return Ok(Accepted {
+                x,
+                hair_links,
+                pairs,
+                residual_m: outcome.residual_m,
+                hand_force_n: outcome.hand_force_n,
+            });
+        }
+        Err(Reject::NoConvergence)
+    }
+}

@@ -1,0 +1,107 @@
+//! Model.md 6's fixed point on the normal forces, for the steps Coulomb's law makes hard.
+//!
+//! Coulomb's law makes a step's equations non-monotone (the friction of a sliding contact
+//! can drive it into the wall). Where the semismooth Newton method on them fails, the step
+//! is solved as a sequence of Tresca problems instead, the shear bounds `mu N` held at the
+//! normal forces of the previous solve, started from the last step's forces, until the
+//! normal forces stop changing: then the answer is Coulomb's. Where the iteration does not
+//! settle, the contacts whose normal force keeps growing are **jammed** (a frictional
+//! paradox: sliding needs ever more normal force the more friction it has): they slide
+//! without friction for the step, which is reported ([`super::StepReport::jams`]).
+
+use super::equations::StepProblem;
+use super::pair::Pair;
+use super::report::StepReport;
+use super::ssn::{Ssn, SsnOutcome};
+use nalgebra::Vector2;
+
+/// Fixed-point iterations on the normal forces before a step is given up.
+const TRESCA_ITERATIONS: usize = 30;
+/// When the held normal forces count as settled, relative.
+const TRESCA_TOLERANCE_N: f64 = 1e-10;
+
+/// Solves the step by the fixed point (see the module docs); `x` and the pairs are the
+/// start and receive the answer.
+pub(crate) fn solve_by_fixed_point(
+    ssn: &mut Ssn,
+    problem: &StepProblem<'_>,
+    x: &mut [f64],
+    pairs: &mut [Pair],
+    report: &mut StepReport,
+) -> SsnOutcome {
+    for c in pairs.iter_mut() {
+        c.tresca_n = Some(c.normal_force_n.max(0.0));
+        c.jammed = false;
+    }
+    let mut outcome = SsnOutcome {
+        converged: false,
+        iterations: 0,
+        residual_m: f64::INFINITY,
+        hand_force_n: Vector2::zeros(),
+    };
+    for _ in 0..TRESCA_ITERATIONS {
+        outcome = ssn.solve(problem, x, pairs);
+        report.iterations += outcome.iterations;
+        if !outcome.converged {
+            break;
+        }
+        let mut settled = true;
+        for c in pairs.iter_mut() {
+            let held = c.tresca_n.unwrap_or(0.0);
+            let now = c.normal_force_n.max(0.0);
+            if (now - held).abs() > TRESCA_TOLERANCE_N * (1.0 + now) {
+                settled = false;
+            }
+            c.tresca_n = Some(now);
+        }
+        if settled {
+            report.fixed_point_solves += 1;
+            for c in pairs.iter_mut() {
+                c.tresca_n = None;
+            }
+            return outcome;
+        }
+    }
+    // No fixed point: a jam. The jamming contacts slide without friction for this step, the
+    // others keep their last friction bound; reported, and it keeps the cone.
+    let mut jammed = 0;
+    for c in pairs.iter_mut() {
+        let held = c.tresca_n.unwrap_or(0.0);
+        if (c.normal_force_n.max(0.0) - held).abs() > 1e-3 * (1e-9 + held) {
+            c.tresca_n = Some(0.0);
+            jammed += 1;
+        } else {
+            c.tresca_n = Some(held.min(c.normal_force_n.max(0.0)));
+        }
+    }
+    if jammed > 0 {
+        // Any other contact whose friction bound then exceeds mu N loses its friction too,
+        // until every contact is inside its cone.
+        for _ in 0..=pairs.len() {
+            outcome = ssn.solve(problem, x, pairs);
+            report.iterations += outcome.iterations;
+            if !outcome.converged {
+                break;
+            }
+            let mut outside = false;
+            for c in pairs.iter_mut() {
+                let bound = c.law.shear_bound(c.normal_force_n).0;
+                if c.shear_force_n.abs() > bound + 1e-12 && c.tresca_n != Some(0.0) {
+                    c.tresca_n = Some(0.0);
+                    jammed += 1;
+                    outside = true;
+                }
+            }
+            if !outside {
+                break;
+            }
+        }
+        report.jams += jammed;
+    }
+    for c in pairs.iter_mut() {
+        c.jammed = c.tresca_n == Some(0.0) && jammed > 0;
+        c.tresca_n = None;
+    }
+    outcome.converged &= jammed > 0;
+    outcome
+}
