@@ -1,16 +1,18 @@
 //! An independent check of a quasi-static state (model.md 6: "every step is checked"):
 //! recomputed from the posture and the reported contact forces with the crate's own
-//! kinematics ([`crate::frame_poses`], [`crate::hair_poses`]), not from the solver's
-//! equations.
+//! kinematics ([`crate::frame_poses`], [`crate::hair_poses`]) and the walls' own distance
+//! queries, not from the solver's equations. [`super::QuasiStatic::step_to`] runs it on
+//! every step it accepts and refuses a step that fails it
+//! ([`super::ContactError::Uncertified`]).
 
 use nalgebra::Vector2;
 
-use super::feature::{Contact, Feature, FrictionLaw};
+use super::feature::{Contact, Feature, FrictionLaw, Slip};
 use super::quasistatic::QuasiStatic;
 use crate::{Frame, hair_poses};
 
 /// How far a state is from a frictional-contact equilibrium; every field is `0` for an
-/// exact one.
+/// exact one, and `NaN` where something was not finite (which fails [`Self::holds`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct EquilibriumCheck {
     /// The largest torque imbalance at a joint strictly inside its limits, or at a hair in
@@ -25,6 +27,26 @@ pub struct EquilibriumCheck {
     pub cone_violation_n: f64,
     /// The largest gap of a contact that carries a force (complementarity), metres.
     pub separation_m: f64,
+    /// The largest slip of a contact reported stuck, metres (Coulomb: a stuck contact does
+    /// not move).
+    pub stuck_slip_m: f64,
+    /// The largest departure of a slipping contact's shear force from the friction limit
+    /// (`|T| = bound`; the bound relaxed on a jam where it was), newtons.
+    pub slip_force_violation_n: f64,
+    /// The largest slip of a slipping contact in the direction of its own shear force (it
+    /// must slip against it), metres.
+    pub wrong_way_slip_m: f64,
+}
+
+/// The tolerances a state is certified against ([`EquilibriumCheck::holds`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CertifyTolerances {
+    /// Torques, N m.
+    pub torque_nm: f64,
+    /// Lengths (penetration, separation, slip), metres.
+    pub length_m: f64,
+    /// Forces, newtons.
+    pub force_n: f64,
 }
 
 /// A joint or hair this close to a limit is on it (the solver ends within its tolerance of
@@ -35,23 +57,123 @@ const ON_LIMIT_RAD: f64 = 1e-9;
 /// 0.01-1 N).
 const FORCE_ZERO_N: f64 = 1e-12;
 
+/// `max` that keeps a NaN (`f64::max` drops it).
+fn worst(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
 impl EquilibriumCheck {
     /// Whether every residual is within its tolerance (torques in N m, lengths in m,
-    /// forces in N).
+    /// forces in N); a NaN anywhere fails.
     pub fn holds(&self, torque_nm: f64, length_m: f64, force_n: f64) -> bool {
         self.torque_residual_nm <= torque_nm
             && self.limit_sign_violation_nm <= torque_nm
             && self.penetration_m <= length_m
             && self.cone_violation_n <= force_n
             && self.separation_m <= length_m
+            && self.stuck_slip_m <= length_m
+            && self.slip_force_violation_n <= force_n
+            && self.wrong_way_slip_m <= length_m
+    }
+
+    /// [`Self::holds`] against `tolerances`.
+    pub fn holds_within(&self, tolerances: &CertifyTolerances) -> bool {
+        self.holds(
+            tolerances.torque_nm,
+            tolerances.length_m,
+            tolerances.force_n,
+        )
+    }
+
+    /// The conditions that fail `tolerances`, in words (empty when it holds).
+    pub fn failures(&self, tolerances: &CertifyTolerances) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut test = |name: &str, value: f64, tolerance: f64, unit: &str| {
+            if value.is_nan() || value > tolerance {
+                out.push(format!(
+                    "{name} {value:.3e} {unit} (tolerance {tolerance:.1e})"
+                ));
+            }
+        };
+        test(
+            "torque imbalance",
+            self.torque_residual_nm,
+            tolerances.torque_nm,
+            "N m",
+        );
+        test(
+            "stop torque of the wrong sign",
+            self.limit_sign_violation_nm,
+            tolerances.torque_nm,
+            "N m",
+        );
+        test("penetration", self.penetration_m, tolerances.length_m, "m");
+        test(
+            "friction cone violated by",
+            self.cone_violation_n,
+            tolerances.force_n,
+            "N",
+        );
+        test(
+            "a loaded contact's gap",
+            self.separation_m,
+            tolerances.length_m,
+            "m",
+        );
+        test(
+            "a stuck contact's slip",
+            self.stuck_slip_m,
+            tolerances.length_m,
+            "m",
+        );
+        test(
+            "a slipping contact off its friction limit by",
+            self.slip_force_violation_n,
+            tolerances.force_n,
+            "N",
+        );
+        test(
+            "a contact slipping with its shear force by",
+            self.wrong_way_slip_m,
+            tolerances.length_m,
+            "m",
+        );
+        out
     }
 }
 
 impl QuasiStatic {
+    /// The tolerances [`Self::step_to`] certifies every step against: ten times what the
+    /// solver's acceptable residual ([`super::ContactSettings::acceptable_m`]) allows, in
+    /// each unit (torques through the stiffest joint over the mean link length, forces
+    /// through the contact scale `k_mean / L^2`), and the penetration tolerance.
+    pub fn certify_tolerances(&self) -> CertifyTolerances {
+        let k = &self.chain.stiffness_nm_per_rad()[1..];
+        let k_max = k.iter().copied().fold(1e-12_f64, f64::max);
+        let k_mean = if k.is_empty() {
+            k_max
+        } else {
+            k.iter().sum::<f64>() / k.len() as f64
+        };
+        let lengths = self.chain.link_lengths_m();
+        let l_mean = lengths.iter().sum::<f64>() / lengths.len() as f64;
+        let residual_m = 10.0 * self.settings.acceptable_m.max(self.settings.tolerance_m);
+        CertifyTolerances {
+            torque_nm: residual_m * k_max / l_mean,
+            length_m: residual_m.max(10.0 * self.settings.penetration_tolerance_m),
+            force_n: residual_m * k_mean.max(1e-3) / (l_mean * l_mean),
+        }
+    }
+
     /// Re-derives the equilibrium conditions of the current state: the torque balance at
     /// every joint and hair from the contact forces reported by [`Self::contacts`] (and the
     /// tip load), the joint-limit multipliers' signs, non-penetration of every link and
-    /// hair tip, the friction cone and the complementarity of forces and gaps.
+    /// hair tip, the friction cone, Coulomb's law (stuck contacts do not slip, slipping ones
+    /// are at the limit against their slip) and the complementarity of forces and gaps.
     pub fn check(&self) -> EquilibriumCheck {
         let mut out = EquilibriumCheck::default();
         let chain = self.chain();
@@ -59,11 +181,15 @@ impl QuasiStatic {
         let theta = self.theta_rad();
         let base = self.base_m();
         let Ok(poses) = crate::frame_poses(chain, theta, Frame::GROUND) else {
-            out.torque_residual_nm = f64::INFINITY;
+            out.torque_residual_nm = f64::NAN;
             return out;
         };
         let ends: Vec<Vector2<f64>> = (0..=n)
-            .map(|i| base + poses.position_m(Frame::link(i)).unwrap_or_default())
+            .map(|i| {
+                base + poses
+                    .position_m(Frame::link(i))
+                    .unwrap_or(Vector2::new(f64::NAN, f64::NAN))
+            })
             .collect();
         let start_of = |link: usize| if link == 0 { base } else { ends[link - 1] };
         let hairs =
@@ -89,7 +215,7 @@ impl QuasiStatic {
         for c in &contacts {
             match point_of(c) {
                 Some(x) => loads.push((c.feature.link(), x, c.force_n())),
-                None => out.torque_residual_nm = f64::INFINITY,
+                None => out.torque_residual_nm = f64::NAN,
             }
         }
         let tip_force = self.tip_force_n() + self.hand_force_n();
@@ -111,47 +237,61 @@ impl QuasiStatic {
             if on_cw && on_ccw {
                 continue;
             } else if on_cw {
-                out.limit_sign_violation_nm = out.limit_sign_violation_nm.max(-tau);
+                out.limit_sign_violation_nm = worst(out.limit_sign_violation_nm, -tau);
             } else if on_ccw {
-                out.limit_sign_violation_nm = out.limit_sign_violation_nm.max(tau);
+                out.limit_sign_violation_nm = worst(out.limit_sign_violation_nm, tau);
             } else {
-                out.torque_residual_nm = out.torque_residual_nm.max(tau.abs());
+                out.torque_residual_nm = worst(out.torque_residual_nm, tau.abs());
             }
         }
-        // Hairs in contact: spring torque against the contact force's moment about the pivot.
-        for c in &contacts {
-            let Feature::HairTip { link } = c.feature else {
-                continue;
-            };
+        // Hairs in contact: spring torque against the contact forces' moment about the
+        // pivot.
+        let mut hair_links: Vec<usize> = contacts
+            .iter()
+            .filter_map(|c| match c.feature {
+                Feature::HairTip { link } => Some(link),
+                _ => None,
+            })
+            .collect();
+        hair_links.sort_unstable();
+        hair_links.dedup();
+        for link in hair_links {
             let (Some((pivot, tip)), Some(Some(hair))) = (hair_tip(link), chain.hairs().get(link))
             else {
+                out.torque_residual_nm = f64::NAN;
                 continue;
             };
             let beta = self.hair_angles_rad()[link];
             // d tip / d beta = rate * R90 (tip - pivot).
             let arm = tip - pivot;
             let rate = Vector2::new(-arm.y, arm.x) * hair.direction_rate();
-            let g = hair.spring_gradient_nm(beta) - rate.dot(&c.force_n());
+            let mut g = hair.spring_gradient_nm(beta);
+            for c in contacts
+                .iter()
+                .filter(|c| c.feature == Feature::HairTip { link })
+            {
+                g -= rate.dot(&c.force_n());
+            }
             if beta >= hair.open_angle_rad - ON_LIMIT_RAD {
-                out.limit_sign_violation_nm = out.limit_sign_violation_nm.max(g);
+                out.limit_sign_violation_nm = worst(out.limit_sign_violation_nm, g);
             } else if beta <= ON_LIMIT_RAD {
-                out.limit_sign_violation_nm = out.limit_sign_violation_nm.max(-g);
+                out.limit_sign_violation_nm = worst(out.limit_sign_violation_nm, -g);
             } else {
-                out.torque_residual_nm = out.torque_residual_nm.max(g.abs());
+                out.torque_residual_nm = worst(out.torque_residual_nm, g.abs());
             }
         }
         // Non-penetration of every link and hair tip.
         for wall in self.walls() {
             for (link, end) in ends.iter().enumerate() {
                 let sc = wall.segment_contact(&start_of(link), end);
-                out.penetration_m = out.penetration_m.max(-sc.wall.gap_m);
+                out.penetration_m = worst(out.penetration_m, -sc.wall.gap_m);
             }
             for h in &hairs {
                 let gap = wall.signed_distance(&(base + h.tip_m)).gap_m;
-                out.penetration_m = out.penetration_m.max(-gap);
+                out.penetration_m = worst(out.penetration_m, -gap);
             }
         }
-        // Cone and complementarity.
+        // Cone, Coulomb's law and complementarity.
         for c in &contacts {
             let (min_n, bound) = match c.law {
                 FrictionLaw::Coulomb { mu } => (0.0, mu * c.normal_force_n.max(0.0)),
@@ -160,18 +300,48 @@ impl QuasiStatic {
                     hold_tension_n,
                 } => (-hold_tension_n, hold_shear_n),
             };
-            out.cone_violation_n = out
-                .cone_violation_n
-                .max(min_n - c.normal_force_n)
-                .max(c.shear_force_n.abs() - bound);
+            let bound = c.relaxed_shear_bound_n.unwrap_or(bound);
+            out.cone_violation_n = worst(
+                worst(out.cone_violation_n, min_n - c.normal_force_n),
+                c.shear_force_n.abs() - bound,
+            );
+            match c.slip {
+                Slip::Stuck => out.stuck_slip_m = worst(out.stuck_slip_m, c.slip_m.abs()),
+                Slip::Forward | Slip::Backward => {
+                    // At the limit, against the slip.
+                    let at_limit = (c.shear_force_n.abs() - bound).abs();
+                    out.slip_force_violation_n = worst(out.slip_force_violation_n, at_limit);
+                    // (A shear force of rounding size has no direction.)
+                    let wrong_way = if c.shear_force_n > FORCE_ZERO_N {
+                        c.slip_m
+                    } else if c.shear_force_n < -FORCE_ZERO_N {
+                        -c.slip_m
+                    } else {
+                        0.0
+                    };
+                    out.wrong_way_slip_m = worst(out.wrong_way_slip_m, wrong_way);
+                }
+            }
             if let Some(x) = point_of(c)
                 && c.force_n().norm() > FORCE_ZERO_N
             {
                 let gap = self.walls()[c.wall].signed_distance(&x).gap_m;
-                out.separation_m = out.separation_m.max(gap.abs());
+                out.separation_m = worst(out.separation_m, gap.abs());
+            }
+            for v in [c.normal_force_n, c.shear_force_n, c.slip_m] {
+                if !v.is_finite() {
+                    out.cone_violation_n = f64::NAN;
+                }
             }
         }
-        out.penetration_m = out.penetration_m.max(0.0);
+        if theta
+            .iter()
+            .chain(self.hair_angles_rad())
+            .any(|v| !v.is_finite())
+        {
+            out.torque_residual_nm = f64::NAN;
+        }
+        out.penetration_m = worst(out.penetration_m, 0.0);
         out
     }
 }

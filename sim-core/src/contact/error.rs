@@ -100,6 +100,22 @@ pub enum ContactError {
         /// Newton iterations spent on the step.
         iterations: usize,
     },
+    /// The state a step reached failed the independent check ([`super::QuasiStatic::check`]):
+    /// the step is refused rather than reported.
+    #[error(
+        "the step to ({base_x_m}, {base_y_m}) m reached a state that fails the independent \
+         check: {failures}"
+    )]
+    Uncertified {
+        /// The base position, x.
+        base_x_m: f64,
+        /// The base position, y.
+        base_y_m: f64,
+        /// What failed, in words.
+        failures: String,
+        /// The check.
+        check: Box<super::EquilibriumCheck>,
+    },
     /// A chain could not be built.
     #[error(transparent)]
     Chain(#[from] ChainError),

@@ -140,9 +140,10 @@ pub struct Contact {
     /// How far the contact point slid along the wall during the step, metres (signed along
     /// `tangent`; exactly what the solver found, `0` to rounding when stuck).
     pub slip_m: f64,
-    /// Whether the contact jammed and slid without friction for the step (a relaxation,
-    /// counted in [`super::StepReport::jams`]).
-    pub friction_dropped: bool,
+    /// `Some(B)` where this step's friction was relaxed at the contact (a jam, see
+    /// [`super::StepReport::jams`]): its shear force was bounded by `B` (`0`: it slid
+    /// without friction) instead of its law's bound.
+    pub relaxed_shear_bound_n: Option<f64>,
 }
 
 impl Contact {

@@ -84,7 +84,7 @@ mod stability;
 mod substep;
 mod tresca;
 
-pub use check::EquilibriumCheck;
+pub use check::{CertifyTolerances, EquilibriumCheck};
 pub use error::ContactError;
 pub use feature::{Contact, Feature, FrictionLaw, Slip};
 pub use quasistatic::QuasiStatic;

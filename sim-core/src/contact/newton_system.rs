@@ -36,6 +36,13 @@ use super::pair::Pair;
 use super::posture::{cross, perp};
 use crate::equilibrium::bordered::{BorderedSystem, SolveStats};
 
+/// A least-squares step leaving more than this fraction of the constraint rows' right-hand
+/// side means the linearized constraints are inconsistent.
+const INCONSISTENT: f64 = 1e-2;
+
+/// The dual regularization of inconsistent constraints, relative to `1 / c`.
+const DUAL_REGULARIZATION: f64 = 1e-10;
+
 /// The Newton system's scratch space, reused from iteration to iteration.
 #[derive(Debug, Default)]
 pub(crate) struct NewtonSystem {
@@ -242,7 +249,20 @@ impl NewtonSystem {
         // Solve and map back to dz.
         reset(&mut self.x, n);
         reset(&mut self.w, kdim);
-        let stats = self.sys.solve(&mut self.x, &mut self.w)?;
+        let mut stats = self.sys.solve(&mut self.x, &mut self.w)?;
+        if stats.truncated && stats.border_residual > INCONSISTENT {
+            // The linearized constraints cannot all hold (stuck contacts that the joints
+            // free of their stops cannot keep in place): regularize them, so that the forces
+            // grow toward the cone's edge and the modes change, instead of a least-squares
+            // step that leaves the residual where it is.
+            let dual = damping.max(DUAL_REGULARIZATION) / eq.c_n_per_m;
+            for (kk, _) in pairs.iter().enumerate() {
+                for col in [self.col_n[kk], self.col_t[kk]].into_iter().flatten() {
+                    *self.sys.r_at(col, col) = -dual;
+                }
+            }
+            stats = self.sys.solve(&mut self.x, &mut self.w)?;
+        }
         if stats.dense {
             self.dense_solves += 1;
         }

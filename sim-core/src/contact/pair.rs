@@ -124,8 +124,9 @@ pub(crate) struct Pair {
     /// When set, the shear bound is `mu` times this normal force instead of the current one
     /// (the Tresca problem of model.md 6's fixed point on the normal forces).
     pub tresca_n: Option<f64>,
-    /// Whether the pair jammed in this step's fixed point and slid without friction.
-    pub jammed: bool,
+    /// `Some(B)` where this step's solution bounded the shear force by `B` instead of the
+    /// law's bound (a jam in the fixed point on the normal forces).
+    pub relaxed_bound_n: Option<f64>,
 }
 
 impl Pair {
@@ -152,7 +153,7 @@ impl Pair {
             normal_active: false,
             slip: Slip::Stuck,
             tresca_n: None,
-            jammed: false,
+            relaxed_bound_n: None,
         }
     }
 

@@ -197,7 +197,7 @@ impl QuasiStatic {
             law: c.law,
             slip: c.slip,
             slip_m: c.slip_m,
-            friction_dropped: c.jammed,
+            relaxed_shear_bound_n: c.relaxed_bound_n,
         }));
     }
 
@@ -254,6 +254,7 @@ impl QuasiStatic {
                 && self.at_rest()
             {
                 report.substeps = 1;
+                self.certify(&mut report)?;
                 return Ok(report);
             }
         }
@@ -307,7 +308,26 @@ impl QuasiStatic {
             Ok(())
         })();
         report.dense_solves = self.ssn.system.dense_solves - dense_before;
-        result.map(|()| report)
+        result?;
+        self.certify(&mut report)?;
+        Ok(report)
+    }
+
+    /// Runs the independent check on the state reached and refuses it if it fails.
+    fn certify(&self, report: &mut StepReport) -> Result<(), ContactError> {
+        let check = self.check();
+        report.certificate = check;
+        let tolerances = self.certify_tolerances();
+        if check.holds_within(&tolerances) {
+            Ok(())
+        } else {
+            Err(ContactError::Uncertified {
+                base_x_m: self.base_m.x,
+                base_y_m: self.base_m.y,
+                failures: check.failures(&tolerances).join("; "),
+                check: Box::new(check),
+            })
+        }
     }
 
     /// Whether every joint sits at its rest angle within its limits (the free equilibrium

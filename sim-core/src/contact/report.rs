@@ -35,6 +35,10 @@ pub struct StepReport {
     /// factorization (an indefinite Newton matrix with a vanishing pivot). Not a relaxation:
     /// the answer is the same, only slower.
     pub dense_solves: usize,
+    /// The independent check of the state after the step ([`super::QuasiStatic::check`]),
+    /// which held within [`super::QuasiStatic::certify_tolerances`] (a step that fails it
+    /// is refused).
+    pub certificate: super::EquilibriumCheck,
 }
 
 impl StepReport {
@@ -86,5 +90,6 @@ impl StepReport {
         self.residual_m = r.residual_m;
         self.residual_above_tolerance |= r.residual_above_tolerance;
         self.dense_solves += r.dense_solves;
+        self.certificate = r.certificate;
     }
 }

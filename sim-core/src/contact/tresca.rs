@@ -31,7 +31,7 @@ pub(crate) fn solve_by_fixed_point(
 ) -> SsnOutcome {
     for c in pairs.iter_mut() {
         c.tresca_n = Some(c.normal_force_n.max(0.0));
-        c.jammed = false;
+        c.relaxed_bound_n = None;
     }
     let mut outcome = SsnOutcome {
         converged: false,
@@ -62,21 +62,38 @@ pub(crate) fn solve_by_fixed_point(
             return outcome;
         }
     }
-    // No fixed point: a jam. The jamming contacts slide without friction for this step, the
-    // others keep their last friction bound; reported, and it keeps the cone.
+    // No fixed point: a jam. The jamming contacts (whose normal force kept growing) slide
+    // without friction for this step; the others keep Coulomb's law, or, where the step
+    // does not converge with it, the bound of their last normal force. Every bound that is
+    // not Coulomb's is recorded on its contact and the step reports the jam.
     let mut jammed = 0;
-    for c in pairs.iter_mut() {
-        let held = c.tresca_n.unwrap_or(0.0);
-        if (c.normal_force_n.max(0.0) - held).abs() > 1e-3 * (1e-9 + held) {
+    let held: Vec<f64> = pairs.iter().map(|c| c.tresca_n.unwrap_or(0.0)).collect();
+    for (c, &h) in pairs.iter_mut().zip(&held) {
+        if (c.normal_force_n.max(0.0) - h).abs() > 1e-3 * (1e-9 + h) {
             c.tresca_n = Some(0.0);
             jammed += 1;
         } else {
-            c.tresca_n = Some(held.min(c.normal_force_n.max(0.0)));
+            c.tresca_n = None;
         }
     }
-    if jammed > 0 {
-        // Any other contact whose friction bound then exceeds mu N loses its friction too,
-        // until every contact is inside its cone.
+    if jammed == 0 {
+        for c in pairs.iter_mut() {
+            c.tresca_n = None;
+        }
+        outcome.converged = false;
+        return outcome;
+    }
+    outcome = ssn.solve(problem, x, pairs);
+    report.iterations += outcome.iterations;
+    if !outcome.converged {
+        // Coulomb's law for the others does not settle either: hold their bounds too.
+        for (c, &h) in pairs.iter_mut().zip(&held) {
+            if c.tresca_n.is_none() {
+                c.tresca_n = Some(h.min(c.normal_force_n.max(0.0)));
+            }
+        }
+        // Any contact whose held bound exceeds mu N loses its friction, until every
+        // contact is inside its cone.
         for _ in 0..=pairs.len() {
             outcome = ssn.solve(problem, x, pairs);
             report.iterations += outcome.iterations;
@@ -96,12 +113,11 @@ pub(crate) fn solve_by_fixed_point(
                 break;
             }
         }
-        report.jams += jammed;
     }
+    report.jams += jammed;
     for c in pairs.iter_mut() {
-        c.jammed = c.tresca_n == Some(0.0) && jammed > 0;
+        c.relaxed_bound_n = c.tresca_n.map(|held| c.law.shear_bound(held).0);
         c.tresca_n = None;
     }
-    outcome.converged &= jammed > 0;
     outcome
 }

@@ -40,6 +40,10 @@ pub(crate) struct SolveStats {
     /// at the ends of one rigid link) and was solved in the least-squares sense, with the
     /// least-norm answer along its null space.
     pub truncated: bool,
+    /// The residual of the extra unknowns' rows relative to their largest right-hand side:
+    /// tiny unless the system is rank deficient and inconsistent (constraints that cannot
+    /// all hold: then the least-squares answer leaves it).
+    pub border_residual: f64,
 }
 
 /// The system and its scratch space (see the module docs).
@@ -75,6 +79,7 @@ pub(crate) struct BorderedSystem {
     res_x: Vec<f64>,
     res_w: Vec<f64>,
     truncated: bool,
+    border_residual: f64,
 }
 
 /// A pivot this small relative to its row's entries means the elimination cannot be trusted.
@@ -146,6 +151,7 @@ impl BorderedSystem {
                 && stats.relative_residual <= RESIDUAL_TOLERANCE.sqrt()
             {
                 stats.truncated = self.truncated;
+                stats.border_residual = self.border_residual;
                 return Some(stats);
             }
         }
@@ -155,6 +161,7 @@ impl BorderedSystem {
         }
         stats.relative_residual = self.relative_residual(x, w);
         stats.truncated = self.truncated;
+        stats.border_residual = self.border_residual;
         stats.relative_residual.is_finite().then_some(stats)
     }
 
@@ -319,7 +326,9 @@ impl BorderedSystem {
             }
         }
         // The extra unknowns' rows are the dense solve's (least squares where it is rank
-        // deficient): their residual is kept for refinement only.
+        // deficient): their residual is measured apart ([`SolveStats::border_residual`]).
+        let rhs_scale = self.rhs_w.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        let mut border = 0.0_f64;
         for r in 0..k {
             let row = &self.q[r * n..(r + 1) * n];
             let mut v = -self.rhs_w[r];
@@ -330,7 +339,15 @@ impl BorderedSystem {
                 v += self.r[r * k + c] * w[c];
             }
             self.res_w[r] = v;
+            border = border.max(v.abs());
         }
+        self.border_residual = if rhs_scale > 0.0 {
+            border / rhs_scale
+        } else if border > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        };
         let _ = scale;
         worst
     }

@@ -515,8 +515,9 @@ impl Polyline {
     }
 
     /// The convex corners that could press on the segment `a -> b` with a gap below
-    /// `within_m` (feet anywhere on the segment's line within `within_m` of it), appended to
-    /// `out`; `O(vertices)`.
+    /// `within_m`, appended to `out`: those within `within_m` plus half the segment's
+    /// length of its bounding box (a corner poking through a segment lies within the
+    /// box grown by its depth), whose cone holds the segment's normal; `O(vertices)`.
     pub fn features_near_segment(
         &self,
         a_m: &Vector2<f64>,
@@ -525,7 +526,7 @@ impl Polyline {
         out: &mut Vec<FeatureContact>,
     ) {
         let (lo, hi) = (a_m.inf(b_m), a_m.sup(b_m));
-        let reach = within_m.max(0.0);
+        let reach = within_m.max(0.0) + 0.5 * (b_m - a_m).norm();
         for vertex in 1..self.tangents.len() {
             let v = self.vertices_m[vertex];
             if v.x < lo.x - reach || v.x > hi.x + reach || v.y < lo.y - reach || v.y > hi.y + reach
