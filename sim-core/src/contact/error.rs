@@ -116,6 +116,11 @@ pub enum ContactError {
         /// The check.
         check: Box<super::EquilibriumCheck>,
     },
+    /// The antenna jammed: no posture within the joints' limits keeps every link out of the
+    /// walls with the base where it was to go (see [`super::Jam`]). A physical outcome, not
+    /// a failure of the solver: the state is that of the last step solved.
+    #[error("{0}")]
+    Jammed(Box<super::Jam>),
     /// A chain could not be built.
     #[error(transparent)]
     Chain(#[from] ChainError),
