@@ -11,8 +11,8 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use antenna_data::stream::SegmentStatus;
 use egui::{Color32, RichText};
-use host_daemon::net::SegmentStatus;
 
 use crate::client::{ClientOptions, Command, ConnectionState, LiveClient, ReplyRecord};
 use crate::error::MonitorError;

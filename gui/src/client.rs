@@ -21,7 +21,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use host_daemon::net::{SegmentSample, SegmentStatus, StreamMessage};
+use antenna_data::stream::{SegmentSample, SegmentStatus, StreamMessage};
 
 use crate::error::MonitorError;
 use crate::history::{Health, History, Sample, SegmentReading};

@@ -46,18 +46,19 @@ use crate::acquisition::{
 };
 use crate::clock::{Schedule, TrialClock};
 use crate::config::{Config, SimFaultKind, TrialConfig};
-use crate::net::{
-    ControlCommand, ControlHandler, ControlToken, RigInfo, RigWall, SegmentSample as NetSample,
-    SegmentStatus, ServerOptions, StageTarget, StreamMessage, StreamServer,
-};
+use crate::net::{ControlHandler, ControlToken, ServerOptions, StreamServer};
 use crate::poll::{PollError, Poller, SegmentHealth};
-use crate::record::{
-    LogMessage, RecordCounts, SegmentSample, SegmentsMessage, ServoMessage, StageMessage,
-    TrialMetadata, TrialRecorder,
-};
 use crate::rig::{DaemonRig, RigError};
+use crate::samples::{record_sample, stream_sample};
 use crate::sim_rig::{SimState, sense, sim_bus};
 use crate::{SegmentFault, SimBus};
+use antenna_data::record::{
+    LogMessage, RecordCounts, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+    TrialRecorder,
+};
+use antenna_data::stream::{
+    ControlCommand, RigInfo, RigWall, SegmentStatus, StageTarget, StreamMessage,
+};
 use antenna_protocol::Calibration;
 use anyhow::{Context, Result, anyhow, bail};
 use std::collections::{BTreeMap, VecDeque};
@@ -923,6 +924,7 @@ impl Hub {
                     .map_or(0.0, |d| d.as_secs_f64()),
                 config: self.options.config_text.clone(),
                 notes,
+                rig: Some(rig_info(&self.config)),
             };
             Some(
                 TrialRecorder::create(&path, &metadata)
@@ -1048,7 +1050,7 @@ impl Hub {
     fn record(
         &mut self,
         t_ns: u64,
-        f: impl FnOnce(&mut TrialRecorder, f64) -> Result<(), crate::record::RecordError>,
+        f: impl FnOnce(&mut TrialRecorder, f64) -> Result<(), antenna_data::record::RecordError>,
     ) {
         let Some(trial) = &mut self.trial else { return };
         if t_ns < trial.start_ns {
@@ -1150,7 +1152,7 @@ impl Hub {
                     .iter()
                     .zip(&self.calibrations)
                     .enumerate()
-                    .map(|(k, (r, c))| net_sample(r, *c, poll.is_stale(k)))
+                    .map(|(k, (r, c))| stream_sample(r, *c, poll.is_stale(k)))
                     .collect(),
                 stage_position_m: self.stage_mm.map(|mm| mm * 1e-3),
                 base_angle_deg: self.base_rad.map(f64::to_degrees),
@@ -1167,7 +1169,7 @@ impl Hub {
                     .iter()
                     .zip(&calibrations)
                     .enumerate()
-                    .map(|(k, (r, &c))| SegmentSample::from_reading(r, c, poll.is_stale(k)))
+                    .map(|(k, (r, &c))| record_sample(r, c, poll.is_stale(k)))
                     .collect(),
             })
         });
@@ -1201,36 +1203,6 @@ impl Hub {
             segments: self.health.clone(),
             note: (!notes.is_empty()).then(|| notes.join("; ")),
         });
-    }
-}
-
-fn net_sample(reading: &crate::SegmentReading, c: Calibration, stale: bool) -> NetSample {
-    match reading.result {
-        Ok(word) => NetSample {
-            address: reading.address,
-            angle_rad: Some(c.angle_rad(word.angle_counts())),
-            contact: Some(word.touch().any()),
-            touch_bits: Some(word.touch().bits()),
-            counter: None,
-            error: None,
-            stale,
-        },
-        Err(e) => NetSample {
-            address: reading.address,
-            angle_rad: None,
-            contact: None,
-            touch_bits: None,
-            counter: None,
-            error: Some(
-                match e {
-                    PollError::Nack { .. } => "nack",
-                    PollError::Corrupted { .. } => "pec",
-                    PollError::Bus { .. } => "bus",
-                }
-                .to_owned(),
-            ),
-            stale,
-        },
     }
 }
 

@@ -209,7 +209,7 @@ impl DaemonRig {
             }
         };
         let physics = match physics {
-            Some(state) => Some((SimPhysics::new(config)?, state)),
+            Some(state) => Some((crate::sim_rig::sim_physics(config)?, state)),
             None => None,
         };
         let mut rig = Self {
@@ -278,7 +278,9 @@ impl DaemonRig {
                 self.mount_rad + self.last_base_rad,
             );
             if self.solved_for != Some(key) {
-                let solved = physics.update(key.0, key.1).map_err(RigError::Simulation)?;
+                let solved = physics
+                    .update(key.0, key.1)
+                    .map_err(|e| RigError::Simulation(e.into()))?;
                 self.solved_for = Some(key);
                 if let Ok(mut shared) = state.lock() {
                     *shared = solved;

@@ -7,8 +7,8 @@
 
 mod net_support;
 
-use host_daemon::net::StreamMessage;
-use host_daemon::record::TrialReader;
+use antenna_data::record::TrialReader;
+use antenna_data::stream::StreamMessage;
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 

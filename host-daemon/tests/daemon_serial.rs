@@ -7,11 +7,11 @@
 
 mod net_support;
 
+use antenna_data::record::TrialReader;
+use antenna_data::stream::StreamMessage;
 use host_daemon::config::{Config, MoveConfig};
 use host_daemon::daemon::{Daemon, DaemonOptions};
 use host_daemon::emulator::{MaestroEmulator, VxmEmulator};
-use host_daemon::net::StreamMessage;
-use host_daemon::record::TrialReader;
 use net_support::{Client, TOKEN};
 use serialport::{SerialPort, TTYPort};
 use std::path::{Path, PathBuf};

@@ -6,10 +6,8 @@ mod net_support;
 
 use std::sync::Arc;
 
-use host_daemon::net::{
-    ControlCommand, ControlToken, ErrorCode, RecordingHandler, StageTarget, StreamMessage,
-    StreamServer,
-};
+use antenna_data::stream::{ControlCommand, ErrorCode, StageTarget, StreamMessage};
+use host_daemon::net::{ControlToken, RecordingHandler, StreamServer};
 use net_support::{Client, TOKEN, samples, wait_for_clients};
 
 fn server_with(handler: Arc<RecordingHandler>) -> StreamServer {
@@ -246,7 +244,7 @@ fn over_long_line_gets_an_error_then_the_connection_closes_and_others_are_served
     let mut watcher = connect(&server);
     let mut c = connect(&server);
     wait_for_clients(&server, 2);
-    let flood = vec![b'{'; 4 * host_daemon::net::MAX_LINE_BYTES];
+    let flood = vec![b'{'; 4 * antenna_data::stream::MAX_LINE_BYTES];
     // The server may close before it has read all of it; a failed write is fine then.
     let _ = std::io::Write::write_all(&mut c.writer, &flood);
     let reply = c.next_reply();

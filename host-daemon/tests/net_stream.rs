@@ -10,9 +10,8 @@ use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use host_daemon::net::{
-    ControlToken, PROTOCOL_VERSION, RecordingHandler, ServerOptions, StreamMessage, StreamServer,
-};
+use antenna_data::stream::{PROTOCOL_VERSION, StreamMessage};
+use host_daemon::net::{ControlToken, RecordingHandler, ServerOptions, StreamServer};
 use net_support::{Client, TOKEN, follow_exactly, samples, wait_for_clients};
 
 fn server(options: ServerOptions) -> StreamServer {
@@ -213,7 +212,7 @@ fn refuses_clients_beyond_the_limit_with_a_message() {
     let reply = second.next_reply();
     assert_eq!(
         reply.error,
-        Some(host_daemon::net::ErrorCode::TooManyClients)
+        Some(antenna_data::stream::ErrorCode::TooManyClients)
     );
     second.expect_closed();
     assert!(matches!(first.next_message(), StreamMessage::Hello { .. }));

@@ -1,4 +1,4 @@
-//! `antenna export`: a trial recorded by `antennad` (MCAP, see `host_daemon::record`) to a
+//! `antenna export`: a trial recorded by `antennad` (MCAP, see `antenna_data::record`) to a
 //! MAT-file (v5 format, as `scipy.io.loadmat` and MATLAB read it) or a CSV file.
 //!
 //! # MAT-file variables
@@ -35,7 +35,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use host_daemon::record::{SegmentSample, Trial};
+use antenna_data::record::{SegmentSample, Trial};
 use matrw::{CellArray, MatFile, MatVariable, MatlabType, NumericArray};
 
 /// Why a trial could not be exported.

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use host_daemon::record::{TrialRecorder, synthetic_metadata, synthetic_segments};
+use antenna_data::record::{TrialRecorder, synthetic_metadata, synthetic_segments};
 
 fn dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("antenna-export-{name}-{}", std::process::id()));

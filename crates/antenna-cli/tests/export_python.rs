@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use host_daemon::record::{
+use antenna_data::record::{
     TrialRecorder, synthetic_metadata, synthetic_segments, synthetic_servo, synthetic_stage,
 };
 use serde_json::json;

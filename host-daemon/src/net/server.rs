@@ -10,9 +10,12 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
+use antenna_data::stream::{
+    ControlReply, ErrorCode, LineRead, MAX_LINE_BYTES, PROTOCOL_VERSION, RigInfo, StreamMessage,
+    encode_line, read_line_capped,
+};
+
 use super::control::{ControlHandler, serve_request};
-use super::framing::{LineRead, MAX_LINE_BYTES, encode_line, read_line_capped};
-use super::message::{ControlReply, ErrorCode, PROTOCOL_VERSION, StreamMessage};
 use super::token::ControlToken;
 
 /// The address the daemon listens on unless configured otherwise: loopback only.
@@ -37,7 +40,7 @@ pub struct ServerOptions {
     /// Sent in [`StreamMessage::Hello`], e.g. `"antennad 0.1.0"`.
     pub daemon: String,
     /// Sent in [`StreamMessage::Hello`]: the rig's geometry, if known.
-    pub rig: Option<super::RigInfo>,
+    pub rig: Option<RigInfo>,
 }
 
 impl Default for ServerOptions {

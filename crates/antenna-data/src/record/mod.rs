@@ -31,7 +31,7 @@
 //! # Example
 //!
 //! ```
-//! use host_daemon::record::{TrialReader, TrialRecorder, synthetic_metadata, synthetic_segments};
+//! use antenna_data::record::{TrialReader, TrialRecorder, synthetic_metadata, synthetic_segments};
 //!
 //! let path = std::env::temp_dir().join(format!("doc-record-{}.mcap", std::process::id()));
 //! let mut recorder = TrialRecorder::create(&path, &synthetic_metadata("doc"))?;
@@ -43,7 +43,7 @@
 //! assert_eq!(trial.segments.len(), 250);
 //! assert!(trial.truncated.is_none());
 //! # std::fs::remove_file(&path).ok();
-//! # Ok::<(), host_daemon::record::RecordError>(())
+//! # Ok::<(), antenna_data::record::RecordError>(())
 //! ```
 
 mod error;

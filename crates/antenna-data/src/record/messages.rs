@@ -3,10 +3,9 @@
 
 use std::collections::BTreeMap;
 
-use antenna_protocol::Calibration;
 use serde::{Deserialize, Serialize};
 
-use crate::{PollError, SegmentReading};
+use crate::stream::RigInfo;
 
 /// One segment's part of one poll (`/antenna/segments`).
 ///
@@ -33,36 +32,6 @@ pub struct SegmentSample {
     /// The sample is valid but its sequence did not advance since the last poll (a stuck
     /// segment), as judged by the acquisition.
     pub stale: bool,
-}
-
-impl SegmentSample {
-    /// The sample of one poll reading, its angle from `calibration`; `stale` as the
-    /// acquisition judged it.
-    pub fn from_reading(reading: &SegmentReading, calibration: Calibration, stale: bool) -> Self {
-        let mut sample = Self {
-            address: reading.address,
-            angle_counts: None,
-            angle_rad: None,
-            touch: None,
-            ok: false,
-            nack: false,
-            pec_error: false,
-            bus_error: false,
-            stale,
-        };
-        match &reading.result {
-            Ok(word) => {
-                sample.ok = true;
-                sample.angle_counts = Some(word.angle_counts());
-                sample.angle_rad = Some(calibration.angle_rad(word.angle_counts()));
-                sample.touch = Some(word.touch().bits());
-            }
-            Err(PollError::Nack { .. }) => sample.nack = true,
-            Err(PollError::Corrupted { .. }) => sample.pec_error = true,
-            Err(PollError::Bus { .. }) => sample.bus_error = true,
-        }
-        sample
-    }
 }
 
 /// One poll of every segment (`/antenna/segments`).
@@ -118,6 +87,11 @@ pub struct TrialMetadata {
     pub config: String,
     /// Free-text notes such as `wall` and `hairs`, sorted by key.
     pub notes: BTreeMap<String, String>,
+    /// The rig's geometry as the stream's `hello` describes it (the antenna, the wall, the
+    /// stage's soft limits), so a reader can draw the chain without the daemon's
+    /// configuration format; `None` in files written before it was added.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig: Option<RigInfo>,
 }
 
 impl TrialMetadata {
@@ -132,6 +106,11 @@ impl TrialMetadata {
         map.insert("config".to_string(), self.config.clone());
         for (k, v) in &self.notes {
             map.insert(format!("notes.{k}"), v.clone());
+        }
+        if let Some(rig) = &self.rig
+            && let Ok(json) = serde_json::to_string(rig)
+        {
+            map.insert("rig".to_string(), json);
         }
         map
     }

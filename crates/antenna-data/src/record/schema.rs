@@ -108,6 +108,10 @@ pub fn metadata_schema() -> Value {
                 "type": "object",
                 "additionalProperties": { "type": "string" },
                 "description": "free-text notes such as wall and hairs"
+            },
+            "rig": {
+                "type": "object",
+                "description": "the rig's geometry, as the stream's hello carries it"
             }
         },
         "required": ["trial", "started_unix_s", "config", "notes"]

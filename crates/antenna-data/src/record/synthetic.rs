@@ -70,5 +70,6 @@ pub fn synthetic_metadata(name: &str) -> TrialMetadata {
         started_unix_s: 1_795_000_000.25,
         config: "[bus]\nkind = \"sim\"\n# synthetic\n".to_string(),
         notes,
+        rig: None,
     }
 }

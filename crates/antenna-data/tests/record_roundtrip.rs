@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use host_daemon::record::{
+use antenna_data::record::{
     RecordError, TrialReader, TrialRecorder, synthetic_metadata, synthetic_segments,
     synthetic_servo, synthetic_stage,
 };
@@ -58,11 +58,11 @@ fn a_finished_trial_reads_back_every_sample_exactly() {
 }
 
 trait FlattenSegments<'a> {
-    fn flatten_segments(self) -> impl Iterator<Item = &'a host_daemon::record::SegmentSample>;
+    fn flatten_segments(self) -> impl Iterator<Item = &'a antenna_data::record::SegmentSample>;
 }
 
-impl<'a, I: Iterator<Item = &'a host_daemon::record::SegmentsMessage>> FlattenSegments<'a> for I {
-    fn flatten_segments(self) -> impl Iterator<Item = &'a host_daemon::record::SegmentSample> {
+impl<'a, I: Iterator<Item = &'a antenna_data::record::SegmentsMessage>> FlattenSegments<'a> for I {
+    fn flatten_segments(self) -> impl Iterator<Item = &'a antenna_data::record::SegmentSample> {
         self.flat_map(|m| m.segments.iter())
     }
 }
