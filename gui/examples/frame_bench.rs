@@ -179,7 +179,7 @@ fn main() -> Result<()> {
     };
     let server = StreamServer::bind_with(
         "127.0.0.1:0",
-        ControlToken::new("bench").context("token")?,
+        ControlToken::new("frame-bench-token-0123").context("token")?,
         Arc::new(RecordingHandler::new()),
         ServerOptions {
             segment_addresses: (0..n).map(|k| (k % 256) as u8).collect(),

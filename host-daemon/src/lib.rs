@@ -26,6 +26,7 @@ pub mod clock;
 pub mod config;
 pub mod daemon;
 pub mod emulator;
+pub mod free_space;
 mod fake_servo;
 mod fake_stage;
 #[cfg(target_os = "linux")]

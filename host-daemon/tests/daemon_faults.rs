@@ -22,7 +22,7 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
     std::fs::remove_dir_all(&dir).ok();
     let mut config = Config::default();
     config.server.listen = "127.0.0.1:0".to_owned();
-    config.server.token = Some(TOKEN.to_owned());
+    config.server.token = Some(host_daemon::net::ControlToken::new(TOKEN).unwrap());
     config.data_dir = dir.clone();
     config.bus.poll_hz = 500.0;
     config.bus.counter_check_every = 25;

@@ -5,13 +5,17 @@
 
 use std::path::PathBuf;
 
+use antenna_data::record::sealed_file::PROVISIONAL_TAIL_BYTES;
 use antenna_data::record::{
-    RecordError, TrialReader, TrialRecorder, synthetic_metadata, synthetic_segments,
-    synthetic_servo, synthetic_stage,
+    ChunkCompression, RecordError, RecorderOptions, TrialReader, TrialRecorder,
+    synthetic_metadata, synthetic_segments, synthetic_servo, synthetic_stage,
 };
 
 fn temp_path(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("record-{name}-{}.mcap", std::process::id()))
+    let path = std::env::temp_dir().join(format!("record-{name}-{}.mcap", std::process::id()));
+    // A leftover of an earlier run would be refused (trial files are never overwritten).
+    let _ = std::fs::remove_file(&path);
+    path
 }
 
 /// Records polls `range` (with stage every 10th and servo every 20th poll).
@@ -90,48 +94,133 @@ fn lcg(state: &mut u64) -> u64 {
 }
 
 #[test]
-fn a_file_cut_after_its_last_flush_reads_back_exactly_the_flushed_samples() {
+fn nothing_reaches_the_file_between_flushes_and_a_torn_flush_loses_only_itself() {
     let path = temp_path("truncated");
     let mut recorder = TrialRecorder::create(&path, &synthetic_metadata("truncated")).unwrap();
     record(&mut recorder, 0..60);
     recorder.flush().unwrap();
     let flushed = recorder.flushed();
     assert_eq!(flushed.segments, 60);
-    let flushed_len = std::fs::metadata(&path).unwrap().len() as usize;
-    // More, unflushed: beyond the writer's buffer, so a partial chunk reaches the file.
+    let first = std::fs::read(&path).unwrap();
+    // More, unflushed: held in memory, the file on disk stays the sealed one.
     record(&mut recorder, 60..95);
     assert_eq!(recorder.flushed(), flushed);
-    let bytes = std::fs::read(&path).unwrap();
-    assert!(
-        bytes.len() > flushed_len,
-        "the unflushed chunk should have partly reached the file"
-    );
+    assert_eq!(std::fs::read(&path).unwrap(), first);
+    recorder.flush().unwrap();
+    let second = std::fs::read(&path).unwrap();
+    // The second flush's one write starts where the first flush's provisional end began.
+    let start = first.len() - PROVISIONAL_TAIL_BYTES;
+    assert_eq!(second[..start], first[..start]);
 
-    let expected: Vec<_> = (0..60).map(|i| synthetic_segments(i, 9)).collect();
-    let mut state = 42;
-    let mut cuts: Vec<usize> = (0..200)
-        .map(|_| flushed_len + (lcg(&mut state) as usize) % (bytes.len() - flushed_len + 1))
-        .collect();
-    cuts.extend([flushed_len, flushed_len + 1, bytes.len()]);
-    for cut in cuts {
-        let trial = TrialReader::read_bytes(&path, &bytes[..cut]).unwrap();
-        assert_eq!(trial.segments, expected, "cut at byte {cut}");
-        assert_eq!(trial.stage.len() as u64, flushed.stage, "cut at byte {cut}");
-        assert_eq!(trial.servo.len() as u64, flushed.servo, "cut at byte {cut}");
-        assert_eq!(trial.metadata, Some(synthetic_metadata("truncated")));
-        assert!(trial.truncated.is_some(), "cut at byte {cut}");
-    }
-    // A cut anywhere at all (even before the last flush, which kill -9 cannot do) gives an
-    // exact prefix of the polls, never a corrupted one, and never a panic.
+    // A kill inside that write leaves its first k bytes over the old file: the reader gets
+    // exactly the first flush's samples (or all of them once the write is whole).
+    let expected_len = 60;
     let all: Vec<_> = (0..95).map(|i| synthetic_segments(i, 9)).collect();
-    // (Every byte of the first 1000, then every 13th.)
-    for cut in (0..1000).chain((1000..bytes.len()).step_by(13)) {
-        let trial = TrialReader::read_bytes(&path, &bytes[..cut]).unwrap();
+    let mut state = 42;
+    let written = second.len() - start;
+    let mut ks: Vec<usize> = (0..300)
+        .map(|_| (lcg(&mut state) as usize) % (written + 1))
+        .collect();
+    ks.extend([0, 1, 8, 9, PROVISIONAL_TAIL_BYTES, written - 1, written]);
+    for k in ks {
+        let mut torn = second[..start + k].to_vec();
+        if start + k < first.len() {
+            torn.extend_from_slice(&first[start + k..]);
+        }
+        let trial = TrialReader::read_bytes(&path, &torn).unwrap();
+        // The first flush's polls, and the second's once its chunk is whole.
+        let n = trial.segments.len();
+        assert!(n == expected_len || n == all.len(), "torn after {k}: {n} polls");
+        assert_eq!(trial.segments, all[..n], "torn after {k} bytes");
+        if k == written {
+            assert_eq!(n, all.len());
+        }
+        assert_eq!(trial.metadata, Some(synthetic_metadata("truncated")));
+        assert!(trial.truncated.is_some(), "torn after {k} bytes");
+    }
+    // A cut anywhere at all gives an exact prefix of the polls, never a corrupted one, and
+    // never a panic. (Every byte of the first 1000, then every 13th.)
+    for cut in (0..1000).chain((1000..second.len()).step_by(13)) {
+        let trial = TrialReader::read_bytes(&path, &second[..cut]).unwrap();
         let n = trial.segments.len();
         assert_eq!(trial.segments, all[..n], "cut at byte {cut}");
         assert!(trial.truncated.is_some(), "cut at byte {cut}");
     }
     drop(recorder);
+    std::fs::remove_file(&path).unwrap();
+}
+
+/// The Rust `mcap` crate, with none of this project's code, reads a file that was never
+/// closed (what `kill -9` leaves) as a complete file: every flushed message, log times in
+/// Unix-epoch nanoseconds, chunks compressed with zstd.
+#[test]
+fn an_unclosed_file_is_a_whole_mcap_file_for_the_mcap_crate() {
+    let path = temp_path("unclosed");
+    let metadata = synthetic_metadata("unclosed");
+    let mut recorder = TrialRecorder::create(&path, &metadata).unwrap();
+    record(&mut recorder, 0..250);
+    let flushed = recorder.flushed();
+    assert!((200..250).contains(&flushed.segments), "{flushed:?}");
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(mcap::Summary::read(&bytes).unwrap(), None, "no summary yet");
+    let mut polls = 0;
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        let message = message.unwrap();
+        if message.channel.topic == "/antenna/segments" {
+            let poll: antenna_data::record::SegmentsMessage =
+                serde_json::from_slice(&message.data).unwrap();
+            let epoch_ns = metadata.started_unix_ns.unwrap();
+            assert_eq!(message.log_time, epoch_ns + (poll.t_s * 1e9).round() as u64);
+            assert_eq!(poll, synthetic_segments(polls, 9));
+            polls += 1;
+        }
+    }
+    assert_eq!(polls, flushed.segments);
+    drop(recorder);
+    // Closed, the file has its summary and its chunks are zstd-compressed.
+    let bytes = std::fs::read(&path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    assert!(!summary.chunk_indexes.is_empty());
+    for chunk in &summary.chunk_indexes {
+        assert_eq!(chunk.compression, "zstd");
+        assert!(chunk.compressed_size < chunk.uncompressed_size);
+    }
+    assert_eq!(TrialReader::read(&path).unwrap().truncated, None);
+    std::fs::remove_file(&path).unwrap();
+}
+
+/// Compression: the same polls take a tenth of the bytes or less with zstd.
+#[test]
+fn zstd_chunks_are_at_least_ten_times_smaller() {
+    let size = |compression| {
+        let path = temp_path(&format!("size-{compression:?}"));
+        let options = RecorderOptions {
+            compression,
+            ..RecorderOptions::default()
+        };
+        let mut recorder =
+            TrialRecorder::create_with(&path, &synthetic_metadata("size"), options).unwrap();
+        record(&mut recorder, 0..3000);
+        recorder.finish().unwrap();
+        let bytes = std::fs::metadata(&path).unwrap().len();
+        assert_eq!(TrialReader::read(&path).unwrap().segments.len(), 3000);
+        std::fs::remove_file(&path).unwrap();
+        bytes
+    };
+    let plain = size(ChunkCompression::None);
+    let zstd = size(ChunkCompression::Zstd);
+    assert!(10 * zstd <= plain, "zstd {zstd} B, uncompressed {plain} B");
+}
+
+/// An existing file is never overwritten: a trial file cannot clobber another one, nor
+/// follow a planted link.
+#[test]
+fn an_existing_file_is_never_overwritten() {
+    let path = temp_path("exists");
+    std::fs::write(&path, b"precious").unwrap();
+    let err = TrialRecorder::create(&path, &synthetic_metadata("exists")).unwrap_err();
+    assert!(matches!(err, RecordError::Io { .. }), "{err}");
+    assert_eq!(std::fs::read(&path).unwrap(), b"precious");
     std::fs::remove_file(&path).unwrap();
 }
 

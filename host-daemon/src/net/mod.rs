@@ -1,6 +1,8 @@
 //! The TCP server of the stream and control protocol (`antenna_data::stream`,
 //! `docs/stream-protocol.md`): a stream of samples to any number of read-only clients, and
-//! control commands guarded by a token.
+//! control commands guarded by a token ([`ControlToken`]): failed tries slowed per address
+//! ([`auth_throttle`]), `stop_all` open to anyone connected, and room for an operator
+//! however many readers there are ([`admission`]).
 //!
 //! The daemon converts its samples into [`StreamMessage::Samples`], hands them to
 //! [`StreamServer::publish`] (which never blocks on a socket) and implements
@@ -23,12 +25,18 @@
 //!
 //! [`StreamMessage::Samples`]: antenna_data::stream::StreamMessage::Samples
 
+pub mod admission;
+pub mod auth_throttle;
+mod connection;
 mod control;
 mod fake_handler;
 mod server;
+mod server_log;
 mod token;
 
-pub use control::{ControlHandler, serve_request};
+pub use auth_throttle::AuthPolicy;
+pub use control::{AuthOutcome, ControlHandler, Served, serve_request};
 pub use fake_handler::RecordingHandler;
 pub use server::{DEFAULT_BIND, ServerError, ServerOptions, StreamServer};
-pub use token::{ControlToken, EmptyToken};
+pub use server_log::ServerLog;
+pub use token::{ControlToken, GENERATED_TOKEN_BYTES, MIN_TOKEN_CHARS, TokenError};

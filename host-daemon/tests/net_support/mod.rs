@@ -9,7 +9,7 @@ use antenna_data::stream::{ControlReply, SegmentSample, StreamMessage};
 use host_daemon::net::StreamServer;
 
 /// The control token every test server uses.
-pub const TOKEN: &str = "test-token-0123";
+pub const TOKEN: &str = "test-token-0123456789";
 
 /// How long any single read may wait before the test fails.
 pub const READ_TIMEOUT: Duration = Duration::from_secs(10);

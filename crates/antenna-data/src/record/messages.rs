@@ -83,6 +83,10 @@ pub struct TrialMetadata {
     pub trial: String,
     /// Wall-clock start, seconds since the Unix epoch (UTC).
     pub started_unix_s: f64,
+    /// The same instant exactly, nanoseconds since the Unix epoch: every message's MCAP log
+    /// time is this plus its `t_s` (absent in files written before it was added).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub started_unix_ns: Option<u64>,
     /// The daemon configuration in force, as free text (TOML).
     pub config: String,
     /// Free-text notes such as `wall` and `hairs`, sorted by key.
@@ -95,6 +99,15 @@ pub struct TrialMetadata {
 }
 
 impl TrialMetadata {
+    /// Unix-epoch nanoseconds of the trial's start: [`Self::started_unix_ns`], else
+    /// [`Self::started_unix_s`] rounded; `None` for a start that is not a Unix time.
+    pub fn start_unix_ns(&self) -> Option<u64> {
+        self.started_unix_ns.or_else(|| {
+            let ns = (self.started_unix_s * 1e9).round();
+            (ns.is_finite() && ns >= 0.0 && ns < u64::MAX as f64).then_some(ns as u64)
+        })
+    }
+
     /// The metadata as MCAP Metadata key/value strings.
     pub fn to_key_values(&self) -> BTreeMap<String, String> {
         let mut map = BTreeMap::new();
@@ -103,6 +116,9 @@ impl TrialMetadata {
             "started_unix_s".to_string(),
             format!("{}", self.started_unix_s),
         );
+        if let Some(ns) = self.started_unix_ns {
+            map.insert("started_unix_ns".to_string(), ns.to_string());
+        }
         map.insert("config".to_string(), self.config.clone());
         for (k, v) in &self.notes {
             map.insert(format!("notes.{k}"), v.clone());

@@ -103,6 +103,10 @@ pub fn metadata_schema() -> Value {
         "properties": {
             "trial": { "type": "string" },
             "started_unix_s": { "type": "number", "description": "wall-clock start, Unix s" },
+            "started_unix_ns": {
+                "type": "integer",
+                "description": "the same, Unix ns: each message's log time is this plus its t_s"
+            },
             "config": { "type": "string", "description": "the configuration, TOML text" },
             "notes": {
                 "type": "object",
