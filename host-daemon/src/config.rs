@@ -1065,12 +1065,13 @@ mod tests {
     /// The recorded configuration reads back as the configuration in force, less the token.
     #[test]
     fn the_recorded_configuration_reads_back_without_the_token() {
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/config/robot.toml"
-        ))
-        .unwrap();
-        let text = text.replace("token_env = \"ANTENNAD_TOKEN\"", "token = \"SECRET-TOKEN-12345\"");
+        let text =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/robot.toml"))
+                .unwrap();
+        let text = text.replace(
+            "token_env = \"ANTENNAD_TOKEN\"",
+            "token = \"SECRET-TOKEN-12345\"",
+        );
         let config = Config::from_toml_str(&text, "robot.toml").unwrap();
         assert!(config.server.token.is_some());
         let recorded = config.to_recorded_toml();
@@ -1080,13 +1081,15 @@ mod tests {
         expected.server.token = None;
         assert_eq!(back, expected);
         let default = Config::default().to_recorded_toml();
-        assert_eq!(Config::from_toml_str(&default, "d").unwrap(), Config::default());
+        assert_eq!(
+            Config::from_toml_str(&default, "d").unwrap(),
+            Config::default()
+        );
     }
 
     #[test]
     fn a_short_token_is_refused_where_it_is_written() {
-        let error =
-            Config::from_toml_str("[server]\ntoken = \"a\"\n", "rig.toml").unwrap_err();
+        let error = Config::from_toml_str("[server]\ntoken = \"a\"\n", "rig.toml").unwrap_err();
         assert_eq!(error.key, "server.token");
         assert_eq!((error.line, error.column), (Some(2), Some(9)));
         assert!(error.message.contains("at least 16 characters"), "{error}");
@@ -1131,7 +1134,10 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!(error.key, "server.token_env");
-        assert!(error.message.contains("ANTENNAD_TEST_TOKEN_UNSET_XYZ"), "{error}");
+        assert!(
+            error.message.contains("ANTENNAD_TEST_TOKEN_UNSET_XYZ"),
+            "{error}"
+        );
     }
 
     #[test]

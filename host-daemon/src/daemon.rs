@@ -1121,15 +1121,13 @@ impl Hub {
     }
 
     fn check_trial_end(&mut self) {
-        if self
-            .trial
-            .as_ref()
-            .is_some_and(|t| t.recorder.is_some())
+        if self.trial.as_ref().is_some_and(|t| t.recorder.is_some())
             && Instant::now() >= self.free_check_due
         {
             self.free_check_due = Instant::now() + FREE_SPACE_CHECK;
             if let Some(short) = self.free_space_short() {
-                self.log.line(format!("antennad: {short}; ending the trial"));
+                self.log
+                    .line(format!("antennad: {short}; ending the trial"));
                 let why: &'static str = "the disk is nearly full";
                 self.record_log(self.clock.elapsed_ns(), &short);
                 self.end_trial(why);
@@ -1392,6 +1390,7 @@ struct MotionInputs<'a> {
 /// The motion thread: samples the stage and the base at their own rates, carries out motion
 /// commands at once (a `stop_all` ahead of anything queued before it), runs a trial's script,
 /// and reports the stage and the servo vanishing and coming back.
+#[allow(clippy::too_many_arguments)]
 fn motion_loop(
     mut rig: DaemonRig,
     clock: TrialClock,
@@ -1491,7 +1490,7 @@ fn on_stop_pending(command: MotionCommand) -> Option<MotionCommand> {
     match command {
         MotionCommand::Move { reply, .. } | MotionCommand::SetBase { reply, .. } => {
             let _ = reply.send(Err(
-                "cancelled: a stop_all came before it was carried out".to_owned(),
+                "cancelled: a stop_all came before it was carried out".to_owned()
             ));
             None
         }

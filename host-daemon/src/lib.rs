@@ -26,9 +26,9 @@ pub mod clock;
 pub mod config;
 pub mod daemon;
 pub mod emulator;
-pub mod free_space;
 mod fake_servo;
 mod fake_stage;
+pub mod free_space;
 #[cfg(target_os = "linux")]
 pub mod i2c_bus;
 pub mod maestro;

@@ -154,7 +154,10 @@ mod tests {
         assert_eq!(second.answer_at, t0 + Duration::from_millis(300));
         assert_eq!(second.failures_from_peer, 2);
         // Another address is not slowed by A.
-        assert_eq!(throttle.failure(B, t0).answer_at, t0 + Duration::from_millis(100));
+        assert_eq!(
+            throttle.failure(B, t0).answer_at,
+            t0 + Duration::from_millis(100)
+        );
         throttle.success(A);
         assert_eq!(throttle.failure(A, t0).failures_from_peer, 1);
     }

@@ -10,8 +10,7 @@ use std::sync::mpsc::{Receiver, SyncSender, TryRecvError};
 use std::time::{Duration, Instant};
 
 use antenna_data::stream::{
-    ControlReply, ErrorCode, LineRead, MAX_LINE_BYTES, StreamMessage, encode_line,
-    read_line_capped,
+    ControlReply, ErrorCode, LineRead, MAX_LINE_BYTES, StreamMessage, encode_line, read_line_capped,
 };
 
 use super::auth_throttle::AuthThrottle;
@@ -164,7 +163,10 @@ pub fn reader_loop(stream: TcpStream, link: &Link, shared: &Shared) {
                     failure.failures_from_peer,
                     link.peer.ip(),
                     failures_here,
-                    failure.answer_at.saturating_duration_since(Instant::now()).as_millis()
+                    failure
+                        .answer_at
+                        .saturating_duration_since(Instant::now())
+                        .as_millis()
                 ));
                 sleep_until(failure.answer_at);
                 if failures_here >= policy.max_failures_per_connection {

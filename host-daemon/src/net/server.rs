@@ -519,7 +519,9 @@ fn start_client(
     let read_half = stream.try_clone()?;
     let writer = thread::Builder::new()
         .name("net-writer".into())
-        .spawn(move || connection::writer_loop(write_half, &receiver, &priority_receiver, &pending))?;
+        .spawn(move || {
+            connection::writer_loop(write_half, &receiver, &priority_receiver, &pending)
+        })?;
     let reader = {
         let reader_link = link.clone();
         let shared = Arc::clone(&ctx.connection);

@@ -71,7 +71,9 @@ impl ServerLog {
         let suppressed = std::mem::take(&mut window.suppressed);
         drop(window);
         if suppressed > 0 {
-            self.line(format!("{text} ({suppressed} connection notices left out before it)"));
+            self.line(format!(
+                "{text} ({suppressed} connection notices left out before it)"
+            ));
         } else {
             self.line(text);
         }

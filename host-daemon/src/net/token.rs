@@ -121,8 +121,14 @@ mod tests {
 
     #[test]
     fn short_and_odd_tokens_are_refused() {
-        assert_eq!(ControlToken::new(""), Err(TokenError::TooShort { chars: 0 }));
-        assert_eq!(ControlToken::new("a"), Err(TokenError::TooShort { chars: 1 }));
+        assert_eq!(
+            ControlToken::new(""),
+            Err(TokenError::TooShort { chars: 0 })
+        );
+        assert_eq!(
+            ControlToken::new("a"),
+            Err(TokenError::TooShort { chars: 1 })
+        );
         assert_eq!(
             ControlToken::new("fifteen-chars-x"),
             Err(TokenError::TooShort { chars: 15 })

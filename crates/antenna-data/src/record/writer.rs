@@ -181,14 +181,17 @@ impl TrialRecorder {
             .compression_threads(0)
             // Chunks are written whole, never through a placeholder header (see SealedFile).
             .disable_seeking(true)
+            // Per-message indexes would be a third of the file (16 bytes for each ~30-byte
+            // compressed message); the chunk indexes are enough for 100 ms chunks, and the
+            // MCAP specification makes message indexes optional.
+            .emit_message_indexes(false)
             .profile("")
             .library(concat!("antennad ", env!("CARGO_PKG_VERSION")))
             .create(file)
             .map_err(mcap_err(&path))?;
-        let channel =
-            |writer: &mut Writer<SealedFile>, topic: &str, name: &str, schema: Value| {
-                add_channel(writer, &path, topic, name, &schema)
-            };
+        let channel = |writer: &mut Writer<SealedFile>, topic: &str, name: &str, schema: Value| {
+            add_channel(writer, &path, topic, name, &schema)
+        };
         let mut meta = channel(
             &mut writer,
             METADATA_TOPIC,
@@ -309,7 +312,13 @@ impl TrialRecorder {
             Some(channel) => channel,
             None => {
                 let path = self.path.clone();
-                add_channel(self.writer()?, &path, LOG_TOPIC, "antenna.Log", &log_schema())?
+                add_channel(
+                    self.writer()?,
+                    &path,
+                    LOG_TOPIC,
+                    "antenna.Log",
+                    &log_schema(),
+                )?
             }
         };
         self.write(LOG_TOPIC, &mut channel, message.t_s, message)?;
