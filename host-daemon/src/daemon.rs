@@ -21,9 +21,19 @@
 //! `move_stage` and `set_base_angle` are carried out when no trial runs, and refused with the
 //! reason while one does: the trial's script owns the stage and the base, so a recording
 //! always shows the motion its metadata describes. `stop_trial` and `stop_all` always work;
-//! `stop_all` kills the stage motion at once (the VXM's `K`) and ends any trial. Whatever a
-//! trial or a client asks, the stage never goes beyond the soft limits (the move is refused
-//! and nothing moves), nor faster than `stage.max_speed_mm_per_s`.
+//! `stop_all` needs no token, kills the stage motion at once (the VXM's `K`) ahead of any
+//! command queued before it, and ends any trial. Whatever a trial or a client asks, the stage
+//! never goes beyond the soft limits (the move is refused and nothing moves), nor faster than
+//! `stage.max_speed_mm_per_s`, and the base angle never leaves the servo's calibrated range.
+//!
+//! # Recording
+//!
+//! A trial's file (`antenna_data::record`) takes the `[recording]` options (compression, the
+//! sync interval), its messages' log times are Unix-epoch nanoseconds, its metadata keeps the
+//! configuration without the token ([`Config::to_recorded_toml`]) and the rig. Free space
+//! under the data directory is checked before a trial and every second during one
+//! ([`crate::free_space`]): below `recording.min_free_mb` a trial is refused, or ends with the
+//! reason recorded; polling and streaming go on. Every file ends with `trial ended: <why>`.
 //!
 //! # Example
 //!
@@ -34,7 +44,9 @@
 //! let mut config = Config::default();
 //! config.server.listen = "127.0.0.1:0".to_owned();
 //! let daemon = Daemon::start(config, DaemonOptions::default())?;
-//! println!("stream on {:?}, token {}", daemon.local_addr(), daemon.token());
+//! println!("stream on {:?}", daemon.local_addr());
+//! // A generated token (none configured) is for the operator: antennad prints it once.
+//! assert!(daemon.token_generated());
 //! let summary = daemon.shutdown()?;
 //! println!("{} polls", summary.polls);
 //! # Ok::<(), anyhow::Error>(())

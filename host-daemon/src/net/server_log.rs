@@ -47,7 +47,7 @@ impl ServerLog {
         }
     }
 
-    /// Logs a connection notice, at most [`NOTICES_PER_SECOND`] a second (a flood of
+    /// Logs a connection notice, at most ten a second (a flood of
     /// connections must not flood the log); the count of those left out comes with the next
     /// one logged.
     pub fn notice(&self, text: String) {

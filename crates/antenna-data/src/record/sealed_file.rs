@@ -12,7 +12,8 @@
 //! kilobytes) can leave a torn end, which [`super::TrialReader`] still reads up to the last
 //! whole record.
 //!
-//! A flush reaches the operating system, not the disk: [`SealedFile::sync`] asks the disk
+//! A flush reaches the operating system, not the disk: a sync through
+//! [`SealedFile::sync_handle`] asks the disk
 //! (`fdatasync`); a power cut may lose what was flushed but not synced.
 
 use std::fs::File;
