@@ -354,6 +354,8 @@ fn accept_loop(listener: &TcpListener, shared: &Shared, ctx: &ClientContext) {
             Ok((stream, peer)) => {
                 next_id += 1;
                 admit_client(stream, peer, next_id, shared, ctx);
+                // Under a flood of connections too, dropped ones leave the list.
+                reap(shared, &mut finishing);
                 continue; // look for more pending connections right away
             }
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
@@ -418,8 +420,11 @@ fn admit_client(
             return;
         }
     }
+    // Threads are started without the list locked (publish never waits for a spawn); only
+    // this thread adds clients, so the admission stands.
+    drop(clients);
     match start_client(stream, peer, id, ctx) {
-        Ok(client) => clients.push(client),
+        Ok(client) => shared.clients().push(client),
         Err(e) => log.notice(format!("could not serve {peer}: {e}")),
     }
 }
