@@ -16,14 +16,12 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use antenna_data::stream::{RigInfo, RigWall, SegmentSample, StreamMessage};
 use antenna_monitor::history::{Health, Sample, SegmentReading};
 use antenna_monitor::{AppOptions, MonitorApp, is_software_gl, tune_for_software_gl};
 use anyhow::{Context, Result, bail};
 use clap::Parser;
-use host_daemon::net::{
-    ControlToken, RecordingHandler, RigInfo, RigWall, SegmentSample, ServerOptions, StreamMessage,
-    StreamServer,
-};
+use host_daemon::net::{ControlToken, RecordingHandler, ServerOptions, StreamServer};
 
 /// Measures the monitor's frame time (see the file's documentation).
 #[derive(Debug, Parser)]
@@ -181,7 +179,7 @@ fn main() -> Result<()> {
     };
     let server = StreamServer::bind_with(
         "127.0.0.1:0",
-        ControlToken::new("bench").context("token")?,
+        ControlToken::new("frame-bench-token-0123").context("token")?,
         Arc::new(RecordingHandler::new()),
         ServerOptions {
             segment_addresses: (0..n).map(|k| (k % 256) as u8).collect(),

@@ -11,8 +11,8 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use antenna_data::stream::SegmentStatus;
 use egui::{Color32, RichText};
-use host_daemon::net::SegmentStatus;
 
 use crate::client::{ClientOptions, Command, ConnectionState, LiveClient, ReplyRecord};
 use crate::error::MonitorError;
@@ -104,6 +104,12 @@ pub struct MonitorApp {
     exports: Vec<ExportRecord>,
     message: Option<(String, bool)>,
     refusal: Option<String>,
+    /// The token given at start (`--token`, `ANTENNA_TOKEN`): proved with `auth` on every
+    /// connection while the token field still holds it. A token typed in proves itself with
+    /// its first command (so that typing sends no guesses).
+    startup_token: String,
+    /// The connection (its number) last proved with `auth`.
+    authenticated: Option<u32>,
     /// Playing a recording: when the cursor last moved.
     playing: Option<Instant>,
 }
@@ -156,7 +162,7 @@ impl MonitorApp {
                 raster: TouchRasterPanel,
                 health: HealthPanel,
                 stage: StagePanel,
-                controls: ControlsPanel::new(options.token),
+                controls: ControlsPanel::new(options.token.clone()),
                 timeline: TimelinePanel::new(options.history_s),
             },
             prediction: None,
@@ -178,6 +184,8 @@ impl MonitorApp {
             exports: Vec::new(),
             message: None,
             refusal: None,
+            startup_token: options.token.clone(),
+            authenticated: None,
             playing: None,
         };
         if let Some(path) = &options.trial {
@@ -498,6 +506,22 @@ impl MonitorApp {
             if let Some(s) = deferred.history_s {
                 self.history_s = s;
                 client.set_history_s(s);
+            }
+            // With the token given at start, each new connection proves it at once, so that
+            // antennad keeps it (an operator's) when readers fill its slots.
+            let token = &self.panels.controls.token;
+            let connection = {
+                let state = client.lock();
+                matches!(state.connection, ConnectionState::Connected { .. })
+                    .then_some(state.connections)
+            };
+            if let Some(connection) = connection
+                && !token.is_empty()
+                && *token == self.startup_token
+                && self.authenticated != Some(connection)
+                && client.send(&Command::Auth, token).is_ok()
+            {
+                self.authenticated = Some(connection);
             }
             for command in &deferred.commands {
                 match client.send(command, &self.panels.controls.token) {

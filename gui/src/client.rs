@@ -21,7 +21,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use host_daemon::net::{SegmentSample, SegmentStatus, StreamMessage};
+use antenna_data::stream::{SegmentSample, SegmentStatus, StreamMessage};
 
 use crate::error::MonitorError;
 use crate::history::{Health, History, Sample, SegmentReading};
@@ -118,8 +118,10 @@ pub enum Command {
         /// Servo angle, degrees.
         angle_deg: f64,
     },
-    /// Stop the stage, hold the servo, end any trial.
+    /// Stop the stage, hold the servo, end any trial (needs no token).
     StopAll,
+    /// Prove the token, so the daemon keeps this connection when it is full of readers.
+    Auth,
 }
 
 impl Command {
@@ -131,17 +133,26 @@ impl Command {
             Command::MoveStage { .. } => "move_stage",
             Command::SetBaseAngle { .. } => "set_base_angle",
             Command::StopAll => "stop_all",
+            Command::Auth => "auth",
         }
     }
 
-    /// The request line (without the newline).
+    /// Whether the daemon wants the token with it (every command but `stop_all`).
+    pub fn needs_token(&self) -> bool {
+        !matches!(self, Command::StopAll)
+    }
+
+    /// The request line (without the newline); an empty `token` is left out.
     pub fn request_line(&self, id: u64, token: &str) -> String {
-        let mut request = serde_json::json!({"id": id, "token": token, "cmd": self.name()});
+        let mut request = serde_json::json!({"id": id, "cmd": self.name()});
+        if !token.is_empty() {
+            request["token"] = token.into();
+        }
         match self {
             Command::StartTrial { name } => request["name"] = name.as_str().into(),
             Command::MoveStage { position_m } => request["position_m"] = (*position_m).into(),
             Command::SetBaseAngle { angle_deg } => request["angle_deg"] = (*angle_deg).into(),
-            Command::StopTrial | Command::StopAll => {}
+            Command::StopTrial | Command::StopAll | Command::Auth => {}
         }
         request.to_string()
     }
@@ -274,9 +285,10 @@ impl LiveClient {
     }
 
     /// Sends a control command with `token`; returns its request id. Refused here, with
-    /// nothing sent, without a token or a connection.
+    /// nothing sent, without a connection, or without a token for a command that needs one
+    /// (`stop_all` needs none).
     pub fn send(&mut self, command: &Command, token: &str) -> Result<u64, MonitorError> {
-        if token.is_empty() {
+        if token.is_empty() && command.needs_token() {
             return Err(MonitorError::Control(format!(
                 "{}: no token; control commands need the daemon's token (antennad prints it \
                  at start)",
@@ -672,6 +684,11 @@ mod tests {
         assert_eq!(v["position_m"], 0.1);
         assert_eq!(v["token"], "s3cret");
         assert_eq!(v["id"], 3);
+        assert_eq!(
+            Command::StopAll.request_line(5, ""),
+            r#"{"cmd":"stop_all","id":5}"#
+        );
+        assert!(!Command::StopAll.needs_token() && Command::Auth.needs_token());
         let line = Command::StartTrial {
             name: "wall-sweep".to_owned(),
         }
@@ -704,7 +721,13 @@ mod tests {
         }
         let err = client.send(&Command::StopAll, "t").unwrap_err().to_string();
         assert!(err.contains("not connected"), "{err}");
+        // Stopping needs no token: only the connection is missing.
         let err = client.send(&Command::StopAll, "").unwrap_err().to_string();
+        assert!(err.contains("not connected"), "{err}");
+        let err = client
+            .send(&Command::StopTrial, "")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("no token"), "{err}");
     }
 }

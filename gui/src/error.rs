@@ -30,7 +30,7 @@ pub enum MonitorError {
         /// The file.
         path: PathBuf,
         /// Why.
-        source: host_daemon::record::RecordError,
+        source: antenna_data::record::RecordError,
     },
     /// A recording holds no segment poll.
     #[error("{}: the recording holds no segment poll", path.display())]

@@ -3,7 +3,7 @@
 //! The chain panel overlays the measured chain with [`Prediction`]s and draws their
 //! difference; it knows only [`Predictor`]. [`predictor_for`] is the one place that chooses
 //! the model: today [`QuasiStaticPredictor`], the simulated rig's own physics
-//! (`host_daemon::sim_rig::SimPhysics`: sim-core's quasi-static contact solver with friction
+//! (`antenna_sim_physics::SimPhysics`: sim-core's quasi-static contact solver with friction
 //! against the flat wall, stepping from the previous posture). Another model is another
 //! implementation of [`Predictor`] and a change to [`predictor_for`].
 //!
@@ -16,8 +16,7 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use host_daemon::config::{AntennaConfig, Config, WallConfig};
-use host_daemon::sim_rig::SimPhysics;
+use antenna_sim_physics::{AntennaSpec, FlatWallSpec, SimPhysics};
 
 use crate::error::MonitorError;
 use crate::rig::RigGeometry;
@@ -64,7 +63,7 @@ pub fn predictor_for(rig: &RigGeometry) -> Result<Box<dyn Predictor>, MonitorErr
 }
 
 /// sim-core's quasi-static contact solver, exactly the simulated rig's physics
-/// (`host_daemon::sim_rig::SimPhysics`).
+/// (`antenna_sim_physics::SimPhysics`).
 #[derive(Debug)]
 pub struct QuasiStaticPredictor {
     physics: SimPhysics,
@@ -91,8 +90,7 @@ impl QuasiStaticPredictor {
                 "the tip-penalty model needs equal link lengths".to_owned(),
             ));
         }
-        let mut config = Config::default();
-        config.sim.antenna = AntennaConfig {
+        let antenna = AntennaSpec {
             links: rig.segment_count(),
             link_length_m,
             stiffness_profile: stiffness.profile.clone(),
@@ -100,15 +98,14 @@ impl QuasiStaticPredictor {
             k_max_n_m_per_rad: stiffness.k_max_n_m_per_rad,
             base_angle_deg: rig.base_mount_angle_rad.to_degrees(),
         };
-        config.sim.wall = WallConfig {
+        let wall = FlatWallSpec {
             distance_m: wall.distance_m,
             angle_deg: wall.angle_rad.to_degrees(),
             // `hello` does not carry the wall's friction: the simulated rig's default.
-            mu: WallConfig::default().mu,
-            stiffness_n_per_m: wall.stiffness_n_per_m,
+            mu: FlatWallSpec::default().mu,
         };
-        let physics =
-            SimPhysics::new(&config).map_err(|e| MonitorError::Prediction(format!("{e:#}")))?;
+        let physics = SimPhysics::new(&antenna, &wall)
+            .map_err(|e| MonitorError::Prediction(e.to_string()))?;
         Ok(Self {
             physics,
             mount_rad: rig.base_mount_angle_rad,
@@ -254,7 +251,7 @@ mod tests {
 
     #[test]
     fn predicts_a_bend_against_the_wall_in_the_background() {
-        let rig = RigGeometry::from_config(&Config::default(), "test").unwrap();
+        let rig = crate::rig::tests::default_rig();
         let mut worker = PredictionWorker::start(predictor_for(&rig).unwrap()).unwrap();
         let free = BasePose {
             stage_position_m: 0.0,

@@ -1,16 +1,15 @@
 //! A recorded trial (MCAP, written by antennad) as a [`History`] to scrub, read with
-//! `host_daemon::record::TrialReader` (the one MCAP reader of the project).
+//! `antenna_data::record::TrialReader` (the one MCAP reader of the project).
 //!
 //! Every `/antenna/segments` poll becomes a [`Sample`], with the latest stage and servo
 //! samples at or before it (they are recorded at their own, lower rates). The geometry comes
-//! from the configuration kept in the recording's metadata, mapped as the daemon maps it for
-//! its stream; a recording without one (or with one that does not parse) gets a stand-in and
+//! from the rig kept in the recording's metadata (what the daemon sends in its stream's
+//! `hello`); a recording without one (written before antennad kept it) gets a stand-in and
 //! says so in [`RecordedTrial::geometry_note`].
 
 use std::path::{Path, PathBuf};
 
-use host_daemon::config::Config;
-use host_daemon::record::{LogMessage, SegmentSample, TrialReader};
+use antenna_data::record::{LogMessage, SegmentSample, TrialMetadata, TrialReader};
 
 use crate::error::MonitorError;
 use crate::history::{Health, History, Sample, SegmentReading};
@@ -51,7 +50,7 @@ pub fn open_trial(path: &Path) -> Result<RecordedTrial, MonitorError> {
         })?;
     let segment_count = first.segments.len();
     let segment_addresses = first.segments.iter().map(|s| s.address).collect();
-    let (rig, geometry_note) = geometry(trial.metadata.as_ref().map(|m| m.config.as_str()))
+    let (rig, geometry_note) = geometry(trial.metadata.as_ref())
         .and_then(|rig| {
             if rig.segment_count() == segment_count {
                 Ok((rig, None))
@@ -102,11 +101,12 @@ pub fn open_trial(path: &Path) -> Result<RecordedTrial, MonitorError> {
     })
 }
 
-fn geometry(config_text: Option<&str>) -> Result<RigGeometry, String> {
-    let text = config_text.ok_or("the recording has no metadata")?;
-    let config = Config::from_toml_str(text, "the recording's configuration")
-        .map_err(|e| format!("its configuration does not parse: {e}"))?;
-    RigGeometry::from_config(&config, "the recording's configuration").map_err(|e| e.to_string())
+fn geometry(metadata: Option<&TrialMetadata>) -> Result<RigGeometry, String> {
+    let metadata = metadata.ok_or("the recording has no metadata")?;
+    let rig = metadata.rig.as_ref().ok_or(
+        "the recording keeps no rig geometry (antennad added it to the trial metadata in 0.2)",
+    )?;
+    RigGeometry::from_rig_info(rig, "the recording's rig").map_err(|e| e.to_string())
 }
 
 fn reading(s: &SegmentSample) -> SegmentReading {
@@ -129,7 +129,7 @@ fn reading(s: &SegmentSample) -> SegmentReading {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use host_daemon::record::{
+    use antenna_data::record::{
         StageMessage, TrialRecorder, synthetic_metadata, synthetic_segments,
     };
 
@@ -138,7 +138,8 @@ mod tests {
         let path =
             std::env::temp_dir().join(format!("monitor-recording-{}.mcap", std::process::id()));
         let mut metadata = synthetic_metadata("unit");
-        metadata.config = String::new();
+        let config = host_daemon::config::Config::default();
+        metadata.rig = Some(host_daemon::daemon::rig_info(&config));
         let mut recorder = TrialRecorder::create(&path, &metadata).unwrap();
         for i in 0..300 {
             let segments = synthetic_segments(i, 9);
@@ -158,7 +159,7 @@ mod tests {
         assert_eq!(trial.history.len(), 300);
         assert_eq!(trial.history.segment_count(), 9);
         assert_eq!(trial.rig.segment_count(), 9);
-        // An empty configuration is the built-in default: the simulated rig with its wall.
+        // The rig kept in the metadata: the simulated rig with its wall.
         assert!(trial.rig.wall.is_some(), "{:?}", trial.geometry_note);
         let last = trial.history.sample(299).unwrap();
         assert!((last.stage_position_m.unwrap() - 0.029).abs() < 1e-6);

@@ -2,8 +2,7 @@
 //! of the stream's `hello`, or a recording's configuration), and the conversion of one
 //! sample into a [`ChainFrame`] with sim-core's kinematics.
 
-use host_daemon::config::Config;
-use host_daemon::net::RigInfo;
+use antenna_data::stream::RigInfo;
 use sim_core::{Chain, Frame, frame_poses};
 
 use crate::error::MonitorError;
@@ -115,12 +114,6 @@ impl RigGeometry {
         geometry.stage_range_m = Some((rig.stage_min_m, rig.stage_max_m));
         geometry.poll_hz = rig.poll_hz;
         Ok(geometry)
-    }
-
-    /// The geometry of a daemon configuration (what a recording's metadata holds), mapped
-    /// exactly as the daemon maps it into `hello`.
-    pub fn from_config(config: &Config, source: impl Into<String>) -> Result<Self, MonitorError> {
-        Self::from_rig_info(&host_daemon::daemon::rig_info(config), source)
     }
 
     /// A stand-in when the daemon sends no geometry: `segments` links of 40 mm on a 40 mm base
@@ -255,13 +248,18 @@ impl RigGeometry {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// The geometry antennad's default configuration sends in `hello`.
+    pub(crate) fn default_rig() -> RigGeometry {
+        let config = host_daemon::config::Config::default();
+        RigGeometry::from_rig_info(&host_daemon::daemon::rig_info(&config), "test").unwrap()
+    }
 
     #[test]
     fn straight_chain_along_the_mounting_angle() {
-        let config = Config::default();
-        let rig = RigGeometry::from_config(&config, "test").unwrap();
+        let rig = default_rig();
         assert_eq!(rig.segment_count(), 9);
         let frame = rig
             .frame(

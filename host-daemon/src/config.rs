@@ -15,8 +15,10 @@
 //! assert!(error.to_string().starts_with("rig.toml:2:1: `bus.poll_hz`"));
 //! ```
 
+use crate::net::ControlToken;
+use antenna_data::record::{ChunkCompression, RecorderOptions};
 use antenna_protocol::{Calibration, Direction};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -50,7 +52,7 @@ impl fmt::Display for ConfigError {
 impl std::error::Error for ConfigError {}
 
 /// The whole configuration.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Config {
     /// Where trial recordings go (`<data_dir>/<trial>.mcap`).
@@ -63,6 +65,8 @@ pub struct Config {
     pub servo: ServoConfig,
     /// The TCP endpoint.
     pub server: ServerConfig,
+    /// How trials are recorded.
+    pub recording: RecordingConfig,
     /// The trials, run by name (the first by default).
     pub trials: Vec<TrialConfig>,
     /// The simulated rig (used when the bus is `sim`).
@@ -77,6 +81,7 @@ impl Default for Config {
             stage: StageConfig::default(),
             servo: ServoConfig::default(),
             server: ServerConfig::default(),
+            recording: RecordingConfig::default(),
             trials: vec![TrialConfig::default()],
             sim: SimConfig::default(),
         }
@@ -84,7 +89,7 @@ impl Default for Config {
 }
 
 /// The I2C bus.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BusConfig {
     /// `sim` for the simulated rig, or a Linux I2C device such as `/dev/i2c-1`.
@@ -152,7 +157,7 @@ impl BusConfig {
 }
 
 /// Which way the magnet turns for a positive joint angle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum DirectionName {
     /// Counter-clockwise.
@@ -162,7 +167,7 @@ pub enum DirectionName {
 }
 
 /// One segment on the bus.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SegmentConfig {
     /// Its 7-bit address (0x08..=0x77).
@@ -185,7 +190,7 @@ impl SegmentConfig {
 }
 
 /// The linear stage (a Velmex VXM, or simulated).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StageConfig {
     /// `sim`, or the VXM's serial port such as `/dev/ttyUSB0`.
@@ -222,7 +227,7 @@ impl Default for StageConfig {
 }
 
 /// The base servo (a Pololu Maestro channel, or simulated).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ServoConfig {
     /// `sim`, or the Maestro's command port such as `/dev/ttyACM0`.
@@ -256,13 +261,34 @@ impl Default for ServoConfig {
 }
 
 /// The TCP endpoint.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+///
+/// The control token comes from at most one of `token` (in the file: at least 16
+/// characters), `token_file` (a file only its owner may read, holding the token on one line)
+/// and `token_env` (the name of an environment variable holding it); with none of them
+/// antennad generates one at start (128 bits from the operating system's random source) and
+/// prints it once. The token itself is never serialized: a recording keeps the configuration
+/// without it.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ServerConfig {
     /// Address and port to listen on; loopback unless you mean otherwise.
     pub listen: String,
-    /// The token control commands must carry; without one, control commands are refused.
-    pub token: Option<String>,
+    /// The token control commands must carry (`stop_all` needs none); read from
+    /// `token_file` or `token_env` when one of those is set.
+    #[serde(skip_serializing)]
+    pub token: Option<ControlToken>,
+    /// A file holding the token (white space around it ignored); it must not be readable by
+    /// the group or others (`chmod 600`). Relative to the working directory.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub token_file: Option<PathBuf>,
+    /// An environment variable holding the token.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub token_env: Option<String>,
+    /// Connections at most (default 32). When full, a new connection takes the place of the
+    /// oldest one that never proved the token; operators' connections are never dropped.
+    pub max_clients: usize,
+    /// Connections from one address at most (default 16), by the same rule.
+    pub max_clients_per_peer: usize,
 }
 
 impl Default for ServerConfig {
@@ -270,12 +296,69 @@ impl Default for ServerConfig {
         Self {
             listen: "127.0.0.1:7878".to_owned(),
             token: None,
+            token_file: None,
+            token_env: None,
+            max_clients: 32,
+            max_clients_per_peer: 16,
         }
     }
 }
 
+/// How trials are recorded.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RecordingConfig {
+    /// Chunk compression: `zstd` (default) or `none`.
+    pub compression: CompressionName,
+    /// Sync the trial file to the disk this often, seconds (default 1; 0: only when the
+    /// trial ends). The file is flushed to the OS every 100 ms whatever this says.
+    pub sync_interval_s: f64,
+    /// Free space the data directory's file system must keep, megabytes (10^6 bytes;
+    /// default 100): a trial is refused below it and ends (with the reason recorded) when
+    /// the free space falls below it; polling goes on.
+    pub min_free_mb: f64,
+}
+
+impl Default for RecordingConfig {
+    fn default() -> Self {
+        Self {
+            compression: CompressionName::Zstd,
+            sync_interval_s: 1.0,
+            min_free_mb: 100.0,
+        }
+    }
+}
+
+impl RecordingConfig {
+    /// The recorder's options.
+    pub fn recorder_options(&self) -> RecorderOptions {
+        RecorderOptions {
+            compression: match self.compression {
+                CompressionName::Zstd => ChunkCompression::Zstd,
+                CompressionName::None => ChunkCompression::None,
+            },
+            sync_interval_s: self.sync_interval_s,
+        }
+    }
+
+    /// [`Self::min_free_mb`] in bytes.
+    pub fn min_free_bytes(&self) -> u64 {
+        (self.min_free_mb * 1e6) as u64
+    }
+}
+
+/// A chunk compression's name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CompressionName {
+    /// zstd.
+    Zstd,
+    /// No compression.
+    None,
+}
+
 /// One trial.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrialConfig {
     /// Its name, also the recording's file name.
@@ -317,7 +400,7 @@ impl Default for TrialConfig {
 }
 
 /// One relative stage move.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MoveConfig {
     /// Distance, millimetres (negative moves back).
@@ -330,7 +413,7 @@ pub struct MoveConfig {
 }
 
 /// The simulated rig.
-#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimConfig {
     /// The wall.
@@ -343,7 +426,7 @@ pub struct SimConfig {
 }
 
 /// What an injected fault does to a simulated segment.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SimFaultKind {
     /// It stops acknowledging its address (a NACK storm).
@@ -355,7 +438,7 @@ pub enum SimFaultKind {
 }
 
 /// A fault injected into one simulated segment for a while.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimFaultConfig {
     /// The segment's address (one of `bus.segments`).
@@ -370,7 +453,7 @@ pub struct SimFaultConfig {
 
 /// A flat wall: a line `distance_m` from the stage's track (at the track's origin), tilted
 /// `angle_deg` toward the track as the stage moves forward.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WallConfig {
     /// Distance from the base track at the track's origin, metres.
@@ -398,7 +481,7 @@ impl Default for WallConfig {
 }
 
 /// The simulated antenna: one link per segment after the base link.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct AntennaConfig {
     /// Flexible links; must equal the number of segments on the bus.
@@ -452,20 +535,74 @@ impl Config {
         Self::from_toml_str(&text, &name)
     }
 
-    /// Parses and checks `text`, naming it `path` in errors.
+    /// Parses and checks `text`, naming it `path` in errors, and reads the control token
+    /// from `server.token_file` or `server.token_env` if one is set.
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, ConfigError> {
-        let config: Config = toml::from_str(text).map_err(|e| toml_error(text, path, &e))?;
-        config.validate().map_err(|(key, message)| {
-            let (line, column) = locate_key(text, &key).unzip();
-            ConfigError {
-                path: path.to_owned(),
-                key,
-                line,
-                column,
-                message,
-            }
-        })?;
+        let mut config: Config = toml::from_str(text).map_err(|e| toml_error(text, path, &e))?;
+        config
+            .validate()
+            .and_then(|()| config.resolve_token())
+            .map_err(|(key, message)| {
+                let (line, column) = locate_key(text, &key).unzip();
+                ConfigError {
+                    path: path.to_owned(),
+                    key,
+                    line,
+                    column,
+                    message,
+                }
+            })?;
         Ok(config)
+    }
+
+    /// The configuration as TOML, without the control token: what a recording keeps. Every
+    /// key is written, defaults included, so the file says exactly what was in force (the
+    /// command line's overrides too); `Config::from_toml_str` reads it back.
+    pub fn to_recorded_toml(&self) -> String {
+        let body = toml::to_string(self).unwrap_or_else(|e| format!("# not serializable: {e}\n"));
+        format!(
+            "# the configuration in force (server.token is never recorded; token_file and \
+             token_env name where it came from)\n{body}"
+        )
+    }
+
+    /// The servo's calibrated range, degrees: from the smaller to the larger of
+    /// `servo.angle_a_deg` and `servo.angle_b_deg`. No commanded angle may leave it.
+    pub fn servo_range_deg(&self) -> (f64, f64) {
+        let (a, b) = (self.servo.angle_a_deg, self.servo.angle_b_deg);
+        (a.min(b), a.max(b))
+    }
+
+    /// Reads the token from `server.token_file` or `server.token_env`: the failing key and
+    /// why (never the token).
+    fn resolve_token(&mut self) -> Result<(), (String, String)> {
+        let server = &mut self.server;
+        if let Some(file) = &server.token_file {
+            let text = read_private_file(file)
+                .map_err(|message| ("server.token_file".to_owned(), message))?;
+            let token = ControlToken::new(text.trim()).map_err(|e| {
+                (
+                    "server.token_file".to_owned(),
+                    format!("{}: {e}", file.display()),
+                )
+            })?;
+            server.token = Some(token);
+        } else if let Some(name) = &server.token_env {
+            let value = std::env::var(name).map_err(|e| {
+                (
+                    "server.token_env".to_owned(),
+                    format!("environment variable {name}: {e}"),
+                )
+            })?;
+            let token = ControlToken::new(value.trim()).map_err(|e| {
+                (
+                    "server.token_env".to_owned(),
+                    format!("environment variable {name}: {e}"),
+                )
+            })?;
+            server.token = Some(token);
+        }
+        Ok(())
     }
 
     /// The trial called `name`, or the first one.
@@ -587,6 +724,47 @@ impl Config {
                 format!("not an address:port, got {:?}", self.server.listen),
             );
         }
+        let sources = [
+            ("server.token", self.server.token.is_some()),
+            ("server.token_file", self.server.token_file.is_some()),
+            ("server.token_env", self.server.token_env.is_some()),
+        ];
+        let given: Vec<&str> = sources.iter().filter(|s| s.1).map(|s| s.0).collect();
+        if given.len() > 1 {
+            return fail(
+                given[1],
+                format!(
+                    "the token comes from one place only; {} are both set",
+                    given.join(" and ")
+                ),
+            );
+        }
+        if self.server.max_clients == 0 {
+            return fail("server.max_clients", "must be at least 1".to_owned());
+        }
+        if !(1..=self.server.max_clients).contains(&self.server.max_clients_per_peer) {
+            return fail(
+                "server.max_clients_per_peer",
+                format!(
+                    "must be in 1..=server.max_clients ({}), got {}",
+                    self.server.max_clients, self.server.max_clients_per_peer
+                ),
+            );
+        }
+        let recording = &self.recording;
+        if !(recording.sync_interval_s.is_finite() && recording.sync_interval_s >= 0.0) {
+            return fail(
+                "recording.sync_interval_s",
+                "must be finite and >= 0 (0: only when the trial ends)".to_owned(),
+            );
+        }
+        if !(recording.min_free_mb.is_finite() && recording.min_free_mb >= 0.0) {
+            return fail(
+                "recording.min_free_mb",
+                "must be finite and >= 0".to_owned(),
+            );
+        }
+        let (servo_min_deg, servo_max_deg) = self.servo_range_deg();
         for (i, trial) in self.trials.iter().enumerate() {
             let ok_name = !trial.name.is_empty()
                 && trial
@@ -608,10 +786,14 @@ impl Config {
                     "must be finite and >= 0 (0: until the moves end)".to_owned(),
                 );
             }
-            if !trial.base_angle_deg.is_finite() {
+            if !(servo_min_deg..=servo_max_deg).contains(&trial.base_angle_deg) {
                 return fail(
                     &format!("trials[{i}].base_angle_deg"),
-                    "must be finite".to_owned(),
+                    format!(
+                        "{} deg is outside the servo's calibrated range {servo_min_deg}..={servo_max_deg} \
+                         deg (servo.angle_a_deg, servo.angle_b_deg)",
+                        trial.base_angle_deg
+                    ),
                 );
             }
             for (j, m) in trial.moves.iter().enumerate() {
@@ -724,6 +906,28 @@ impl Config {
         }
         Ok(())
     }
+}
+
+/// The contents of a token file, which must not be readable by its group or others.
+fn read_private_file(path: &Path) -> Result<String, String> {
+    let metadata =
+        std::fs::metadata(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = metadata.permissions().mode() & 0o777;
+        if mode & 0o077 != 0 {
+            return Err(format!(
+                "{}: readable by its group or others (mode {mode:03o}); the token must be \
+                 private: chmod 600 {}",
+                path.display(),
+                path.display()
+            ));
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = metadata;
+    std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))
 }
 
 /// Line and column (1-based) of byte `offset` in `text`.
@@ -856,6 +1060,96 @@ mod tests {
         assert_eq!(config, Config::default());
         assert!(config.bus.is_sim());
         assert_eq!(config.bus.segments.len(), 9);
+    }
+
+    /// The recorded configuration reads back as the configuration in force, less the token.
+    #[test]
+    fn the_recorded_configuration_reads_back_without_the_token() {
+        let text =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/robot.toml"))
+                .unwrap();
+        let text = text.replace(
+            "token_env = \"ANTENNAD_TOKEN\"",
+            "token = \"SECRET-TOKEN-12345\"",
+        );
+        let config = Config::from_toml_str(&text, "robot.toml").unwrap();
+        assert!(config.server.token.is_some());
+        let recorded = config.to_recorded_toml();
+        assert!(!recorded.contains("SECRET"), "{recorded}");
+        let back = Config::from_toml_str(&recorded, "recorded").unwrap();
+        let mut expected = config.clone();
+        expected.server.token = None;
+        assert_eq!(back, expected);
+        let default = Config::default().to_recorded_toml();
+        assert_eq!(
+            Config::from_toml_str(&default, "d").unwrap(),
+            Config::default()
+        );
+    }
+
+    #[test]
+    fn a_short_token_is_refused_where_it_is_written() {
+        let error = Config::from_toml_str("[server]\ntoken = \"a\"\n", "rig.toml").unwrap_err();
+        assert_eq!(error.key, "server.token");
+        assert_eq!((error.line, error.column), (Some(2), Some(9)));
+        assert!(error.message.contains("at least 16 characters"), "{error}");
+        let error = Config::from_toml_str(
+            "[server]\ntoken = \"0123456789abcdef\"\ntoken_env = \"X\"\n",
+            "rig.toml",
+        )
+        .unwrap_err();
+        assert_eq!(error.key, "server.token_env");
+        assert_eq!(error.line, Some(3));
+    }
+
+    #[test]
+    fn the_token_comes_from_a_private_file_or_the_environment() {
+        let dir = std::env::temp_dir().join(format!("token-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("token");
+        std::fs::write(&file, "from-a-file-0123456789\n").unwrap();
+        let text = format!("[server]\ntoken_file = {:?}\n", file.display().to_string());
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o644)).unwrap();
+            let error = Config::from_toml_str(&text, "rig.toml").unwrap_err();
+            assert_eq!(error.key, "server.token_file");
+            assert!(error.message.contains("chmod 600"), "{error}");
+            assert!(!error.to_string().contains("from-a-file"), "{error}");
+            std::fs::set_permissions(&file, std::fs::Permissions::from_mode(0o600)).unwrap();
+        }
+        let config = Config::from_toml_str(&text, "rig.toml").unwrap();
+        let token = config.server.token.as_ref().unwrap();
+        assert!(token.matches("from-a-file-0123456789"));
+        std::fs::write(&file, "short\n").unwrap();
+        let error = Config::from_toml_str(&text, "rig.toml").unwrap_err();
+        assert_eq!(error.key, "server.token_file");
+        assert!(error.message.contains("at least 16"), "{error}");
+        std::fs::remove_dir_all(&dir).unwrap();
+
+        let error = Config::from_toml_str(
+            "[server]\ntoken_env = \"ANTENNAD_TEST_TOKEN_UNSET_XYZ\"\n",
+            "rig.toml",
+        )
+        .unwrap_err();
+        assert_eq!(error.key, "server.token_env");
+        assert!(
+            error.message.contains("ANTENNAD_TEST_TOKEN_UNSET_XYZ"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn a_trial_base_angle_outside_the_servo_calibration_is_refused() {
+        let error = Config::from_toml_str(
+            "[[trials]]\nname = \"t\"\nbase_angle_deg = 90.0\n",
+            "rig.toml",
+        )
+        .unwrap_err();
+        assert_eq!(error.key, "trials[0].base_angle_deg");
+        assert_eq!(error.line, Some(3));
+        assert!(error.message.contains("-45..=45"), "{error}");
     }
 
     #[test]

@@ -21,9 +21,19 @@
 //! `move_stage` and `set_base_angle` are carried out when no trial runs, and refused with the
 //! reason while one does: the trial's script owns the stage and the base, so a recording
 //! always shows the motion its metadata describes. `stop_trial` and `stop_all` always work;
-//! `stop_all` kills the stage motion at once (the VXM's `K`) and ends any trial. Whatever a
-//! trial or a client asks, the stage never goes beyond the soft limits (the move is refused
-//! and nothing moves), nor faster than `stage.max_speed_mm_per_s`.
+//! `stop_all` needs no token, kills the stage motion at once (the VXM's `K`) ahead of any
+//! command queued before it, and ends any trial. Whatever a trial or a client asks, the stage
+//! never goes beyond the soft limits (the move is refused and nothing moves), nor faster than
+//! `stage.max_speed_mm_per_s`, and the base angle never leaves the servo's calibrated range.
+//!
+//! # Recording
+//!
+//! A trial's file (`antenna_data::record`) takes the `[recording]` options (compression, the
+//! sync interval), its messages' log times are Unix-epoch nanoseconds, its metadata keeps the
+//! configuration without the token ([`Config::to_recorded_toml`]) and the rig. Free space
+//! under the data directory is checked before a trial and every second during one
+//! ([`crate::free_space`]): below `recording.min_free_mb` a trial is refused, or ends with the
+//! reason recorded; polling and streaming go on. Every file ends with `trial ended: <why>`.
 //!
 //! # Example
 //!
@@ -34,7 +44,9 @@
 //! let mut config = Config::default();
 //! config.server.listen = "127.0.0.1:0".to_owned();
 //! let daemon = Daemon::start(config, DaemonOptions::default())?;
-//! println!("stream on {:?}, token {}", daemon.local_addr(), daemon.token());
+//! println!("stream on {:?}", daemon.local_addr());
+//! // A generated token (none configured) is for the operator: antennad prints it once.
+//! assert!(daemon.token_generated());
 //! let summary = daemon.shutdown()?;
 //! println!("{} polls", summary.polls);
 //! # Ok::<(), anyhow::Error>(())
@@ -46,18 +58,20 @@ use crate::acquisition::{
 };
 use crate::clock::{Schedule, TrialClock};
 use crate::config::{Config, SimFaultKind, TrialConfig};
-use crate::net::{
-    ControlCommand, ControlHandler, ControlToken, RigInfo, RigWall, SegmentSample as NetSample,
-    SegmentStatus, ServerOptions, StageTarget, StreamMessage, StreamServer,
-};
+use crate::free_space::{FreeSpace, StatvfsFreeSpace};
+use crate::net::{ControlHandler, ControlToken, ServerLog, ServerOptions, StreamServer};
 use crate::poll::{PollError, Poller, SegmentHealth};
-use crate::record::{
-    LogMessage, RecordCounts, SegmentSample, SegmentsMessage, ServoMessage, StageMessage,
-    TrialMetadata, TrialRecorder,
-};
 use crate::rig::{DaemonRig, RigError};
+use crate::samples::{record_sample, stream_sample};
 use crate::sim_rig::{SimState, sense, sim_bus};
 use crate::{SegmentFault, SimBus};
+use antenna_data::record::{
+    LogMessage, RecordCounts, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+    TrialRecorder,
+};
+use antenna_data::stream::{
+    ControlCommand, RigInfo, RigWall, SegmentStatus, StageTarget, StreamMessage,
+};
 use antenna_protocol::Calibration;
 use anyhow::{Context, Result, anyhow, bail};
 use std::collections::{BTreeMap, VecDeque};
@@ -77,8 +91,6 @@ const LOG_LINES_KEPT: usize = 4000;
 /// How [`Daemon::start`] runs the daemon.
 #[derive(Debug, Clone)]
 pub struct DaemonOptions {
-    /// The configuration as text, kept in every recording's metadata.
-    pub config_text: String,
     /// Start a trial at once: `Some(None)` the configuration's first trial, `Some(Some(name))`
     /// the one called `name`, `None` none (wait for `start_trial`).
     pub first_trial: Option<Option<String>>,
@@ -96,13 +108,15 @@ pub struct DaemonOptions {
     pub print_hz: f64,
     /// Capacity of the acquisition event queue.
     pub queue: usize,
+    /// Where free space under the data directory is learnt (the file system's count by
+    /// default; tests give a fake one).
+    pub free_space: Arc<dyn FreeSpace>,
 }
 
 impl Default for DaemonOptions {
     /// No trial at start, recording, serving, quiet.
     fn default() -> Self {
         Self {
-            config_text: String::new(),
             first_trial: None,
             first_trial_duration: None,
             exit_after_trial: false,
@@ -111,6 +125,7 @@ impl Default for DaemonOptions {
             echo: false,
             print_hz: 4.0,
             queue: 16_384,
+            free_space: Arc::new(StatvfsFreeSpace),
         }
     }
 }
@@ -155,7 +170,8 @@ pub struct Daemon;
 #[derive(Debug)]
 pub struct DaemonHandle {
     local_addr: Option<SocketAddr>,
-    token: String,
+    token: ControlToken,
+    token_generated: bool,
     stop: Arc<AtomicBool>,
     hub: Option<JoinHandle<Result<DaemonSummary>>>,
     log: Log,
@@ -168,9 +184,15 @@ impl DaemonHandle {
         self.local_addr
     }
 
-    /// The control token (the configured one, or the one made up at start).
+    /// The control token (the configured one, or the one generated at start).
     pub fn token(&self) -> &str {
-        &self.token
+        self.token.expose()
+    }
+
+    /// Whether the token was generated at start (none was configured): `antennad` then
+    /// prints it once.
+    pub fn token_generated(&self) -> bool {
+        self.token_generated
     }
 
     /// The trial running now, if any.
@@ -312,6 +334,9 @@ struct DaemonControl {
     motion: Mutex<Sender<MotionCommand>>,
     trial: Arc<Mutex<Option<String>>>,
     max_speed_mm_per_s: f64,
+    /// Set by `stop_all` before its command is queued: the motion thread stops before it
+    /// carries out anything else, and cancels the moves queued ahead of the stop.
+    stop_pending: Arc<AtomicBool>,
 }
 
 impl DaemonControl {
@@ -386,6 +411,7 @@ impl ControlHandler for DaemonControl {
                 })
             }
             ControlCommand::StopAll => {
+                self.stop_pending.store(true, Ordering::SeqCst);
                 let stopped = ask(&self.motion()?, |reply| MotionCommand::StopAll { reply });
                 let ended = ask(&self.hub()?, |reply| HubRequest::Stop {
                     why: "stop_all",
@@ -401,18 +427,22 @@ impl ControlHandler for DaemonControl {
     }
 }
 
-/// A control token for this run when none is configured: not guessable from outside.
-fn generated_token() -> String {
-    use std::hash::{BuildHasher, Hasher};
-    let mut hasher = std::collections::hash_map::RandomState::new().build_hasher();
-    hasher.write_u128(
-        SystemTime::now()
-            .duration_since(UNIX_EPOCH)
-            .map_or(0, |d| d.as_nanos()),
-    );
-    hasher.write_u32(std::process::id());
-    format!("{:016x}", hasher.finish())
+/// Unix-epoch nanoseconds of `clock`'s origin (the wall clock now, less the time since it).
+fn unix_origin_ns(clock: TrialClock) -> u64 {
+    let now_ns = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+    now_ns.saturating_sub(clock.elapsed_ns())
 }
+
+/// `text` with every occurrence of the token replaced: what a client asks to record never
+/// carries it into a file.
+fn scrub(text: &str, token: &ControlToken) -> String {
+    text.replace(token.expose(), "<redacted>")
+}
+
+/// How often the free space under the data directory is looked at during a trial.
+const FREE_SPACE_CHECK: Duration = Duration::from_secs(1);
 
 /// `<dir>/<name>.mcap`, or `<dir>/<name>-2.mcap` and so on if it exists.
 fn free_path(dir: &Path, name: &str) -> PathBuf {
@@ -449,8 +479,11 @@ impl Daemon {
             echo: options.echo,
             lines: Arc::new(Mutex::new(VecDeque::new())),
         };
-        let token_text = config.server.token.clone().unwrap_or_else(generated_token);
-        let token = ControlToken::new(token_text.clone()).context("`server.token` is empty")?;
+        let token_generated = config.server.token.is_none();
+        let token = match config.server.token.clone() {
+            Some(token) => token,
+            None => ControlToken::generate().context("generating the control token")?,
+        };
         let addresses = config.bus.addresses();
         let clock = TrialClock::start();
         let stop_threads = Arc::new(AtomicBool::new(false));
@@ -507,7 +540,9 @@ impl Daemon {
         let (hub_tx, hub_rx) = channel();
         let trial_state = Arc::new(Mutex::new(None));
         let script_done = Arc::new(AtomicU64::new(0));
+        let stop_pending = Arc::new(AtomicBool::new(false));
         let motion = {
+            let stop_pending = Arc::clone(&stop_pending);
             let events = events.clone();
             let stop = Arc::clone(&stop_threads);
             let status = Arc::clone(&rig_status);
@@ -520,7 +555,17 @@ impl Daemon {
                 .name("antennad-motion".to_owned())
                 .spawn(move || {
                     motion_loop(
-                        rig, clock, periods, &events, &motion_rx, &stop, &status, &done,
+                        rig,
+                        clock,
+                        periods,
+                        &events,
+                        MotionInputs {
+                            commands: &motion_rx,
+                            stop_pending: &stop_pending,
+                        },
+                        &stop,
+                        &status,
+                        &done,
                     )
                 })
                 .context("starting the motion thread")?
@@ -532,15 +577,20 @@ impl Daemon {
                 motion: Mutex::new(motion_tx.clone()),
                 trial: Arc::clone(&trial_state),
                 max_speed_mm_per_s: config.stage.max_speed_mm_per_s,
+                stop_pending: Arc::clone(&stop_pending),
             });
+            let server_log = log.clone();
             let server_options = ServerOptions {
                 segment_addresses: addresses.clone(),
                 rig: Some(rig_info(&config)),
+                max_clients: config.server.max_clients,
+                max_clients_per_peer: config.server.max_clients_per_peer,
+                log: ServerLog::new(move |line| server_log.line(format!("antennad: {line}"))),
                 ..ServerOptions::default()
             };
             match StreamServer::bind_with(
                 config.server.listen.as_str(),
-                token,
+                token.clone(),
                 handler,
                 server_options,
             ) {
@@ -568,14 +618,19 @@ impl Daemon {
             config.bus.poll_hz,
         ));
         if let Some(addr) = local_addr {
-            let token_shown = if config.server.token.is_some() {
-                "(the configured server.token)".to_owned()
+            let token_source = if token_generated {
+                "generated at start (antennad prints it once)"
+            } else if config.server.token_file.is_some() {
+                "from server.token_file"
+            } else if config.server.token_env.is_some() {
+                "from server.token_env"
             } else {
-                token_text.clone()
+                "the configured server.token"
             };
             log.line(format!(
                 "  watch it with: nc {ip} {port}   (or, without nc: cat </dev/tcp/{ip}/{port}; \
-                 newline-delimited JSON, docs/stream-protocol.md; control token: {token_shown})",
+                 newline-delimited JSON, docs/stream-protocol.md; control token: \
+                 {token_source}; stop_all needs none)",
                 ip = addr.ip(),
                 port = addr.port()
             ));
@@ -583,6 +638,9 @@ impl Daemon {
 
         let stop = Arc::new(AtomicBool::new(false));
         let mut hub = Hub {
+            unix_origin_ns: unix_origin_ns(clock),
+            token: token.clone(),
+            free_check_due: Instant::now(),
             calibrations: config.bus.calibrations(),
             config,
             options: options.clone(),
@@ -655,7 +713,8 @@ impl Daemon {
         };
         Ok(DaemonHandle {
             local_addr,
-            token: token_text,
+            token,
+            token_generated,
             stop,
             hub: Some(hub_thread),
             log,
@@ -809,6 +868,13 @@ struct ActiveTrial {
 }
 
 struct Hub {
+    /// Unix-epoch nanoseconds of the clock's origin: a poll's `t_ns` plus this is its
+    /// wall-clock time (the recordings' log times).
+    unix_origin_ns: u64,
+    /// Never recorded: anything a client asks to record is scrubbed of it.
+    token: ControlToken,
+    /// When the free space under the data directory is looked at next during a trial.
+    free_check_due: Instant,
     config: Config,
     options: DaemonOptions,
     clock: TrialClock,
@@ -911,30 +977,40 @@ impl Hub {
         };
         let mut notes = config.metadata.clone();
         notes.extend(metadata);
+        let notes = notes
+            .into_iter()
+            .map(|(k, v)| (scrub(&k, &self.token), scrub(&v, &self.token)))
+            .collect();
+        let start_ns = self.clock.elapsed_ns();
         let recorder = if self.options.record {
             let dir = &self.config.data_dir;
             std::fs::create_dir_all(dir)
                 .map_err(|e| format!("creating the data directory {}: {e}", dir.display()))?;
+            if let Some(short) = self.free_space_short() {
+                return Err(format!("trial {:?} refused: {short}", config.name));
+            }
             let path = free_path(dir, &config.name);
+            let started_unix_ns = self.unix_origin_ns.saturating_add(start_ns);
             let metadata = TrialMetadata {
                 trial: config.name.clone(),
-                started_unix_s: SystemTime::now()
-                    .duration_since(UNIX_EPOCH)
-                    .map_or(0.0, |d| d.as_secs_f64()),
-                config: self.options.config_text.clone(),
+                started_unix_s: started_unix_ns as f64 * 1e-9,
+                started_unix_ns: Some(started_unix_ns),
+                config: scrub(&self.config.to_recorded_toml(), &self.token),
                 notes,
+                rig: Some(rig_info(&self.config)),
             };
+            let options = self.config.recording.recorder_options();
             Some(
-                TrialRecorder::create(&path, &metadata)
+                TrialRecorder::create_with(&path, &metadata, options)
                     .map_err(|e| format!("creating the recording {}: {e}", path.display()))?,
             )
         } else {
             None
         };
+        self.free_check_due = Instant::now() + FREE_SPACE_CHECK;
         let id = self.next_trial_id;
         self.next_trial_id += 1;
         let duration = duration.unwrap_or(Duration::from_secs_f64(config.duration_s));
-        let start_ns = self.clock.elapsed_ns();
         let moves = config
             .moves
             .iter()
@@ -994,7 +1070,13 @@ impl Hub {
         }
         let _ = self.motion.send(MotionCommand::EndScript);
         let (path, recorded, result) = match trial.recorder {
-            Some(recorder) => {
+            Some(mut recorder) => {
+                // The reason is the file's last word (a full disk may refuse even that).
+                let t_s = self.clock.elapsed_ns().saturating_sub(trial.start_ns) as f64 * 1e-9;
+                let _ = recorder.record_log(&LogMessage {
+                    t_s,
+                    text: format!("trial ended: {why}"),
+                });
                 let written = recorder.written();
                 let path = recorder.path().to_path_buf();
                 let result = recorder.finish().map(|_| ());
@@ -1030,7 +1112,40 @@ impl Hub {
         message
     }
 
+    /// Why the data directory has too little room for a recording, if it has.
+    fn free_space_short(&self) -> Option<String> {
+        let dir = &self.config.data_dir;
+        let min_bytes = self.config.recording.min_free_bytes();
+        match self.options.free_space.free_bytes(dir) {
+            Ok(free) if free < min_bytes => Some(format!(
+                "the disk holding {} is nearly full: {:.1} MB free, below recording.min_free_mb \
+                 = {} MB",
+                dir.display(),
+                free as f64 * 1e-6,
+                self.config.recording.min_free_mb
+            )),
+            Ok(_) => None,
+            Err(e) => Some(format!(
+                "the free space under {} cannot be read: {e}",
+                dir.display()
+            )),
+        }
+    }
+
     fn check_trial_end(&mut self) {
+        if self.trial.as_ref().is_some_and(|t| t.recorder.is_some())
+            && Instant::now() >= self.free_check_due
+        {
+            self.free_check_due = Instant::now() + FREE_SPACE_CHECK;
+            if let Some(short) = self.free_space_short() {
+                self.log
+                    .line(format!("antennad: {short}; ending the trial"));
+                let why: &'static str = "the disk is nearly full";
+                self.record_log(self.clock.elapsed_ns(), &short);
+                self.end_trial(why);
+                return;
+            }
+        }
         let Some(trial) = &self.trial else { return };
         let elapsed_ns = self.clock.elapsed_ns().saturating_sub(trial.start_ns);
         let why = if trial.duration.is_zero() {
@@ -1048,7 +1163,7 @@ impl Hub {
     fn record(
         &mut self,
         t_ns: u64,
-        f: impl FnOnce(&mut TrialRecorder, f64) -> Result<(), crate::record::RecordError>,
+        f: impl FnOnce(&mut TrialRecorder, f64) -> Result<(), antenna_data::record::RecordError>,
     ) {
         let Some(trial) = &mut self.trial else { return };
         if t_ns < trial.start_ns {
@@ -1150,7 +1265,7 @@ impl Hub {
                     .iter()
                     .zip(&self.calibrations)
                     .enumerate()
-                    .map(|(k, (r, c))| net_sample(r, *c, poll.is_stale(k)))
+                    .map(|(k, (r, c))| stream_sample(r, *c, poll.is_stale(k)))
                     .collect(),
                 stage_position_m: self.stage_mm.map(|mm| mm * 1e-3),
                 base_angle_deg: self.base_rad.map(f64::to_degrees),
@@ -1167,7 +1282,7 @@ impl Hub {
                     .iter()
                     .zip(&calibrations)
                     .enumerate()
-                    .map(|(k, (r, &c))| SegmentSample::from_reading(r, c, poll.is_stale(k)))
+                    .map(|(k, (r, &c))| record_sample(r, c, poll.is_stale(k)))
                     .collect(),
             })
         });
@@ -1201,36 +1316,6 @@ impl Hub {
             segments: self.health.clone(),
             note: (!notes.is_empty()).then(|| notes.join("; ")),
         });
-    }
-}
-
-fn net_sample(reading: &crate::SegmentReading, c: Calibration, stale: bool) -> NetSample {
-    match reading.result {
-        Ok(word) => NetSample {
-            address: reading.address,
-            angle_rad: Some(c.angle_rad(word.angle_counts())),
-            contact: Some(word.touch().any()),
-            touch_bits: Some(word.touch().bits()),
-            counter: None,
-            error: None,
-            stale,
-        },
-        Err(e) => NetSample {
-            address: reading.address,
-            angle_rad: None,
-            contact: None,
-            touch_bits: None,
-            counter: None,
-            error: Some(
-                match e {
-                    PollError::Nack { .. } => "nack",
-                    PollError::Corrupted { .. } => "pec",
-                    PollError::Bus { .. } => "bus",
-                }
-                .to_owned(),
-            ),
-            stale,
-        },
     }
 }
 
@@ -1307,16 +1392,26 @@ fn nanos(d: Duration) -> u64 {
     u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
 }
 
+/// What the motion thread is told: its commands, and the flag `stop_all` raises ahead of
+/// its own command.
+struct MotionInputs<'a> {
+    commands: &'a Receiver<MotionCommand>,
+    stop_pending: &'a AtomicBool,
+}
+
 /// The motion thread: samples the stage and the base at their own rates, carries out motion
-/// commands at once, runs a trial's script, and reports the stage and the servo vanishing and
-/// coming back.
+/// commands at once (a `stop_all` ahead of anything queued before it), runs a trial's script,
+/// and reports the stage and the servo vanishing and coming back.
 #[allow(clippy::too_many_arguments)]
 fn motion_loop(
     mut rig: DaemonRig,
     clock: TrialClock,
     (stage_period, base_period): (Duration, Duration),
     events: &EventSender,
-    commands: &Receiver<MotionCommand>,
+    MotionInputs {
+        commands,
+        stop_pending,
+    }: MotionInputs<'_>,
     stop: &AtomicBool,
     status: &RigStatus,
     script_done: &AtomicU64,
@@ -1328,6 +1423,9 @@ fn motion_loop(
     let mut stage_ok = true;
     let mut servo_ok = true;
     while !stop.load(Ordering::Relaxed) {
+        if stop_pending.swap(false, Ordering::SeqCst) {
+            let _ = stop_first(&mut rig, commands, clock.elapsed(), &mut script, &mut notes);
+        }
         let stage_next = stage_schedule.next_deadline() <= base_schedule.next_deadline();
         let due = stage_schedule
             .next_deadline()
@@ -1337,7 +1435,16 @@ fn motion_loop(
             match commands.recv_timeout((due - now).min(Duration::from_millis(50))) {
                 Ok(command) => {
                     let now = clock.elapsed();
-                    on_motion_command(&mut rig, command, now, &mut script, &mut notes);
+                    if stop_pending.swap(false, Ordering::SeqCst) {
+                        // The stop was queued behind this command: it goes first.
+                        let kept = on_stop_pending(command);
+                        let stopped = stop_first(&mut rig, commands, now, &mut script, &mut notes);
+                        if let Some(MotionCommand::StopAll { reply }) = kept {
+                            let _ = reply.send(stopped);
+                        }
+                    } else {
+                        on_motion_command(&mut rig, command, now, &mut script, &mut notes);
+                    }
                     check_availability(&rig, &mut stage_ok, &mut servo_ok, status, &mut notes, now);
                     continue;
                 }
@@ -1387,6 +1494,45 @@ fn motion_loop(
     if let Err(e) = rig.stop(clock.elapsed()) {
         notes.send(clock.elapsed(), format!("stopping the stage failed: {e}"));
     }
+}
+
+/// A command that was queued ahead of a `stop_all`: a move or a base angle is cancelled
+/// (answered so), a script is dropped; a stop is kept to be answered.
+fn on_stop_pending(command: MotionCommand) -> Option<MotionCommand> {
+    match command {
+        MotionCommand::Move { reply, .. } | MotionCommand::SetBase { reply, .. } => {
+            let _ = reply.send(Err(
+                "cancelled: a stop_all came before it was carried out".to_owned()
+            ));
+            None
+        }
+        MotionCommand::RunScript { .. } | MotionCommand::EndScript => None,
+        stop @ MotionCommand::StopAll { .. } => Some(stop),
+    }
+}
+
+/// Carries out a `stop_all` before anything else: stops the stage and the script, and
+/// answers every command queued before the stop (moves cancelled, stops done).
+fn stop_first(
+    rig: &mut DaemonRig,
+    commands: &Receiver<MotionCommand>,
+    now: Duration,
+    script: &mut Option<Script>,
+    notes: &mut Notes<'_>,
+) -> Result<String, String> {
+    *script = None;
+    let stopped = match rig.stop(now) {
+        Ok(()) => Ok("stage stopped".to_owned()),
+        Err(e) => Err(format!("stopping the stage failed: {e}")),
+    };
+    let (Ok(text) | Err(text)) = &stopped;
+    notes.send(now, format!("stop_all: {text}"));
+    while let Ok(command) = commands.try_recv() {
+        if let Some(MotionCommand::StopAll { reply }) = on_stop_pending(command) {
+            let _ = reply.send(stopped.clone());
+        }
+    }
+    stopped
 }
 
 fn check_availability(

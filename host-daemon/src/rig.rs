@@ -129,6 +129,8 @@ pub struct DaemonRig {
     servo: ServoDevice,
     physics: Option<(SimPhysics, Shared<SimState>)>,
     mount_rad: f64,
+    /// The servo's calibrated range, degrees (`servo.angle_a_deg`..`servo.angle_b_deg`).
+    servo_range_deg: (f64, f64),
     advanced_to: Duration,
     solved_for: Option<(f64, f64)>,
     last_stage_mm: f64,
@@ -209,7 +211,7 @@ impl DaemonRig {
             }
         };
         let physics = match physics {
-            Some(state) => Some((SimPhysics::new(config)?, state)),
+            Some(state) => Some((crate::sim_rig::sim_physics(config)?, state)),
             None => None,
         };
         let mut rig = Self {
@@ -217,6 +219,7 @@ impl DaemonRig {
             servo,
             physics,
             mount_rad: config.sim.antenna.base_angle_deg.to_radians(),
+            servo_range_deg: config.servo_range_deg(),
             advanced_to: Duration::ZERO,
             solved_for: None,
             last_stage_mm: 0.0,
@@ -278,7 +281,9 @@ impl DaemonRig {
                 self.mount_rad + self.last_base_rad,
             );
             if self.solved_for != Some(key) {
-                let solved = physics.update(key.0, key.1).map_err(RigError::Simulation)?;
+                let solved = physics
+                    .update(key.0, key.1)
+                    .map_err(|e| RigError::Simulation(e.into()))?;
                 self.solved_for = Some(key);
                 if let Ok(mut shared) = state.lock() {
                     *shared = solved;
@@ -395,8 +400,18 @@ impl DaemonRig {
         }
     }
 
-    /// Sets the base (servo) angle, radians.
+    /// Sets the base (servo) angle, radians; an angle outside the servo's calibrated range
+    /// (`servo.angle_a_deg`..`servo.angle_b_deg`) is refused and nothing moves.
     pub fn set_base_angle_rad(&mut self, angle_rad: f64, now: Duration) -> Result<(), RigError> {
+        let (min_deg, max_deg) = self.servo_range_deg;
+        let angle_deg = angle_rad.to_degrees();
+        // A hair of slack for the round trip through radians.
+        if !(min_deg - 1e-9..=max_deg + 1e-9).contains(&angle_deg) {
+            return Err(RigError::Refused(format!(
+                "{angle_deg} deg is outside the servo's calibrated range {min_deg}..={max_deg} \
+                 deg (servo.angle_a_deg, servo.angle_b_deg)"
+            )));
+        }
         self.advance(now)?;
         match &mut self.servo {
             ServoDevice::Sim(servo) => servo

@@ -4,170 +4,54 @@
 //! solver as the stage carries the antenna along a configured wall.
 //!
 //! # Contact
-//! sim-core's quasi-static contact solver ([`sim_core::contact::QuasiStatic`]): every link
-//! and joint kept out of the wall, Coulomb friction that sticks and slips (`mu` of
-//! `[sim.wall]`), snaps followed downhill. Each new stage position is a step of the sweep; a
-//! new base angle rebuilds the solver from the current posture, backed off the wall if the
-//! turn would put the antenna into it, and steps back. A segment's touch switches close
-//! where its link touches the wall (`sim_core::touch_bits_from_contacts`).
+//! The physics is `antenna-sim-physics`' [`SimPhysics`] (shared with `antenna-monitor`'s
+//! prediction): sim-core's quasi-static contact solver, every link and joint kept out of the
+//! wall, Coulomb friction that sticks and slips (`mu` of `[sim.wall]`), snaps followed
+//! downhill, a segment's touch switches closing where its link touches the wall.
 
 use crate::acquisition::{
     AcquisitionEvent, MotionSettings, PollReport, PollSettings, Rig, Shared, event_channel,
     spawn_motion, spawn_poller,
 };
 use crate::clock::TrialClock;
-use crate::config::{Config, TrialConfig, WallConfig};
+use crate::config::{Config, TrialConfig};
 use crate::poll::{Poller, SegmentHealth};
 use crate::sim_bus::{SimBus, SimSegment};
 use crate::stage::{Homed, LimitedStage};
 use crate::{FakeServo, FakeStage, Servo};
-use antenna_protocol::TouchBits;
+pub use antenna_sim_physics::{AntennaSpec, FlatWallSpec, SimPhysics, SimState};
 use anyhow::{Context, Result, anyhow};
-use nalgebra::Vector2;
-use sim_core::contact::{ContactSettings, QuasiStatic};
-use sim_core::{
-    Chain, ChainContact, Line, SolidSide, Surface, SurfaceMap, Wall, touch_bits_from_contacts,
-};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-/// The physical state the simulated segments sense.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct SimState {
-    /// Joint angles `theta_1..theta_n`, radians.
-    pub joint_angles_rad: Vec<f64>,
-    /// Raw touch switches per segment.
-    pub touch: Vec<TouchBits>,
-    /// The wall's force on the tip, newtons (0 out of contact).
-    pub tip_force_n: f64,
+/// The physics of `config`'s simulated antenna (`[sim.antenna]`) against its wall
+/// (`[sim.wall]`).
+pub fn sim_physics(config: &Config) -> Result<SimPhysics> {
+    Ok(SimPhysics::new(&antenna_spec(config), &wall_spec(config))?)
 }
 
-/// The antenna against the wall: the posture for a stage position and base angle.
-#[derive(Debug)]
-pub struct SimPhysics {
-    sim: QuasiStatic,
-    contacts: Vec<ChainContact>,
-    touch_bits: Vec<u8>,
-}
-
-impl SimPhysics {
-    /// The antenna of `config.sim.antenna` (one link per segment) at rest in front of its
-    /// wall, the stage at 0.
-    pub fn new(config: &Config) -> Result<Self> {
-        let antenna = &config.sim.antenna;
-        let lengths = vec![antenna.link_length_m; antenna.links + 1];
-        let profile = antenna
-            .profile()
-            .ok_or_else(|| anyhow!("unknown stiffness profile {:?}", antenna.stiffness_profile))?;
-        let k = profile
-            .stiffness_n_m_per_rad(
-                &lengths,
-                antenna.k_min_n_m_per_rad,
-                antenna.k_max_n_m_per_rad,
-            )
-            .context("sim.antenna stiffness")?;
-        let chain = Chain::builder(antenna.links)
-            .link_length_m(antenna.link_length_m)
-            .base_angle_rad(antenna.base_angle_deg.to_radians())
-            .stiffnesses_nm_per_rad(k)
-            .build()
-            .context("sim.antenna")?;
-        let wall = wall_of(&config.sim.wall)?;
-        let theta = chain.rest_theta();
-        let sim = QuasiStatic::new(
-            chain,
-            vec![wall],
-            Vector2::zeros(),
-            &theta,
-            ContactSettings::default(),
-        )
-        .context("sim.antenna at rest with the stage at 0 against sim.wall")?;
-        Ok(Self {
-            touch_bits: vec![0; theta.len()],
-            sim,
-            contacts: Vec::new(),
-        })
-    }
-
-    /// The posture with the base at `base_x_m` along the track and the base link at
-    /// `base_angle_rad`: one quasi-static step from the last one.
-    pub fn update(&mut self, base_x_m: f64, base_angle_rad: f64) -> Result<SimState> {
-        if base_angle_rad != self.sim.chain().base_angle_rad() {
-            self.turn_base(base_angle_rad)?;
-        }
-        self.sim
-            .step_to(Vector2::new(base_x_m, 0.0))
-            .with_context(|| format!("the antenna with the stage at {:.1} mm", base_x_m * 1e3))?;
-        let contacts = self.sim.contacts();
-        self.contacts.clear();
-        self.contacts
-            .extend(contacts.iter().map(|c| c.chain_contact()));
-        touch_bits_from_contacts(&self.contacts, &mut self.touch_bits).context("touch bits")?;
-        let n = self.sim.chain().n();
-        Ok(SimState {
-            joint_angles_rad: self.sim.theta_rad()[1..].to_vec(),
-            touch: self.touch_bits[1..]
-                .iter()
-                .map(|&b| TouchBits::from_bits_truncate(b))
-                .collect(),
-            tip_force_n: contacts
-                .iter()
-                .filter(|c| c.feature.link() == n)
-                .map(|c| c.normal_force_n)
-                .sum(),
-        })
-    }
-
-    /// Turns the base link to `base_angle_rad` keeping the joint angles: the solver is
-    /// rebuilt there, its base first backed off along the wall's normal by as much as the
-    /// turn would put the antenna into the wall (the next step brings it back on).
-    fn turn_base(&mut self, base_angle_rad: f64) -> Result<()> {
-        let chain = self
-            .sim
-            .chain()
-            .with_base_angle_rad(base_angle_rad)
-            .context("base angle")?;
-        let mut theta = self.sim.theta_rad().to_vec();
-        theta[0] = base_angle_rad;
-        let base = self.sim.base_m();
-        let walls = self.sim.walls().to_vec();
-        let poses = sim_core::frame_poses(&chain, &theta, sim_core::Frame::GROUND)
-            .context("poses after the turn")?;
-        let mut back_m = Vector2::zeros();
-        for wall in &walls {
-            for link in 0..=chain.n() {
-                let p = base
-                    + poses
-                        .position_m(sim_core::Frame::link(link))
-                        .unwrap_or_default();
-                let d = wall.signed_distance(&p);
-                let inside_m = -d.gap_m + TURN_CLEARANCE_M;
-                if inside_m > 0.0 && inside_m * d.normal.norm() > back_m.norm() {
-                    back_m = d.normal * inside_m;
-                }
-            }
-        }
-        self.sim = QuasiStatic::new(chain, walls, base + back_m, &theta, *self.sim.settings())
-            .context("the antenna turned on its base")?;
-        Ok(())
+/// `[sim.antenna]` as the physics takes it.
+pub fn antenna_spec(config: &Config) -> AntennaSpec {
+    let antenna = &config.sim.antenna;
+    AntennaSpec {
+        links: antenna.links,
+        link_length_m: antenna.link_length_m,
+        stiffness_profile: antenna.stiffness_profile.clone(),
+        k_min_n_m_per_rad: antenna.k_min_n_m_per_rad,
+        k_max_n_m_per_rad: antenna.k_max_n_m_per_rad,
+        base_angle_deg: antenna.base_angle_deg,
     }
 }
 
-/// How far off the wall a turned antenna is put before it steps back, metres.
-const TURN_CLEARANCE_M: f64 = 1e-3;
-
-/// `[sim.wall]` as a sim-core wall: a line through `(0, distance_m)` at `-angle_deg` to the
-/// track (it comes closer as the stage moves forward), solid beyond it, smooth with `mu`.
-fn wall_of(config: &WallConfig) -> Result<Wall> {
-    let line = Line::new(
-        Vector2::new(0.0, config.distance_m),
-        -config.angle_deg.to_radians(),
-        SolidSide::Left,
-    )
-    .context("sim.wall")?;
-    let surface = SurfaceMap::uniform(Surface::Smooth { mu: config.mu }).context("sim.wall.mu")?;
-    Ok(Wall::new(line, surface))
+/// `[sim.wall]` as the physics takes it.
+pub fn wall_spec(config: &Config) -> FlatWallSpec {
+    let wall = &config.sim.wall;
+    FlatWallSpec {
+        distance_m: wall.distance_m,
+        angle_deg: wall.angle_deg,
+        mu: wall.mu,
+    }
 }
 
 /// The simulated stage and servo, moving in real time, with the antenna following them.
@@ -195,7 +79,7 @@ impl SimRig {
         let mut rig = Self {
             stage,
             servo: FakeServo::new(),
-            physics: SimPhysics::new(config)?,
+            physics: sim_physics(config)?,
             state,
             mount_rad: config.sim.antenna.base_angle_deg.to_radians(),
             advanced_to: Duration::ZERO,
@@ -450,19 +334,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_antenna_bends_only_once_it_reaches_the_wall() {
+    fn the_default_configuration_is_the_default_physics() {
         let config = Config::default();
-        let mut physics = SimPhysics::new(&config).unwrap();
-        let base = config.sim.antenna.base_angle_deg.to_radians();
-        let free = physics.update(0.0, base).unwrap();
-        assert_eq!(free.tip_force_n, 0.0);
-        assert!(free.joint_angles_rad.iter().all(|a| a.abs() < 1e-9));
-        let pressed = physics.update(0.15, base).unwrap();
-        assert!(pressed.tip_force_n > 0.0);
-        assert!(pressed.joint_angles_rad.iter().all(|a| a.abs() > 0.01));
-        assert!(pressed.joint_angles_rad.iter().sum::<f64>().abs() > 0.2);
-        assert!(pressed.touch[8].any());
-        let back = physics.update(0.0, base).unwrap();
-        assert!(back.joint_angles_rad.iter().all(|a| a.abs() < 1e-6));
+        assert_eq!(antenna_spec(&config), AntennaSpec::default());
+        assert_eq!(wall_spec(&config), FlatWallSpec::default());
     }
 }

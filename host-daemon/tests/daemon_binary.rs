@@ -7,8 +7,8 @@
 
 mod net_support;
 
-use host_daemon::net::StreamMessage;
-use host_daemon::record::TrialReader;
+use antenna_data::record::TrialReader;
+use antenna_data::stream::StreamMessage;
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 
@@ -63,6 +63,62 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
     );
     assert!(trial.stage.last().unwrap().position_m > 0.02);
     assert_eq!(trial.metadata.unwrap().notes["wall"], "simulated flat wall");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A configured token is never printed; a generated one (128 random bits, 32 hexadecimal
+/// digits) is printed exactly once, at start, and recorded nowhere.
+#[test]
+fn a_configured_token_is_never_printed_and_a_generated_one_once() {
+    let dir = std::env::temp_dir().join(format!("antennad-token-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).unwrap();
+    let secret = "SECRET-TOKEN-123-configured";
+    let config = dir.join("antennad.toml");
+    std::fs::write(&config, format!("[server]\ntoken = \"{secret}\"\n")).unwrap();
+    let run = |extra: &[&std::ffi::OsStr]| {
+        let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
+            .args([
+                "--exit-after-trial",
+                "--duration-s",
+                "0.3",
+                "--listen",
+                "127.0.0.1:0",
+            ])
+            .arg("--data-dir")
+            .arg(dir.join("data"))
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(output.status.success());
+        [output.stdout, output.stderr].concat()
+    };
+    let printed = run(&["--config".as_ref(), config.as_os_str()]);
+    let text = String::from_utf8_lossy(&printed);
+    assert!(!text.contains(secret), "{text}");
+    assert!(
+        text.contains("control token: the configured server.token"),
+        "{text}"
+    );
+    let printed = run(&[]);
+    let text = String::from_utf8_lossy(&printed).into_owned();
+    let shown: Vec<&str> = text
+        .lines()
+        .filter_map(|l| {
+            l.split_once("(generated; shown only here): ")
+                .map(|(_, t)| t)
+        })
+        .collect();
+    assert_eq!(shown.len(), 1, "{text}");
+    let token = shown[0].trim();
+    assert_eq!(token.len(), 32);
+    assert!(token.chars().all(|c| c.is_ascii_hexdigit()));
+    assert_eq!(text.matches(token).count(), 1, "{text}");
+    for entry in std::fs::read_dir(dir.join("data")).unwrap() {
+        let bytes = std::fs::read(entry.unwrap().path()).unwrap();
+        assert!(!bytes.windows(token.len()).any(|w| w == token.as_bytes()));
+        assert!(!bytes.windows(secret.len()).any(|w| w == secret.as_bytes()));
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -153,17 +209,74 @@ fn without_exit_after_trial_it_keeps_serving_and_stops_cleanly_on_sigterm() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `kill -9` during a trial: the file opens in the standard readers as it is (Python's
+/// `mcap` `make_reader(...).iter_messages()`, the Rust `mcap` crate), with every poll up to
+/// 100 ms before the kill, log times in Unix-epoch nanoseconds.
 #[test]
 fn kill_9_during_a_trial_leaves_every_poll_up_to_the_last_flush() {
     let dir = std::env::temp_dir().join(format!("antennad-kill9-{}", std::process::id()));
     let (mut child, _addr, mut lines) = spawn(&["--duration-s", "60", "--print-hz", "10"], &dir);
-    // Wait for two seconds of trial, in sample lines ("   2.00 ...").
-    assert!(lines.by_ref().any(|l| l.trim_start().starts_with("2.")));
+    // Wait for two seconds of trial, in sample lines ("   2.00 ..."): antennad prints a
+    // poll's line after recording it.
+    let printed_t_s: f64 = lines
+        .by_ref()
+        .find(|l| l.trim_start().starts_with("2."))
+        .and_then(|l| l.split_whitespace().next()?.parse().ok())
+        .unwrap();
+    let unix_now_ns = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_nanos() as u64;
     child.kill().unwrap(); // SIGKILL
     assert!(!child.wait().unwrap().success());
-    let trial = TrialReader::read(dir.join("wall-sweep.mcap")).unwrap();
-    assert!(trial.truncated.is_some(), "no footer after kill -9");
+    let path = dir.join("wall-sweep.mcap");
+
+    // Python's standard reader, no recovery code.
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/python/read_killed.py");
+    let out = Command::new("python3")
+        .arg(&script)
+        .arg(&path)
+        .output()
+        .expect("python3 (scripts/setup installs it with the mcap package)");
+    assert!(
+        out.status.success(),
+        "make_reader(...).iter_messages() failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let python: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let python_polls = python["polls"].as_u64().unwrap();
+    // Lost at most the 100 ms before the kill (the printed time has two decimals).
+    let last_t_s = python["last_t_s"].as_f64().unwrap();
+    assert!(
+        last_t_s >= printed_t_s - 0.1 - 0.005,
+        "the last poll read is at {last_t_s} s, the trial was at {printed_t_s} s"
+    );
+    assert_eq!(python["log_times_ok"], true, "{python}");
+    // Log times are Unix-epoch nanoseconds: the trial started seconds before the kill.
+    let started_unix_ns = python["started_unix_ns"].as_u64().unwrap();
+    let age_s = (unix_now_ns as f64 - started_unix_ns as f64) * 1e-9;
+    assert!(
+        (1.0..120.0).contains(&age_s),
+        "the trial started {age_s} s before"
+    );
+
+    // The Rust mcap crate, no recovery code either.
+    let bytes = std::fs::read(&path).unwrap();
+    let rust_polls = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(Result::unwrap)
+        .filter(|m| m.channel.topic == "/antenna/segments")
+        .count() as u64;
+    assert_eq!(rust_polls, python_polls);
+
+    let trial = TrialReader::read(&path).unwrap();
+    assert!(
+        trial.truncated.is_some(),
+        "a killed recorder leaves no summary"
+    );
     let n = trial.segments.len();
+    assert_eq!(n as u64, python_polls);
     // At least the two seconds of trial seen, less the 100 ms flush interval, at 1 kHz
     // (with room for skipped deadlines on a loaded machine).
     assert!(n > 1000, "{n} polls read back");

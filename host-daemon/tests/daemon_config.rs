@@ -60,9 +60,17 @@ fn the_example_files_parse_and_sim_toml_is_the_default() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
     let sim = Config::from_file(&dir.join("sim.toml")).unwrap();
     assert_eq!(sim, Config::default());
-    let robot = Config::from_file(&dir.join("robot.toml")).unwrap();
+    // robot.toml takes its token from $ANTENNAD_TOKEN: given here in the file instead.
+    let text = std::fs::read_to_string(dir.join("robot.toml")).unwrap();
+    assert!(text.contains("\ntoken_env = \"ANTENNAD_TOKEN\"\n"));
+    let text = text.replace(
+        "token_env = \"ANTENNAD_TOKEN\"",
+        "token = \"robot-token-0123456789\"",
+    );
+    let robot = Config::from_toml_str(&text, "robot.toml").unwrap();
     assert_eq!(robot.bus.device, "/dev/i2c-1");
     assert_eq!(robot.stage.port, "/dev/ttyUSB0");
     assert_eq!(robot.servo.port, "/dev/ttyACM0");
     assert!(robot.server.token.is_some());
+    assert_eq!(robot.server.token_env, None);
 }

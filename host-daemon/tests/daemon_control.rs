@@ -6,10 +6,10 @@
 
 mod net_support;
 
+use antenna_data::record::TrialReader;
+use antenna_data::stream::{ControlReply, ErrorCode, StreamMessage};
 use host_daemon::config::{Config, MoveConfig};
 use host_daemon::daemon::{Daemon, DaemonHandle, DaemonOptions};
-use host_daemon::net::{ControlReply, ErrorCode, StreamMessage};
-use host_daemon::record::TrialReader;
 use net_support::{Client, TOKEN};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -23,7 +23,7 @@ fn temp_dir(name: &str) -> PathBuf {
 fn config(dir: &std::path::Path) -> Config {
     let mut config = Config::default();
     config.server.listen = "127.0.0.1:0".to_owned();
-    config.server.token = Some(TOKEN.to_owned());
+    config.server.token = Some(host_daemon::net::ControlToken::new(TOKEN).unwrap());
     config.data_dir = dir.to_path_buf();
     config.bus.poll_hz = 500.0;
     config.stage.max_mm = 100.0;
@@ -99,26 +99,46 @@ fn watch(client: &mut Client, mut done: impl FnMut(Option<f64>, Option<f64>) -> 
 }
 
 #[test]
-fn every_command_needs_the_token_and_malformed_ones_get_clear_errors() {
+fn every_command_but_stop_all_needs_the_token_and_malformed_ones_get_clear_errors() {
     let dir = temp_dir("tokens");
     let (daemon, mut client) = start(config(&dir));
-    for (id, body) in [
-        r#""cmd":"start_trial","name":"wall-sweep""#,
-        r#""cmd":"stop_trial""#,
-        r#""cmd":"move_stage","relative_m":0.01"#,
-        r#""cmd":"set_base_angle","angle_deg":5"#,
-        r#""cmd":"stop_all""#,
+    for (id, (body, token)) in [
+        (
+            r#""cmd":"start_trial","name":"wall-sweep""#,
+            r#""token":"wrong","#,
+        ),
+        (r#""cmd":"stop_trial""#, ""),
+        (
+            r#""cmd":"move_stage","relative_m":0.01"#,
+            r#""token":"wrong","#,
+        ),
+        (r#""cmd":"set_base_angle","angle_deg":5"#, ""),
     ]
     .iter()
     .enumerate()
     {
-        for token in [r#""token":"wrong","#, ""] {
-            client.send_line(&format!(r#"{{"id":{id},{token}{body}}}"#));
-            let reply = client.next_reply();
-            assert_eq!(reply.error, Some(ErrorCode::BadToken), "{body}: {reply:?}");
-        }
+        client.send_line(&format!(r#"{{"id":{id},{token}{body}}}"#));
+        let reply = client.next_reply();
+        assert_eq!(reply.error, Some(ErrorCode::BadToken), "{body}: {reply:?}");
     }
     assert_eq!(daemon.trial(), None, "no trial started without the token");
+    // Stopping needs no token, and is logged with the peer's address.
+    client.send_line(r#"{"id":7,"cmd":"stop_all"}"#);
+    let reply = client.next_reply();
+    assert!(reply.ok, "{reply:?}");
+    let peer = client.writer.local_addr().unwrap().to_string();
+    let log = daemon.log_lines();
+    assert!(
+        log.iter()
+            .any(|l| l.contains(&format!("stop_all from {peer}"))),
+        "{log:#?}"
+    );
+    let failures = log
+        .iter()
+        .filter(|l| l.contains(&format!("authentication failed from {peer}")))
+        .count();
+    assert_eq!(failures, 4, "{log:#?}");
+    assert!(log.iter().all(|l| !l.contains(TOKEN)));
     // Malformed: not JSON, a misspelt field, both targets, a bad number, an unknown command.
     client.send_line("move the stage please");
     assert_eq!(client.next_reply().error, Some(ErrorCode::BadJson));
@@ -205,8 +225,21 @@ fn moves_and_angles_work_between_trials_and_never_pass_the_soft_limits() {
     .stage;
     assert!(stage.iter().all(|&m| m <= 0.1), "{stage:?}");
     assert!(stage.iter().rev().take(10).all(|&m| m == 0.09), "{stage:?}");
-    let reply = request(&mut client, 6, r#""cmd":"set_base_angle","angle_deg":170"#);
-    assert_eq!(reply.error, Some(ErrorCode::Rejected), "{reply:?}");
+    // The servo's calibration covers -45..=45 deg: beyond it is refused, nothing moves.
+    for angle_deg in [90.0, -45.5, 170.0] {
+        let body = format!(r#""cmd":"set_base_angle","angle_deg":{angle_deg}"#);
+        let reply = request(&mut client, 6, &body);
+        assert_eq!(reply.error, Some(ErrorCode::Rejected), "{reply:?}");
+        assert!(
+            reply.message.contains("calibrated range -45..=45"),
+            "{reply:?}"
+        );
+    }
+    let reply = request(&mut client, 6, r#""cmd":"set_base_angle","angle_deg":-45"#);
+    assert!(reply.ok, "{reply:?}");
+    watch(&mut client, |_, b| {
+        b.is_some_and(|b| (b + 45.0).abs() < 1e-9)
+    });
     // stop_all with no trial: the stage stops, nothing else to end.
     let reply = request(&mut client, 7, r#""cmd":"move_stage","position_m":0.0"#);
     assert!(reply.ok, "{reply:?}");

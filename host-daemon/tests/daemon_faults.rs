@@ -7,10 +7,10 @@
 
 mod net_support;
 
+use antenna_data::record::TrialReader;
+use antenna_data::stream::StreamMessage;
 use host_daemon::config::{Config, SimFaultConfig, SimFaultKind};
 use host_daemon::daemon::{Daemon, DaemonOptions};
-use host_daemon::net::StreamMessage;
-use host_daemon::record::TrialReader;
 use net_support::{Client, TOKEN};
 use std::io::Write;
 use std::net::TcpStream;
@@ -22,7 +22,7 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
     std::fs::remove_dir_all(&dir).ok();
     let mut config = Config::default();
     config.server.listen = "127.0.0.1:0".to_owned();
-    config.server.token = Some(TOKEN.to_owned());
+    config.server.token = Some(host_daemon::net::ControlToken::new(TOKEN).unwrap());
     config.data_dir = dir.clone();
     config.bus.poll_hz = 500.0;
     config.bus.counter_check_every = 25;
@@ -132,7 +132,7 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
         summary.skipped
     );
     // Every fault is on its segment, for its whole window (250 polls at 500 Hz), once.
-    let flagged = |k: usize, f: fn(&host_daemon::record::SegmentSample) -> bool| -> Vec<u64> {
+    let flagged = |k: usize, f: fn(&antenna_data::record::SegmentSample) -> bool| -> Vec<u64> {
         trial
             .segments
             .iter()
@@ -143,7 +143,7 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
     for (k, f) in [
         (
             2,
-            (|s| s.nack) as fn(&host_daemon::record::SegmentSample) -> bool,
+            (|s| s.nack) as fn(&antenna_data::record::SegmentSample) -> bool,
         ),
         (4, |s| s.pec_error),
     ] {

@@ -7,11 +7,11 @@
 
 mod net_support;
 
+use antenna_data::record::TrialReader;
+use antenna_data::stream::StreamMessage;
 use host_daemon::config::{Config, MoveConfig};
 use host_daemon::daemon::{Daemon, DaemonOptions};
 use host_daemon::emulator::{MaestroEmulator, VxmEmulator};
-use host_daemon::net::StreamMessage;
-use host_daemon::record::TrialReader;
 use net_support::{Client, TOKEN};
 use serialport::{SerialPort, TTYPort};
 use std::path::{Path, PathBuf};
@@ -36,7 +36,7 @@ fn pty() -> (TTYPort, String) {
 fn config(dir: &Path, stage_port: &str, servo_port: &str) -> Config {
     let mut config = Config::default();
     config.server.listen = "127.0.0.1:0".to_owned();
-    config.server.token = Some(TOKEN.to_owned());
+    config.server.token = Some(host_daemon::net::ControlToken::new(TOKEN).unwrap());
     config.data_dir = dir.to_path_buf();
     config.bus.poll_hz = 500.0;
     config.stage.port = stage_port.to_owned();

@@ -6,10 +6,8 @@ mod net_support;
 
 use std::sync::Arc;
 
-use host_daemon::net::{
-    ControlCommand, ControlToken, ErrorCode, RecordingHandler, StageTarget, StreamMessage,
-    StreamServer,
-};
+use antenna_data::stream::{ControlCommand, ErrorCode, StageTarget, StreamMessage};
+use host_daemon::net::{ControlToken, RecordingHandler, StreamServer};
 use net_support::{Client, TOKEN, samples, wait_for_clients};
 
 fn server_with(handler: Arc<RecordingHandler>) -> StreamServer {
@@ -74,10 +72,10 @@ fn wrong_or_missing_token_is_refused_and_the_handler_not_called() {
     let server = server_with(Arc::clone(&handler));
     let mut c = connect(&server);
     for (id, request) in [
-        r#"{"id":10,"token":"nope","cmd":"stop_all"}"#,
-        r#"{"id":11,"cmd":"stop_all"}"#,
+        r#"{"id":10,"token":"nope","cmd":"stop_trial"}"#,
+        r#"{"id":11,"cmd":"start_trial","name":"x"}"#,
         r#"{"id":12,"token":"","cmd":"set_base_angle","angle_deg":5}"#,
-        r#"{"id":13,"token":42,"cmd":"stop_all"}"#,
+        r#"{"id":13,"token":42,"cmd":"auth"}"#,
     ]
     .iter()
     .enumerate()
@@ -88,19 +86,71 @@ fn wrong_or_missing_token_is_refused_and_the_handler_not_called() {
         assert!(!reply.ok);
         assert_eq!(reply.error, Some(ErrorCode::BadToken));
     }
-    // A token with the right prefix is still wrong.
-    c.send_line(&format!(
-        r#"{{"id":14,"token":"{}","cmd":"stop_all"}}"#,
-        &TOKEN[..TOKEN.len() - 1]
-    ));
-    assert_eq!(c.next_reply().error, Some(ErrorCode::BadToken));
     assert!(handler.calls().is_empty());
-    // The connection is still usable.
+    // The connection is still usable, and the right token is answered.
     c.send_line(&format!(
-        r#"{{"id":15,"token":"{TOKEN}","cmd":"stop_all"}}"#
+        r#"{{"id":15,"token":"{TOKEN}","cmd":"stop_trial"}}"#
     ));
     assert!(c.next_reply().ok);
-    assert_eq!(handler.calls(), vec![ControlCommand::StopAll]);
+    assert_eq!(handler.calls(), vec![ControlCommand::StopTrial]);
+    // A token with the right prefix is still wrong.
+    let mut other = connect(&server);
+    other.send_line(&format!(
+        r#"{{"id":14,"token":"{}","cmd":"stop_trial"}}"#,
+        &TOKEN[..TOKEN.len() - 1]
+    ));
+    assert_eq!(other.next_reply().error, Some(ErrorCode::BadToken));
+    assert_eq!(handler.calls().len(), 1);
+    server.shutdown();
+}
+
+#[test]
+fn stop_all_needs_no_token_and_jumps_the_stream_queue() {
+    let handler = Arc::new(RecordingHandler::new());
+    let server = server_with(Arc::clone(&handler));
+    let mut c = connect(&server);
+    for request in [
+        r#"{"id":1,"cmd":"stop_all"}"#,
+        r#"{"id":2,"token":"wrong","cmd":"stop_all"}"#,
+    ] {
+        c.send_line(request);
+        let reply = c.next_reply();
+        assert!(reply.ok, "{reply:?}");
+    }
+    assert_eq!(
+        handler.calls(),
+        vec![ControlCommand::StopAll, ControlCommand::StopAll]
+    );
+    // The client stops reading: the socket's buffers fill, then its queue (1024 lines).
+    wait_for_clients(&server, 1);
+    let mut last_queued = 0;
+    for seq in 0..1_000_000 {
+        if server.publish(&samples(seq)) == 0 {
+            break;
+        }
+        last_queued = seq;
+    }
+    // The reply goes out ahead of the stream lines still queued.
+    c.send_line(r#"{"id":3,"cmd":"stop_all"}"#);
+    loop {
+        if let StreamMessage::Reply(reply) = c.next_message() {
+            assert_eq!(reply.id, Some(3));
+            break;
+        }
+    }
+    let mut after_reply = 0;
+    loop {
+        if let StreamMessage::Samples { seq, .. } = c.next_message() {
+            after_reply += 1;
+            if seq == last_queued {
+                break;
+            }
+        }
+    }
+    assert!(
+        after_reply > 500,
+        "only {after_reply} stream lines came after the reply"
+    );
     server.shutdown();
 }
 
@@ -246,7 +296,7 @@ fn over_long_line_gets_an_error_then_the_connection_closes_and_others_are_served
     let mut watcher = connect(&server);
     let mut c = connect(&server);
     wait_for_clients(&server, 2);
-    let flood = vec![b'{'; 4 * host_daemon::net::MAX_LINE_BYTES];
+    let flood = vec![b'{'; 4 * antenna_data::stream::MAX_LINE_BYTES];
     // The server may close before it has read all of it; a failed write is fine then.
     let _ = std::io::Write::write_all(&mut c.writer, &flood);
     let reply = c.next_reply();
@@ -265,8 +315,9 @@ fn over_long_line_gets_an_error_then_the_connection_closes_and_others_are_served
 }
 
 #[test]
-fn empty_token_cannot_be_configured_and_busy_port_is_a_clear_error() {
+fn short_token_cannot_be_configured_and_busy_port_is_a_clear_error() {
     assert!(ControlToken::new("").is_err());
+    assert!(ControlToken::new("a").is_err());
     let first = server_with(Arc::new(RecordingHandler::new()));
     let err = StreamServer::bind(
         first.local_addr(),

@@ -10,9 +10,8 @@ use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use host_daemon::net::{
-    ControlToken, PROTOCOL_VERSION, RecordingHandler, ServerOptions, StreamMessage, StreamServer,
-};
+use antenna_data::stream::{PROTOCOL_VERSION, StreamMessage};
+use host_daemon::net::{ControlToken, RecordingHandler, ServerOptions, StreamServer};
 use net_support::{Client, TOKEN, follow_exactly, samples, wait_for_clients};
 
 fn server(options: ServerOptions) -> StreamServer {
@@ -201,23 +200,30 @@ fn shutdown_joins_its_threads_and_closes_every_connection() {
     drop(stalled);
 }
 
+/// At the limit a new client takes the place of the oldest one that never proved the token
+/// (told why); an operator's connection is never dropped, so then the new one is refused.
 #[test]
-fn refuses_clients_beyond_the_limit_with_a_message() {
+fn at_the_limit_the_oldest_reader_makes_room_and_operators_stay() {
+    use antenna_data::stream::ErrorCode;
     let server = server(ServerOptions {
         max_clients: 1,
         ..ServerOptions::default()
     });
     let mut first = Client::connect(server.local_addr());
+    assert!(matches!(first.next_message(), StreamMessage::Hello { .. }));
     wait_for_clients(&server, 1);
     let mut second = Client::connect(server.local_addr());
-    let reply = second.next_reply();
-    assert_eq!(
-        reply.error,
-        Some(host_daemon::net::ErrorCode::TooManyClients)
-    );
-    second.expect_closed();
-    assert!(matches!(first.next_message(), StreamMessage::Hello { .. }));
+    assert!(matches!(second.next_message(), StreamMessage::Hello { .. }));
+    assert_eq!(first.next_reply().error, Some(ErrorCode::Evicted));
+    first.expect_closed();
+    wait_for_clients(&server, 1);
+    second.send_line(&format!(r#"{{"id":1,"token":"{TOKEN}","cmd":"auth"}}"#));
+    assert!(second.next_reply().ok);
+    assert_eq!(server.operator_count(), 1);
+    let mut third = Client::connect(server.local_addr());
+    assert_eq!(third.next_reply().error, Some(ErrorCode::TooManyClients));
+    third.expect_closed();
     server.publish(&samples(1));
-    assert_eq!(first.next_message(), samples(1));
+    assert_eq!(second.next_message(), samples(1));
     server.shutdown();
 }

@@ -6,9 +6,9 @@ crash), `scipy.io.loadmat` on the MAT-file, and the `csv` module on the CSV file
 Usage: check_export.py EXPECTED.json
 
 EXPECTED.json (written by crates/antenna-cli/tests/export_python.rs) names the files and holds
-the values that were recorded: t_s, address, angle_rad and touch (polls x segments, null for
-a missing sample), stage_t_s, stage_position_m, servo_t_s, base_angle_rad, trial, config,
-notes, truncated_mcap and truncated_polls. Exits non-zero with a message on the first
+the values that were recorded: t_s, seq, address, angle_rad and touch (polls x segments, null
+for a missing sample), stage_t_s, stage_position_m, servo_t_s, base_angle_rad, trial, config,
+notes, started_unix_ns, truncated_mcap and truncated_polls. Exits non-zero with a message on the first
 mismatch. Needs scipy and mcap (scripts/setup installs them).
 """
 
@@ -19,7 +19,7 @@ import sys
 
 import numpy as np
 import scipy.io
-from mcap.reader import NonSeekingReader, make_reader
+from mcap.reader import make_reader
 
 TOPICS = {"/trial/metadata", "/antenna/segments", "/antenna/stage", "/antenna/servo"}
 
@@ -57,7 +57,8 @@ def check_mcap(e):
         for _schema, channel, message in reader.iter_messages():
             data = json.loads(message.data)
             if channel.topic == "/antenna/segments":
-                check(message.log_time == round(data["t_s"] * 1e9), "log time is t_s in ns")
+                check(message.log_time == e["started_unix_ns"] + round(data["t_s"] * 1e9),
+                      "log time is the Unix-epoch start plus t_s, in ns")
                 polls.append(data)
             elif channel.topic == "/antenna/stage":
                 stage.append(data)
@@ -71,6 +72,7 @@ def check_mcap(e):
     check(len(polls) == len(e["t_s"]), f"MCAP: {len(polls)} polls, expected {len(e['t_s'])}")
     for i, poll in enumerate(polls):
         check(poll["t_s"] == e["t_s"][i], f"MCAP: t_s of poll {i}")
+        check(poll["seq"] == e["seq"][i], f"MCAP: seq of poll {i}")
         for k, seg in enumerate(poll["segments"]):
             check(seg["address"] == e["address"][k], f"MCAP: address {i},{k}")
             check(same(seg["angle_rad"], e["angle_rad"][i][k]), f"MCAP: angle_rad {i},{k}")
@@ -85,18 +87,16 @@ def check_mcap(e):
 
 
 def check_truncated_mcap(e):
-    """A file cut by kill -9 has no footer: a streaming reader gets every flushed poll."""
+    """A file left by kill -9 (never closed) opens in the standard reader as it is, with
+    every flushed poll: no recovery code, no exception."""
     polls = []
     with open(e["truncated_mcap"], "rb") as f:
-        reader = NonSeekingReader(f, validate_crcs=True)
-        try:
-            # In file order: log-time order would hold messages back to sort them.
-            for _schema, channel, message in reader.iter_messages(log_time_order=False):
-                if channel.topic == "/antenna/segments":
-                    polls.append(json.loads(message.data))
-        except Exception as error:  # the cut record at the end
-            print(f"check_export: truncated MCAP stops with {type(error).__name__}")
-    check(len(polls) >= e["truncated_polls"],
+        reader = make_reader(f, validate_crcs=True)
+        check(reader.get_summary() is None, "an unclosed file has no summary")
+        for _schema, channel, message in reader.iter_messages():
+            if channel.topic == "/antenna/segments":
+                polls.append(json.loads(message.data))
+    check(len(polls) == e["truncated_polls"],
           f"truncated MCAP: {len(polls)} polls, {e['truncated_polls']} were flushed")
     for i, poll in enumerate(polls):
         check(poll["t_s"] == e["t_s"][i], f"truncated MCAP: t_s of poll {i}")
@@ -109,7 +109,7 @@ def check_mat(e):
     m = scipy.io.loadmat(e["mat"], mat_dtype=True)
     n, s = len(e["t_s"]), len(e["address"])
     expected_shapes = {
-        "t_s": (n, 1), "address": (1, s), "angle_rad": (n, s), "angle_counts": (n, s),
+        "t_s": (n, 1), "seq": (n, 1), "address": (1, s), "angle_rad": (n, s), "angle_counts": (n, s),
         "touch": (n, s), "ok": (n, s), "nack": (n, s), "pec_error": (n, s),
         "bus_error": (n, s), "stale": (n, s),
         "stage_t_s": (len(e["stage_t_s"]), 1), "stage_position_m": (len(e["stage_t_s"]), 1),
@@ -121,6 +121,7 @@ def check_mat(e):
         check(m[name].shape == shape, f"MAT: {name} has shape {m[name].shape}, expected {shape}")
         check(m[name].dtype == np.float64, f"MAT: {name} is {m[name].dtype}, not double")
     check(np.array_equal(m["t_s"][:, 0], np.array(e["t_s"])), "MAT: t_s")
+    check(np.array_equal(m["seq"][:, 0], np.array(e["seq"], dtype=float)), "MAT: seq")
     check(np.array_equal(m["address"][0], np.array(e["address"], dtype=float)), "MAT: address")
     angle = np.array([[np.nan if v is None else v for v in row] for row in e["angle_rad"]])
     check(np.array_equal(m["angle_rad"], angle, equal_nan=True), "MAT: angle_rad")
@@ -149,6 +150,7 @@ def check_csv(e):
     for j, row in enumerate(rows):
         i, k = j // s, j % s
         check(int(row["poll"]) == i, f"CSV row {j}: poll")
+        check(int(row["seq"]) == e["seq"][i], f"CSV row {j}: seq")
         check(float(row["t_s"]) == e["t_s"][i], f"CSV row {j}: t_s")
         check(int(row["address"]) == e["address"][k], f"CSV row {j}: address")
         a = None if row["angle_rad"] == "" else float(row["angle_rad"])

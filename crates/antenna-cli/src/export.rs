@@ -1,4 +1,4 @@
-//! `antenna export`: a trial recorded by `antennad` (MCAP, see `host_daemon::record`) to a
+//! `antenna export`: a trial recorded by `antennad` (MCAP, see `antenna_data::record`) to a
 //! MAT-file (v5 format, as `scipy.io.loadmat` and MATLAB read it) or a CSV file.
 //!
 //! # MAT-file variables
@@ -10,6 +10,7 @@
 //! | variable | size | meaning |
 //! |---|---|---|
 //! | `t_s` | N x 1 | poll times, s since the trial started |
+//! | `seq` | N x 1 | the polls' numbers on the daemon's clock (+1 per poll deadline: a gap is a skipped deadline); NaN in files written before antennad recorded it |
 //! | `address` | 1 x S | segment I2C addresses, polling order |
 //! | `angle_rad` | N x S | joint angles, rad |
 //! | `angle_counts` | N x S | raw angles, counts of 4096 per turn |
@@ -17,25 +18,28 @@
 //! | `ok`, `nack`, `pec_error`, `bus_error`, `stale` | N x S | per-sample health flags |
 //! | `stage_t_s`, `stage_position_m` | M x 1 | stage positions, m, and their times |
 //! | `servo_t_s`, `base_angle_rad` | K x 1 | base angles, rad, and their times |
-//! | `trial`, `config` | char | trial name; the configuration text |
+//! | `trial`, `config` | char | trial name; the configuration in force, without the control token (a `token = ...` line of a file written before antennad left it out is blanked here) |
 //! | `started_unix_s` | 1 x 1 | wall-clock start, Unix s |
 //! | `notes` | P x 2 cell | free-text notes: key, value |
 //! | `truncated` | char | empty, or why the file ended early (a crash) |
 //!
 //! # CSV columns
 //!
-//! Comment lines (`#`) first: `# trial: ...`, `# started_unix_s: ...`, `# notes.KEY: ...`,
-//! `# config: LINE` per configuration line, and `# truncated: ...` for a cut file. Then the
-//! header and one row per segment per poll:
-//! `poll,t_s,address,angle_counts,angle_rad,touch,ok,nack,pec_error,bus_error,stale,stage_position_m,base_angle_rad`.
-//! `poll` numbers the polls from 0; a missing sample leaves its cells empty; flags are 0/1;
+//! Comment lines (`#`) first: `# trial: ...`, `# started_unix_s: ...`, `# started_unix_ns:
+//! ...` (every poll's wall-clock time is this plus its `t_s`), `# notes.KEY: ...`, `# config:
+//! LINE` per configuration line (no token, as in the MAT-file), and `# truncated: ...` for a
+//! cut file. Then the header and one row per segment per poll:
+//! `poll,seq,t_s,address,angle_counts,angle_rad,touch,ok,nack,pec_error,bus_error,stale,stage_position_m,base_angle_rad`.
+//! `poll` numbers the polls from 0 in the file, `seq` is the daemon's poll number (empty in
+//! files written before antennad recorded it); a missing sample leaves its cells empty; flags
+//! are 0/1;
 //! `stage_position_m` and `base_angle_rad` are the latest values at or before `t_s` (empty
 //! before the first).
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use host_daemon::record::{SegmentSample, Trial};
+use antenna_data::record::{SegmentSample, Trial};
 use matrw::{CellArray, MatFile, MatVariable, MatlabType, NumericArray};
 
 /// Why a trial could not be exported.
@@ -87,6 +91,12 @@ pub fn trial_to_mat(trial: &Trial) -> Result<MatFile, ExportError> {
     let mut mat = MatFile::new();
     let t: Vec<f64> = trial.segments.iter().map(|m| m.t_s).collect();
     mat.insert("t_s", numeric(n, 1, t)?);
+    let seq: Vec<f64> = trial
+        .segments
+        .iter()
+        .map(|m| m.seq.map_or(f64::NAN, |s| s as f64))
+        .collect();
+    mat.insert("seq", numeric(n, 1, seq)?);
     let addresses = trial
         .segments
         .first()
@@ -132,7 +142,7 @@ pub fn trial_to_mat(trial: &Trial) -> Result<MatFile, ExportError> {
     );
     let metadata = trial.metadata.clone().unwrap_or_default();
     mat.insert("trial", text(&metadata.trial));
-    mat.insert("config", text(&metadata.config));
+    mat.insert("config", text(&without_token(&metadata.config)));
     mat.insert(
         "started_unix_s",
         numeric(1, 1, vec![metadata.started_unix_s])?,
@@ -162,6 +172,24 @@ pub fn write_mat(trial: &Trial, path: &Path) -> anyhow::Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: writing the MAT-file: {e:?}", path.display()))
 }
 
+/// A recorded configuration without its control token: antennad has left the token out of
+/// recordings since 0.2; a `token = ...` line of an older file is blanked here, so an export
+/// never carries it.
+pub fn without_token(config: &str) -> String {
+    config
+        .split_inclusive('\n')
+        .map(|line| {
+            let key = line.split('=').next().unwrap_or_default().trim();
+            if line.contains('=') && key.trim_matches('"') == "token" {
+                let end = if line.ends_with('\n') { "\n" } else { "" };
+                format!("token = \"<redacted>\"{end}")
+            } else {
+                line.to_owned()
+            }
+        })
+        .collect()
+}
+
 fn cell<T: std::fmt::Display>(value: Option<T>) -> String {
     value.map(|v| v.to_string()).unwrap_or_default()
 }
@@ -173,10 +201,13 @@ pub fn trial_to_csv(trial: &Trial) -> Result<String, ExportError> {
     if let Some(metadata) = &trial.metadata {
         let _ = writeln!(out, "# trial: {}", metadata.trial);
         let _ = writeln!(out, "# started_unix_s: {}", metadata.started_unix_s);
+        if let Some(ns) = metadata.started_unix_ns {
+            let _ = writeln!(out, "# started_unix_ns: {ns}");
+        }
         for (key, value) in &metadata.notes {
             let _ = writeln!(out, "# notes.{key}: {}", value.replace('\n', " "));
         }
-        for line in metadata.config.lines() {
+        for line in without_token(&metadata.config).lines() {
             let _ = writeln!(out, "# config: {line}");
         }
     }
@@ -184,7 +215,7 @@ pub fn trial_to_csv(trial: &Trial) -> Result<String, ExportError> {
         let _ = writeln!(out, "# truncated: {}", why.replace('\n', " "));
     }
     out.push_str(
-        "poll,t_s,address,angle_counts,angle_rad,touch,ok,nack,pec_error,bus_error,stale,\
+        "poll,seq,t_s,address,angle_counts,angle_rad,touch,ok,nack,pec_error,bus_error,stale,\
          stage_position_m,base_angle_rad\n",
     );
     let flag = |b: bool| if b { '1' } else { '0' };
@@ -201,7 +232,8 @@ pub fn trial_to_csv(trial: &Trial) -> Result<String, ExportError> {
         for x in &m.segments {
             let _ = writeln!(
                 out,
-                "{poll},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{poll},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                cell(m.seq),
                 m.t_s,
                 x.address,
                 cell(x.angle_counts),

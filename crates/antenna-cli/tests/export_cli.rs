@@ -5,10 +5,12 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use host_daemon::record::{TrialRecorder, synthetic_metadata, synthetic_segments};
+use antenna_data::record::{TrialRecorder, synthetic_metadata, synthetic_segments};
 
 fn dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("antenna-export-{name}-{}", std::process::id()));
+    // Trial files are never overwritten: start from an empty directory.
+    std::fs::remove_dir_all(&dir).ok();
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }

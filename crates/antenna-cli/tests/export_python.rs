@@ -1,6 +1,6 @@
 //! `antenna export` checked by Python: a synthetic trial is recorded, exported to MAT and
-//! CSV, and `tests/python/check_export.py` reads the MCAP file with the Python `mcap` reader
-//! (complete, and cut short as `kill -9` leaves it), the MAT-file with `scipy.io.loadmat` and
+//! CSV, and `tests/python/check_export.py` reads the MCAP file with the Python `mcap` reader's
+//! `make_reader` (complete, and as `kill -9` leaves it), the MAT-file with `scipy.io.loadmat` and
 //! the CSV with `csv`, comparing every value with what was recorded. Needs python3 with scipy
 //! and mcap: `scripts/setup` installs them.
 #![allow(clippy::unwrap_used)]
@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use host_daemon::record::{
+use antenna_data::record::{
     TrialRecorder, synthetic_metadata, synthetic_segments, synthetic_servo, synthetic_stage,
 };
 use serde_json::json;
@@ -60,6 +60,7 @@ fn python_reads_the_mcap_the_mat_file_and_the_csv_back_exactly() {
     require_python();
     let dir: PathBuf =
         std::env::temp_dir().join(format!("antenna-export-python-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
     std::fs::create_dir_all(&dir).unwrap();
     let polls = 1234;
     let metadata = synthetic_metadata("export-python");
@@ -93,6 +94,8 @@ fn python_reads_the_mcap_the_mat_file_and_the_csv_back_exactly() {
         "truncated_mcap": cut,
         "truncated_polls": flushed,
         "t_s": messages.iter().map(|m| m.t_s).collect::<Vec<_>>(),
+        "seq": messages.iter().map(|m| m.seq).collect::<Vec<_>>(),
+        "started_unix_ns": metadata.started_unix_ns,
         "address": messages[0].segments.iter().map(|s| s.address).collect::<Vec<_>>(),
         "angle_rad": messages.iter()
             .map(|m| m.segments.iter().map(|s| s.angle_rad).collect::<Vec<_>>())

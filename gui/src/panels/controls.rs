@@ -1,6 +1,8 @@
 //! Controls: start and stop a trial, move the stage, set the base angle, stop everything.
-//! Every button is disabled until a token is entered (and the daemon is connected): control
-//! needs the daemon's token, watching does not. The daemon's replies are listed below.
+//! **Stop everything** is always enabled (the daemon takes `stop_all` from anyone, without a
+//! token); the other buttons are disabled until a token is entered and the daemon is
+//! connected: control needs the daemon's token, watching does not. The daemon's replies are
+//! listed below.
 
 use egui::{Color32, RichText};
 
@@ -54,7 +56,12 @@ impl ControlsPanel {
         if !connected {
             ui.label(RichText::new("not connected: controls disabled").weak());
         } else if self.token.is_empty() {
-            ui.label(RichText::new("enter the daemon's token to enable control").weak());
+            ui.label(
+                RichText::new(
+                    "enter the daemon's token to enable control (Stop everything needs none)",
+                )
+                .weak(),
+            );
         }
         ui.add_enabled_ui(enabled, |ui| {
             ui.horizontal(|ui| {
@@ -96,12 +103,14 @@ impl ControlsPanel {
                 )
                 .labelled_by(label.id);
             });
-            let stop = egui::Button::new(RichText::new("Stop everything").color(Color32::WHITE))
-                .fill(Color32::from_rgb(180, 30, 30));
-            if ui.add(stop).clicked() {
-                commands.push(Command::StopAll);
-            }
         });
+        // Stopping is always allowed: enabled whatever the token and the connection (a click
+        // without a connection says so below).
+        let stop = egui::Button::new(RichText::new("Stop everything").color(Color32::WHITE))
+            .fill(Color32::from_rgb(180, 30, 30));
+        if ui.add(stop).clicked() {
+            commands.push(Command::StopAll);
+        }
         if let Some(refusal) = refusal {
             ui.label(RichText::new(refusal).color(Color32::RED));
         }

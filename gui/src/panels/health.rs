@@ -1,8 +1,8 @@
 //! Segment health: per segment its address, the latest reading's state and, live, the
 //! daemon's counters since it started (good reads, no acknowledge, PEC errors, stale polls).
 
+use antenna_data::stream::SegmentStatus;
 use egui::{Color32, RichText};
-use host_daemon::net::SegmentStatus;
 
 use crate::history::Health;
 

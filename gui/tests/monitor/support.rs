@@ -25,7 +25,7 @@ pub fn temp_dir(name: &str) -> PathBuf {
 pub fn config(dir: &std::path::Path) -> Config {
     let mut config = Config::default();
     config.server.listen = "127.0.0.1:0".to_owned();
-    config.server.token = Some(TOKEN.to_owned());
+    config.server.token = Some(host_daemon::net::ControlToken::new(TOKEN).unwrap());
     config.data_dir = dir.to_path_buf();
     config
 }

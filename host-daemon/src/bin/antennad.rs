@@ -9,7 +9,7 @@
 //! logic on a virtual I2C bus, a virtual stage carrying the antenna along a wall, and joint
 //! angles from sim-core's equilibrium solver.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Parser;
 use host_daemon::config::Config;
 use host_daemon::daemon::{Daemon, DaemonOptions};
@@ -65,17 +65,9 @@ fn main() -> ExitCode {
 }
 
 fn run(args: Args) -> Result<()> {
-    let (mut config, config_text) = match &args.config {
-        Some(path) => {
-            let config = Config::from_file(path)?;
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("reading {}", path.display()))?;
-            (config, text)
-        }
-        None => (
-            Config::default(),
-            "# the built-in default: the simulated rig\n".to_owned(),
-        ),
+    let mut config = match &args.config {
+        Some(path) => Config::from_file(path)?,
+        None => Config::default(),
     };
     if let Some(dir) = &args.data_dir {
         config.data_dir.clone_from(dir);
@@ -89,7 +81,6 @@ fn run(args: Args) -> Result<()> {
         None => None,
     };
     let options = DaemonOptions {
-        config_text,
         first_trial: (!args.idle).then(|| args.trial.clone()),
         first_trial_duration,
         exit_after_trial: args.exit_after_trial,
@@ -100,6 +91,13 @@ fn run(args: Args) -> Result<()> {
         ..DaemonOptions::default()
     };
     let daemon = Daemon::start(config, options)?;
+    if daemon.token_generated() && daemon.local_addr().is_some() {
+        // The one place a token is shown: generated for this run, printed once, at start.
+        println!(
+            "antennad: control token for this run (generated; shown only here): {}",
+            daemon.token()
+        );
+    }
     if !args.exit_after_trial {
         println!(
             "antennad: serving until interrupted (Ctrl-C); start another trial with a start_trial command"

@@ -2,7 +2,9 @@
 
 use std::sync::Mutex;
 
-use super::control::{ControlCommand, ControlHandler};
+use antenna_data::stream::ControlCommand;
+
+use super::control::ControlHandler;
 
 /// Records every command; refuses those for which `refuse` returns a reason.
 #[derive(Debug, Default)]

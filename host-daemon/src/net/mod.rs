@@ -1,43 +1,42 @@
-//! The TCP interface: a stream of samples to any number of read-only clients, and control
-//! commands guarded by a token.
+//! The TCP server of the stream and control protocol (`antenna_data::stream`,
+//! `docs/stream-protocol.md`): a stream of samples to any number of read-only clients, and
+//! control commands guarded by a token ([`ControlToken`]): failed tries slowed per address
+//! ([`auth_throttle`]), `stop_all` open to anyone connected, and room for an operator
+//! however many readers there are ([`admission`]).
 //!
-//! The wire format is newline-delimited JSON, documented with examples in
-//! `docs/stream-protocol.md`: the server sends [`StreamMessage`]s, a client may send
-//! [`ControlRequest`]s and gets a [`StreamMessage::Reply`] for each. The types here do not
-//! depend on the daemon's internals; the daemon converts its samples into
-//! [`StreamMessage::Samples`], hands them to [`StreamServer::publish`] (which never blocks on
-//! a socket) and implements [`ControlHandler`].
+//! The daemon converts its samples into [`StreamMessage::Samples`], hands them to
+//! [`StreamServer::publish`] (which never blocks on a socket) and implements
+//! [`ControlHandler`].
 //!
 //! # Example
 //!
 //! ```
 //! use std::sync::Arc;
-//! use host_daemon::net::{ControlToken, RecordingHandler, StreamMessage, StreamServer};
+//! use antenna_data::stream::StreamMessage;
+//! use host_daemon::net::{ControlToken, RecordingHandler, StreamServer};
 //!
-//! let token = ControlToken::new("s3cret").expect("non-empty");
+//! let token = ControlToken::new("s3cret-s3cret-s3cret").expect("long enough");
 //! let server = StreamServer::bind("127.0.0.1:0", token, Arc::new(RecordingHandler::new()))
 //!     .expect("bind");
 //! let queued = server.publish(&StreamMessage::Lagged { dropped: 0 });
 //! assert_eq!(queued, 0); // nobody is connected yet
 //! server.shutdown();
 //! ```
+//!
+//! [`StreamMessage::Samples`]: antenna_data::stream::StreamMessage::Samples
 
+pub mod admission;
+pub mod auth_throttle;
+mod connection;
 mod control;
 mod fake_handler;
-mod framing;
-mod message;
 mod server;
+mod server_log;
 mod token;
 
-pub use control::{
-    COMMAND_NAMES, ControlCommand, ControlHandler, ControlRequest, StageTarget, WireCommand,
-    serve_request,
-};
+pub use auth_throttle::AuthPolicy;
+pub use control::{AuthOutcome, ControlHandler, Served, serve_request};
 pub use fake_handler::RecordingHandler;
-pub use framing::{LineRead, MAX_LINE_BYTES, encode_line, read_line_capped};
-pub use message::{
-    ControlReply, ErrorCode, PROTOCOL_VERSION, RigInfo, RigWall, SegmentSample, SegmentStatus,
-    StreamMessage,
-};
 pub use server::{DEFAULT_BIND, ServerError, ServerOptions, StreamServer};
-pub use token::{ControlToken, EmptyToken};
+pub use server_log::ServerLog;
+pub use token::{ControlToken, GENERATED_TOKEN_BYTES, MIN_TOKEN_CHARS, TokenError};

@@ -1,18 +1,35 @@
 //! The TCP server: one accept thread, and per client a reader thread (control requests) and a
 //! writer thread draining a bounded queue, so that [`StreamServer::publish`] never touches a
 //! socket.
+//!
+//! # Who may connect, and who may control
+//!
+//! Watching needs nothing. Every command needs the token except `stop_all`, which anyone
+//! connected may send and which the daemon carries out ahead of any other work. Failed
+//! authentications are slowed per address and logged with it, and a connection that fails
+//! [`super::AuthPolicy::max_failures_per_connection`] times is closed
+//! ([`super::auth_throttle`]). The number of connections is capped, in all and per address;
+//! when a cap is reached, a new connection takes the place of the oldest one that never
+//! proved the token, so an operator can always connect and control however many readers
+//! there are ([`super::admission`]).
 
-use std::io::{self, BufReader, Write};
+use std::io::{self, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
+use std::sync::mpsc::{TrySendError, sync_channel};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
-use super::control::{ControlHandler, serve_request};
-use super::framing::{LineRead, MAX_LINE_BYTES, encode_line, read_line_capped};
-use super::message::{ControlReply, ErrorCode, PROTOCOL_VERSION, StreamMessage};
+use antenna_data::stream::{
+    ControlReply, ErrorCode, PROTOCOL_VERSION, RigInfo, StreamMessage, encode_line,
+};
+
+use super::admission::{Admission, Occupant, admit};
+use super::auth_throttle::{AuthPolicy, AuthThrottle};
+use super::connection::{self, Link, Outgoing, PRIORITY_CAPACITY};
+use super::control::ControlHandler;
+use super::server_log::ServerLog;
 use super::token::ControlToken;
 
 /// The address the daemon listens on unless configured otherwise: loopback only.
@@ -30,14 +47,21 @@ pub struct ServerOptions {
     /// accepted no bytes, or messages were dropped for it and its queue has not drained to
     /// half its capacity since.
     pub write_timeout: Duration,
-    /// Connections beyond this many are refused with an error line (default 32).
+    /// Connections at most (default 32); see the module documentation for who makes room.
     pub max_clients: usize,
+    /// Connections from one address at most (default 16).
+    pub max_clients_per_peer: usize,
+    /// How failed authentications are slowed.
+    pub auth: AuthPolicy,
     /// Sent in [`StreamMessage::Hello`].
     pub segment_addresses: Vec<u8>,
     /// Sent in [`StreamMessage::Hello`], e.g. `"antennad 0.1.0"`.
     pub daemon: String,
     /// Sent in [`StreamMessage::Hello`]: the rig's geometry, if known.
-    pub rig: Option<super::RigInfo>,
+    pub rig: Option<RigInfo>,
+    /// Where the server's notices go (failed authentications, `stop_all`, connections
+    /// dropped or refused), each naming the peer's address.
+    pub log: ServerLog,
 }
 
 impl Default for ServerOptions {
@@ -46,9 +70,12 @@ impl Default for ServerOptions {
             queue_capacity: 1024,
             write_timeout: Duration::from_secs(5),
             max_clients: 32,
+            max_clients_per_peer: 16,
+            auth: AuthPolicy::default(),
             segment_addresses: Vec::new(),
             daemon: format!("antennad {}", env!("CARGO_PKG_VERSION")),
             rig: None,
+            log: ServerLog::default(),
         }
     }
 }
@@ -72,23 +99,16 @@ pub enum ServerError {
     Options(&'static str),
 }
 
-/// What a client's writer sends.
-enum Outgoing {
-    /// One encoded line, shared by every client it goes to.
-    Line(Arc<[u8]>),
-    /// Flush and close the connection.
-    Close,
-}
-
 struct Client {
-    sender: SyncSender<Outgoing>,
+    /// Smaller is older.
+    id: u64,
+    link: Link,
     stream: TcpStream,
+    connected_at: Instant,
     /// Messages dropped since the last one queued for this client.
     dropped: u64,
     /// When a message was first dropped, if the queue has not drained to half since.
     lagging_since: Option<Instant>,
-    /// Lines queued and not yet written (shared with the writer and reader threads).
-    pending: Arc<AtomicUsize>,
     /// Set once the server has shut this connection down; it is reaped soon after.
     disconnected: bool,
     writer: JoinHandle<()>,
@@ -115,7 +135,8 @@ impl Shared {
 /// the count reaches the client as a [`StreamMessage::Lagged`] line just before the next message
 /// it does get. A client that stays behind for [`ServerOptions::write_timeout`] (its socket
 /// accepts no bytes, or it keeps losing messages without its queue draining to half) is
-/// disconnected. Control replies are never dropped.
+/// disconnected. Control replies are never dropped, and go out ahead of the stream lines
+/// queued before them.
 pub struct StreamServer {
     local_addr: SocketAddr,
     write_timeout: Duration,
@@ -163,8 +184,15 @@ impl StreamServer {
         if options.write_timeout.is_zero() {
             return Err(ServerError::Options("write_timeout must be positive"));
         }
-        if options.max_clients == 0 {
-            return Err(ServerError::Options("max_clients must be at least 1"));
+        if options.max_clients == 0 || options.max_clients_per_peer == 0 {
+            return Err(ServerError::Options(
+                "max_clients and max_clients_per_peer must be at least 1",
+            ));
+        }
+        if options.auth.max_failures_per_connection == 0 {
+            return Err(ServerError::Options(
+                "auth.max_failures_per_connection must be at least 1",
+            ));
         }
         let bind_err = |source| ServerError::Bind {
             addr: format!("{addr:?}"),
@@ -182,8 +210,12 @@ impl StreamServer {
         let accept = {
             let shared = Arc::clone(&shared);
             let ctx = ClientContext {
-                token: Arc::new(token),
-                handler,
+                connection: Arc::new(connection::Shared {
+                    token: Arc::new(token),
+                    handler,
+                    throttle: Arc::new(AuthThrottle::new(options.auth)),
+                    log: options.log.clone(),
+                }),
                 options: Arc::new(options),
             };
             thread::Builder::new()
@@ -246,8 +278,8 @@ impl StreamServer {
     /// Queues one line without blocking; a lagging client counts as caught up once its queue
     /// has drained to half its capacity.
     fn try_queue(&self, client: &mut Client, line: Arc<[u8]>) -> Result<(), TrySendError<()>> {
-        let before = client.pending.fetch_add(1, Ordering::SeqCst);
-        match client.sender.try_send(Outgoing::Line(line)) {
+        let before = client.link.pending.fetch_add(1, Ordering::SeqCst);
+        match client.link.sender.try_send(Outgoing::Line(line)) {
             Ok(()) => {
                 if before <= self.queue_capacity / 2 {
                     client.lagging_since = None;
@@ -255,7 +287,7 @@ impl StreamServer {
                 Ok(())
             }
             Err(e) => {
-                client.pending.fetch_sub(1, Ordering::SeqCst);
+                client.link.pending.fetch_sub(1, Ordering::SeqCst);
                 Err(match e {
                     TrySendError::Full(_) => TrySendError::Full(()),
                     TrySendError::Disconnected(_) => TrySendError::Disconnected(()),
@@ -280,6 +312,15 @@ impl StreamServer {
         self.shared.clients().len()
     }
 
+    /// How many connected clients have proved the token.
+    pub fn operator_count(&self) -> usize {
+        self.shared
+            .clients()
+            .iter()
+            .filter(|c| !c.disconnected && c.link.authenticated.load(Ordering::SeqCst))
+            .count()
+    }
+
     /// Stops accepting, disconnects every client and joins all the server's threads.
     pub fn shutdown(mut self) {
         self.stop_and_join();
@@ -301,22 +342,20 @@ impl Drop for StreamServer {
 }
 
 struct ClientContext {
-    token: Arc<ControlToken>,
-    handler: Arc<dyn ControlHandler>,
+    connection: Arc<connection::Shared>,
     options: Arc<ServerOptions>,
 }
 
 fn accept_loop(listener: &TcpListener, shared: &Shared, ctx: &ClientContext) {
     let mut finishing: Vec<JoinHandle<()>> = Vec::new();
+    let mut next_id = 0u64;
     while !shared.stop.load(Ordering::SeqCst) {
         match listener.accept() {
-            Ok((stream, _peer)) => {
-                let full = shared.clients().len() >= ctx.options.max_clients;
-                if full {
-                    refuse(stream, ctx.options.max_clients);
-                } else if let Ok(client) = start_client(stream, ctx) {
-                    shared.clients().push(client);
-                }
+            Ok((stream, peer)) => {
+                next_id += 1;
+                admit_client(stream, peer, next_id, shared, ctx);
+                // Under a flood of connections too, dropped ones leave the list.
+                reap(shared, &mut finishing);
                 continue; // look for more pending connections right away
             }
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
@@ -328,12 +367,86 @@ fn accept_loop(listener: &TcpListener, shared: &Shared, ctx: &ClientContext) {
     let clients = std::mem::take(&mut *shared.clients());
     for client in clients {
         let _ = client.stream.shutdown(Shutdown::Both);
-        drop(client.sender);
+        drop(client.link);
         finishing.push(client.writer);
         finishing.push(client.reader);
     }
     for handle in finishing {
         let _ = handle.join();
+    }
+}
+
+/// Lets a new connection in, dropping another for it if a cap is reached, or refuses it.
+fn admit_client(
+    stream: TcpStream,
+    peer: SocketAddr,
+    id: u64,
+    shared: &Shared,
+    ctx: &ClientContext,
+) {
+    let log = &ctx.connection.log;
+    let mut clients = shared.clients();
+    let occupants: Vec<Occupant> = clients
+        .iter()
+        .filter(|c| !c.disconnected)
+        .map(|c| Occupant {
+            id: c.id,
+            ip: c.link.peer.ip(),
+            authenticated: c.link.authenticated.load(Ordering::SeqCst),
+        })
+        .collect();
+    let options = &ctx.options;
+    match admit(
+        &occupants,
+        peer.ip(),
+        options.max_clients,
+        options.max_clients_per_peer,
+    ) {
+        Admission::Admit => {}
+        Admission::Evict(victim) => {
+            if let Some(client) = clients.iter_mut().find(|c| c.id == victim) {
+                log.notice(format!(
+                    "dropped {} (connected {:.1} s, no token proved) to make room for {peer}",
+                    client.link.peer,
+                    client.connected_at.elapsed().as_secs_f64()
+                ));
+                evict(client, peer);
+            }
+        }
+        Admission::Refuse(why) => {
+            drop(clients);
+            log.notice(format!("refused {peer}: {why}"));
+            refuse(stream, &why);
+            return;
+        }
+    }
+    // Threads are started without the list locked (publish never waits for a spawn); only
+    // this thread adds clients, so the admission stands.
+    drop(clients);
+    match start_client(stream, peer, id, ctx) {
+        Ok(client) => shared.clients().push(client),
+        Err(e) => log.notice(format!("could not serve {peer}: {e}")),
+    }
+}
+
+/// Tells a client why it is dropped and closes its connection.
+fn evict(client: &mut Client, for_peer: SocketAddr) {
+    client.link.evicted.store(true, Ordering::SeqCst);
+    client.disconnected = true;
+    let reply = StreamMessage::Reply(ControlReply::error(
+        None,
+        ErrorCode::Evicted,
+        format!(
+            "the server is full: this connection, the oldest that never proved the token, \
+             makes room for {for_peer}; closing"
+        ),
+    ));
+    let queued = encode_line(&reply).is_ok_and(|line| {
+        client.link.priority.try_send(line.into()).is_ok()
+            && client.link.sender.try_send(Outgoing::CloseNow).is_ok()
+    });
+    if !queued {
+        let _ = client.stream.shutdown(Shutdown::Both);
     }
 }
 
@@ -362,11 +475,11 @@ fn reap(shared: &Shared, finishing: &mut Vec<JoinHandle<()>>) {
     }
 }
 
-fn refuse(mut stream: TcpStream, max_clients: usize) {
+fn refuse(mut stream: TcpStream, why: &str) {
     let reply = StreamMessage::Reply(ControlReply::error(
         None,
         ErrorCode::TooManyClients,
-        format!("the server already has {max_clients} clients"),
+        format!("{why}; closing"),
     ));
     let _ = stream.set_nonblocking(true);
     if let Ok(line) = encode_line(&reply) {
@@ -375,11 +488,17 @@ fn refuse(mut stream: TcpStream, max_clients: usize) {
     let _ = stream.shutdown(Shutdown::Both);
 }
 
-fn start_client(stream: TcpStream, ctx: &ClientContext) -> io::Result<Client> {
+fn start_client(
+    stream: TcpStream,
+    peer: SocketAddr,
+    id: u64,
+    ctx: &ClientContext,
+) -> io::Result<Client> {
     stream.set_nonblocking(false)?;
     stream.set_nodelay(true)?;
     stream.set_write_timeout(Some(ctx.options.write_timeout))?;
     let (sender, receiver) = sync_channel(ctx.options.queue_capacity);
+    let (priority, priority_receiver) = sync_channel(PRIORITY_CAPACITY);
     let pending = Arc::new(AtomicUsize::new(0));
     let hello = StreamMessage::Hello {
         protocol_version: PROTOCOL_VERSION,
@@ -393,131 +512,46 @@ fn start_client(stream: TcpStream, ctx: &ClientContext) -> io::Result<Client> {
         pending.fetch_add(1, Ordering::SeqCst);
         let _ = sender.try_send(Outgoing::Line(line.into()));
     }
+    let link = Link {
+        peer,
+        sender,
+        priority,
+        pending: Arc::clone(&pending),
+        authenticated: Arc::new(AtomicBool::new(false)),
+        evicted: Arc::new(AtomicBool::new(false)),
+    };
     let write_half = stream.try_clone()?;
     let read_half = stream.try_clone()?;
-    let writer = {
-        let pending = Arc::clone(&pending);
-        thread::Builder::new()
-            .name("net-writer".into())
-            .spawn(move || writer_loop(write_half, &receiver, &pending))?
-    };
+    let writer = thread::Builder::new()
+        .name("net-writer".into())
+        .spawn(move || {
+            connection::writer_loop(write_half, &receiver, &priority_receiver, &pending)
+        })?;
     let reader = {
-        let sender = sender.clone();
-        let token = Arc::clone(&ctx.token);
-        let handler = Arc::clone(&ctx.handler);
-        let pending = Arc::clone(&pending);
+        let reader_link = link.clone();
+        let shared = Arc::clone(&ctx.connection);
         thread::Builder::new()
             .name("net-reader".into())
-            .spawn(move || reader_loop(read_half, &sender, &pending, &token, handler.as_ref()))
+            .spawn(move || connection::reader_loop(read_half, &reader_link, &shared))
     };
     let reader = match reader {
         Ok(r) => r,
         Err(e) => {
             let _ = stream.shutdown(Shutdown::Both);
-            drop(sender);
+            drop(link);
             let _ = writer.join();
             return Err(e);
         }
     };
     Ok(Client {
-        sender,
+        id,
+        link,
         stream,
+        connected_at: Instant::now(),
         dropped: 0,
         lagging_since: None,
-        pending,
         disconnected: false,
         writer,
         reader,
     })
 }
-
-/// Writes queued lines until the queue is closed, a write fails or times out (then the whole
-/// connection is shut down, which also ends the reader), or `Close` (then only the sending
-/// side is closed, after everything queued before it).
-fn writer_loop(mut stream: TcpStream, receiver: &Receiver<Outgoing>, pending: &AtomicUsize) {
-    while let Ok(item) = receiver.recv() {
-        match item {
-            Outgoing::Line(line) => {
-                if stream.write_all(&line).is_err() {
-                    break;
-                }
-                pending.fetch_sub(1, Ordering::SeqCst);
-            }
-            Outgoing::Close => {
-                let _ = stream.flush();
-                let _ = stream.shutdown(Shutdown::Write);
-                return;
-            }
-        }
-    }
-    let _ = stream.shutdown(Shutdown::Both);
-}
-
-/// Reads request lines and queues their replies (blocking only this client when its queue is
-/// full). Ends at end of input, on a read error, or after an over-long line.
-fn reader_loop(
-    stream: TcpStream,
-    sender: &SyncSender<Outgoing>,
-    pending: &AtomicUsize,
-    token: &ControlToken,
-    handler: &dyn ControlHandler,
-) {
-    let mut reader = BufReader::new(stream);
-    loop {
-        let reply = match read_line_capped(&mut reader, MAX_LINE_BYTES) {
-            Ok(LineRead::Line(line)) if line.iter().all(u8::is_ascii_whitespace) => continue,
-            Ok(LineRead::Line(line)) => serve_request(&line, token, handler),
-            Ok(LineRead::TooLong) => {
-                let reply = ControlReply::error(
-                    None,
-                    ErrorCode::LineTooLong,
-                    format!("lines are limited to {MAX_LINE_BYTES} bytes; closing"),
-                );
-                let _ = send_reply(sender, pending, reply);
-                let _ = sender.send(Outgoing::Close);
-                drain_before_close(reader.get_mut());
-                return;
-            }
-            // End of input: a read-only client may close its sending side and keep reading.
-            Ok(LineRead::Eof) | Err(_) => return,
-        };
-        if send_reply(sender, pending, reply).is_err() {
-            return;
-        }
-    }
-}
-
-fn send_reply(
-    sender: &SyncSender<Outgoing>,
-    pending: &AtomicUsize,
-    reply: ControlReply,
-) -> Result<(), ()> {
-    let line = encode_line(&StreamMessage::Reply(reply)).map_err(|_| ())?;
-    pending.fetch_add(1, Ordering::SeqCst);
-    sender.send(Outgoing::Line(line.into())).map_err(|_| {
-        pending.fetch_sub(1, Ordering::SeqCst);
-    })
-}
-
-/// Reads and discards what the client is still sending (at most [`DRAIN_BYTES`], waiting at
-/// most [`DRAIN_WAIT`] per read), so that closing the socket does not reset the connection and
-/// destroy the error reply before the client has read it.
-fn drain_before_close(stream: &mut TcpStream) {
-    use std::io::Read;
-    if stream.set_read_timeout(Some(DRAIN_WAIT)).is_err() {
-        return;
-    }
-    let mut scratch = [0u8; 8192];
-    let mut total = 0;
-    while total < DRAIN_BYTES {
-        match stream.read(&mut scratch) {
-            Ok(0) | Err(_) => return,
-            Ok(n) => total += n,
-        }
-    }
-}
-
-/// See [`drain_before_close`].
-const DRAIN_BYTES: usize = 1 << 20;
-/// See [`drain_before_close`].
-const DRAIN_WAIT: Duration = Duration::from_millis(500);

@@ -1,39 +1,93 @@
-//! The control token and its constant-time comparison.
+//! The control token: at least [`MIN_TOKEN_CHARS`] characters, generated from the operating
+//! system's random source when none is configured, compared in constant time, never shown
+//! by `Debug`.
 
 use std::fmt;
 
-/// The secret a client must send with every control command. Its `Debug` output is redacted.
+/// The shortest token accepted, in characters.
+pub const MIN_TOKEN_CHARS: usize = 16;
+
+/// Random bytes in a generated token (128 bits), written as 32 hexadecimal digits.
+pub const GENERATED_TOKEN_BYTES: usize = 16;
+
+/// The secret a client must send with every control command but `stop_all`. Its `Debug`
+/// output is redacted and it has no `Display`: it is shown only where asked for by
+/// [`ControlToken::expose`].
 #[derive(Clone, PartialEq, Eq)]
 pub struct ControlToken(String);
 
-/// The token was empty.
+/// Why a token was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("the control token must not be empty")]
-pub struct EmptyToken;
+pub enum TokenError {
+    /// Too short to resist guessing.
+    #[error(
+        "a control token needs at least {MIN_TOKEN_CHARS} characters, this one has {chars} \
+         (leave it out and antennad generates one; or use 32 random hexadecimal digits, e.g. \
+         `openssl rand -hex 16`)"
+    )]
+    TooShort {
+        /// Its length in characters.
+        chars: usize,
+    },
+    /// Leading or trailing white space or control characters, which clients lose or mangle.
+    #[error("a control token must not hold control characters or start or end with white space")]
+    BadCharacters,
+    /// The operating system's random source failed.
+    #[error("the operating system's random source failed: {0}")]
+    Random(String),
+}
 
 impl ControlToken {
-    /// Wraps a non-empty secret.
+    /// Wraps a secret of at least [`MIN_TOKEN_CHARS`] characters.
     ///
     /// # Errors
-    /// [`EmptyToken`] for an empty string (an empty token would let anyone control the rig).
-    pub fn new(secret: impl Into<String>) -> Result<Self, EmptyToken> {
+    /// [`TokenError::TooShort`], [`TokenError::BadCharacters`].
+    pub fn new(secret: impl Into<String>) -> Result<Self, TokenError> {
         let secret = secret.into();
-        if secret.is_empty() {
-            Err(EmptyToken)
-        } else {
-            Ok(Self(secret))
+        let chars = secret.chars().count();
+        if chars < MIN_TOKEN_CHARS {
+            return Err(TokenError::TooShort { chars });
         }
+        if secret.trim() != secret || secret.chars().any(char::is_control) {
+            return Err(TokenError::BadCharacters);
+        }
+        Ok(Self(secret))
+    }
+
+    /// A new token of [`GENERATED_TOKEN_BYTES`] bytes from the operating system's random
+    /// source (`getrandom`), as hexadecimal digits.
+    ///
+    /// # Errors
+    /// [`TokenError::Random`] if the random source fails.
+    pub fn generate() -> Result<Self, TokenError> {
+        let mut bytes = [0u8; GENERATED_TOKEN_BYTES];
+        getrandom::fill(&mut bytes).map_err(|e| TokenError::Random(e.to_string()))?;
+        let hex = bytes.iter().map(|b| format!("{b:02x}")).collect::<String>();
+        Self::new(hex)
     }
 
     /// Whether `candidate` is this token, in time that depends only on the lengths.
     pub fn matches(&self, candidate: &str) -> bool {
         constant_time_eq(self.0.as_bytes(), candidate.as_bytes())
     }
+
+    /// The secret itself: for the one place that must show it (`antennad` printing a
+    /// generated token once at start, a client sending it).
+    pub fn expose(&self) -> &str {
+        &self.0
+    }
 }
 
 impl fmt::Debug for ControlToken {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str("ControlToken(<redacted>)")
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for ControlToken {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let secret = String::deserialize(deserializer)?;
+        Self::new(secret).map_err(serde::de::Error::custom)
     }
 }
 
@@ -56,13 +110,46 @@ mod tests {
 
     #[test]
     fn compares_exactly() {
-        let t = ControlToken::new("s3cret").unwrap();
-        assert!(t.matches("s3cret"));
-        assert!(!t.matches("s3cre"));
-        assert!(!t.matches("s3cret "));
+        let t = ControlToken::new("s3cret-s3cret-s3").unwrap();
+        assert!(t.matches("s3cret-s3cret-s3"));
+        assert!(!t.matches("s3cret-s3cret-s"));
+        assert!(!t.matches("s3cret-s3cret-s3 "));
         assert!(!t.matches(""));
-        assert!(!t.matches("S3cret"));
-        assert_eq!(ControlToken::new(""), Err(EmptyToken));
+        assert!(!t.matches("S3cret-s3cret-s3"));
         assert!(!format!("{t:?}").contains("s3cret"));
+    }
+
+    #[test]
+    fn short_and_odd_tokens_are_refused() {
+        assert_eq!(
+            ControlToken::new(""),
+            Err(TokenError::TooShort { chars: 0 })
+        );
+        assert_eq!(
+            ControlToken::new("a"),
+            Err(TokenError::TooShort { chars: 1 })
+        );
+        assert_eq!(
+            ControlToken::new("fifteen-chars-x"),
+            Err(TokenError::TooShort { chars: 15 })
+        );
+        assert!(ControlToken::new("sixteen-chars-xy").is_ok());
+        assert_eq!(
+            ControlToken::new(" sixteen-chars-xy"),
+            Err(TokenError::BadCharacters)
+        );
+        assert_eq!(
+            ControlToken::new("sixteen\nchars-xyz"),
+            Err(TokenError::BadCharacters)
+        );
+    }
+
+    #[test]
+    fn generated_tokens_are_128_random_bits() {
+        let a = ControlToken::generate().unwrap();
+        let b = ControlToken::generate().unwrap();
+        assert_eq!(a.expose().len(), 2 * GENERATED_TOKEN_BYTES);
+        assert!(a.expose().chars().all(|c| c.is_ascii_hexdigit()));
+        assert_ne!(a, b);
     }
 }

@@ -5,10 +5,11 @@ use std::io::{BufRead, BufReader, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::time::{Duration, Instant};
 
-use host_daemon::net::{ControlReply, SegmentSample, StreamMessage, StreamServer};
+use antenna_data::stream::{ControlReply, SegmentSample, StreamMessage};
+use host_daemon::net::StreamServer;
 
 /// The control token every test server uses.
-pub const TOKEN: &str = "test-token-0123";
+pub const TOKEN: &str = "test-token-0123456789";
 
 /// How long any single read may wait before the test fails.
 pub const READ_TIMEOUT: Duration = Duration::from_secs(10);

@@ -519,7 +519,7 @@ fn run_identify(args: &IdentifyArgs) -> Result<(), Failure> {
 
 fn run_export(args: &ExportArgs) -> Result<(), Failure> {
     let path = &args.trial;
-    let trial = host_daemon::record::TrialReader::read(path)
+    let trial = antenna_data::record::TrialReader::read(path)
         .map_err(|e| anyhow!("cannot export the trial: {e}"))?;
     if let Some(why) = &trial.truncated {
         eprintln!(

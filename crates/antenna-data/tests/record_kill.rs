@@ -6,7 +6,7 @@
 use std::io::{BufRead as _, BufReader};
 use std::process::{Command, Stdio};
 
-use host_daemon::record::{
+use antenna_data::record::{
     TrialReader, synthetic_metadata, synthetic_segments, synthetic_servo, synthetic_stage,
 };
 

@@ -16,22 +16,32 @@
 //! gone, no stage (servo) samples are recorded, and `/trial/log` says when it vanished and
 //! came back.
 //!
-//! `t_s` is monotonic time since the trial started, on one clock for all topics; each
-//! message's MCAP log time is the same instant in nanoseconds.
+//! `t_s` is monotonic time since the trial started, on one clock for all topics. Each
+//! message's MCAP log time (and publish time) is that instant in Unix-epoch nanoseconds:
+//! [`TrialMetadata::started_unix_ns`] plus `t_s`, so a trial lines up with video and other
+//! logs.
+//!
+//! # Size
+//!
+//! Messages go into zstd-compressed chunks ([`ChunkCompression`], MCAP's own compression that
+//! every reader undoes), one per flush: the default trial's JSON shrinks about 25 times
+//! (BENCHMARKS.md, "Recordings").
 //!
 //! # Crash safety
 //!
 //! [`TrialRecorder`] closes its chunk and flushes the file at least every 100 ms of trial
-//! time ([`FLUSH_INTERVAL_S`]). A chunk becomes readable only once it is closed, so a process
-//! killed with `kill -9` leaves a file whose chunks up to the last flush are complete and
-//! whose tail is a partial record with no footer. [`TrialReader`] reads such a file linearly
-//! and returns every message up to the last flush (chunk CRCs checked) and says where it
-//! stopped ([`Trial::truncated`]).
+//! time ([`FLUSH_INTERVAL_S`]), and each flush leaves the file a complete MCAP file (without
+//! a summary: [`sealed_file`]), so a process killed with `kill -9` leaves a file that
+//! standard readers (Python's `mcap`, the Rust `mcap` crate, Foxglove) open as it is, with
+//! every message up to the last flush. The file is synced to the disk every
+//! [`RecorderOptions::sync_interval_s`] (1 s by default) and at the end. [`TrialReader`]
+//! also reads older files cut inside a chunk, up to their last whole record (chunk CRCs
+//! checked), and says where and why a file stopped ([`Trial::truncated`]).
 //!
 //! # Example
 //!
 //! ```
-//! use host_daemon::record::{TrialReader, TrialRecorder, synthetic_metadata, synthetic_segments};
+//! use antenna_data::record::{TrialReader, TrialRecorder, synthetic_metadata, synthetic_segments};
 //!
 //! let path = std::env::temp_dir().join(format!("doc-record-{}.mcap", std::process::id()));
 //! let mut recorder = TrialRecorder::create(&path, &synthetic_metadata("doc"))?;
@@ -43,13 +53,14 @@
 //! assert_eq!(trial.segments.len(), 250);
 //! assert!(trial.truncated.is_none());
 //! # std::fs::remove_file(&path).ok();
-//! # Ok::<(), host_daemon::record::RecordError>(())
+//! # Ok::<(), antenna_data::record::RecordError>(())
 //! ```
 
 mod error;
 mod messages;
 mod reader;
 pub mod schema;
+pub mod sealed_file;
 mod synthetic;
 mod writer;
 
@@ -62,4 +73,6 @@ pub use synthetic::{
     SYNTHETIC_POLL_PERIOD_S, synthetic_metadata, synthetic_segments, synthetic_servo,
     synthetic_stage,
 };
-pub use writer::{FLUSH_INTERVAL_S, RecordCounts, TrialRecorder};
+pub use writer::{
+    ChunkCompression, FLUSH_INTERVAL_S, RecordCounts, RecorderOptions, TrialRecorder,
+};

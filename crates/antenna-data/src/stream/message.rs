@@ -162,18 +162,25 @@ pub struct ControlReply {
 pub enum ErrorCode {
     /// The line was not UTF-8 JSON, or not a JSON object.
     BadJson,
-    /// The line exceeded [`crate::net::MAX_LINE_BYTES`]; the connection is then closed.
+    /// The line exceeded [`super::MAX_LINE_BYTES`]; the connection is then closed.
     LineTooLong,
     /// `cmd` was missing or not one of the known commands.
     UnknownCommand,
     /// The command's fields were missing, misspelt or out of range.
     BadRequest,
-    /// `token` was missing or wrong; nothing was done.
+    /// `token` was missing or wrong; nothing was done. The reply comes after a delay that
+    /// grows with the failures from the same address.
     BadToken,
     /// The daemon refused or failed to carry out a valid command.
     Rejected,
-    /// The server already has its maximum number of clients; the connection is then closed.
+    /// The server already has its maximum number of clients (or this address its maximum of
+    /// connections) and none can be dropped for this one; the connection is then closed.
     TooManyClients,
+    /// The connection made too many failed authentications; it is then closed.
+    TooManyFailures,
+    /// The server was full and dropped this connection, the oldest one that never proved the
+    /// token, to make room for a new client; it is then closed.
+    Evicted,
 }
 
 impl ControlReply {
@@ -217,7 +224,7 @@ mod tests {
     /// older daemons send it, read as `None`) and with it.
     #[test]
     fn documented_hello_lines_with_and_without_rig() {
-        let doc = include_str!("../../../docs/stream-protocol.md");
+        let doc = include_str!("../../../../docs/stream-protocol.md");
         let lines: Vec<&str> = doc
             .lines()
             .filter(|l| l.starts_with(r#"{"type":"hello""#))
@@ -245,7 +252,7 @@ mod tests {
     /// that did not send `stale` or `touch_bits` still reads, as not stale and without bits.
     #[test]
     fn documented_samples_line_and_stale_compatibility() {
-        let doc = include_str!("../../../docs/stream-protocol.md");
+        let doc = include_str!("../../../../docs/stream-protocol.md");
         let line = doc
             .lines()
             .find(|l| l.starts_with(r#"{"type":"samples""#))

@@ -68,7 +68,9 @@ pub fn synthetic_metadata(name: &str) -> TrialMetadata {
     TrialMetadata {
         trial: name.to_string(),
         started_unix_s: 1_795_000_000.25,
+        started_unix_ns: Some(1_795_000_000_250_000_000),
         config: "[bus]\nkind = \"sim\"\n# synthetic\n".to_string(),
         notes,
+        rig: None,
     }
 }

@@ -29,7 +29,8 @@ pub struct Trial {
     pub truncated: Option<String>,
 }
 
-/// Reads trial files written by [`super::TrialRecorder`].
+/// Reads trial files written by [`super::TrialRecorder`]: closed ones, ones that were not
+/// closed (ending at their last flush), and older ones cut inside a chunk.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct TrialReader;
 
@@ -99,12 +100,21 @@ impl TrialReader {
                 _ => {}
             }
         }
-        if trial.truncated.is_none() && !(bytes.len() >= 2 * MAGIC.len() && bytes.ends_with(MAGIC))
-        {
-            trial.truncated = Some(format!(
-                "the file ends after {} bytes without its footer",
-                bytes.len()
-            ));
+        if trial.truncated.is_none() {
+            if !(bytes.len() >= 2 * MAGIC.len() && bytes.ends_with(MAGIC)) {
+                trial.truncated = Some(format!(
+                    "the file ends after {} bytes without its footer",
+                    bytes.len()
+                ));
+            } else if mcap::read::footer(bytes).is_ok_and(|f| f.summary_start == 0) {
+                // The recorder seals the file after every flush with a footer without a
+                // summary; a closed file has its summary.
+                trial.truncated = Some(
+                    "the recording was not closed (the recorder was killed or the disk cut it \
+                     short): it ends at its last flush"
+                        .to_owned(),
+                );
+            }
         }
         Ok(trial)
     }

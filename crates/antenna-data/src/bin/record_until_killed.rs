@@ -1,5 +1,5 @@
 //! Test helper (not part of the daemon): records the synthetic trial of
-//! `host_daemon::record` to the MCAP file given as the only argument, forever, at about
+//! `antenna_data::record` to the MCAP file given as the only argument, forever, at about
 //! 1 kHz of wall time with the recorder's own 100 ms flushes, and prints `flushed N` (N
 //! segment polls that are durable) after every flush. `tests/record_kill.rs` kills it with
 //! SIGKILL and reads the file back.
@@ -7,15 +7,14 @@
 use std::io::Write as _;
 use std::time::Duration;
 
-use anyhow::Context as _;
-use host_daemon::record::{
+use antenna_data::record::{
     TrialRecorder, synthetic_metadata, synthetic_segments, synthetic_servo, synthetic_stage,
 };
 
-fn main() -> anyhow::Result<()> {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args_os()
         .nth(1)
-        .context("usage: record-until-killed FILE.mcap")?;
+        .ok_or("usage: record-until-killed FILE.mcap")?;
     let mut recorder = TrialRecorder::create(&path, &synthetic_metadata("killed"))?;
     let stdout = std::io::stdout();
     let mut last_flushed = 0;

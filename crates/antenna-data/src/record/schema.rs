@@ -103,11 +103,19 @@ pub fn metadata_schema() -> Value {
         "properties": {
             "trial": { "type": "string" },
             "started_unix_s": { "type": "number", "description": "wall-clock start, Unix s" },
+            "started_unix_ns": {
+                "type": "integer",
+                "description": "the same, Unix ns: each message's log time is this plus its t_s"
+            },
             "config": { "type": "string", "description": "the configuration, TOML text" },
             "notes": {
                 "type": "object",
                 "additionalProperties": { "type": "string" },
                 "description": "free-text notes such as wall and hairs"
+            },
+            "rig": {
+                "type": "object",
+                "description": "the rig's geometry, as the stream's hello carries it"
             }
         },
         "required": ["trial", "started_unix_s", "config", "notes"]

@@ -3,10 +3,9 @@
 
 use std::collections::BTreeMap;
 
-use antenna_protocol::Calibration;
 use serde::{Deserialize, Serialize};
 
-use crate::{PollError, SegmentReading};
+use crate::stream::RigInfo;
 
 /// One segment's part of one poll (`/antenna/segments`).
 ///
@@ -33,36 +32,6 @@ pub struct SegmentSample {
     /// The sample is valid but its sequence did not advance since the last poll (a stuck
     /// segment), as judged by the acquisition.
     pub stale: bool,
-}
-
-impl SegmentSample {
-    /// The sample of one poll reading, its angle from `calibration`; `stale` as the
-    /// acquisition judged it.
-    pub fn from_reading(reading: &SegmentReading, calibration: Calibration, stale: bool) -> Self {
-        let mut sample = Self {
-            address: reading.address,
-            angle_counts: None,
-            angle_rad: None,
-            touch: None,
-            ok: false,
-            nack: false,
-            pec_error: false,
-            bus_error: false,
-            stale,
-        };
-        match &reading.result {
-            Ok(word) => {
-                sample.ok = true;
-                sample.angle_counts = Some(word.angle_counts());
-                sample.angle_rad = Some(calibration.angle_rad(word.angle_counts()));
-                sample.touch = Some(word.touch().bits());
-            }
-            Err(PollError::Nack { .. }) => sample.nack = true,
-            Err(PollError::Corrupted { .. }) => sample.pec_error = true,
-            Err(PollError::Bus { .. }) => sample.bus_error = true,
-        }
-        sample
-    }
 }
 
 /// One poll of every segment (`/antenna/segments`).
@@ -114,13 +83,31 @@ pub struct TrialMetadata {
     pub trial: String,
     /// Wall-clock start, seconds since the Unix epoch (UTC).
     pub started_unix_s: f64,
+    /// The same instant exactly, nanoseconds since the Unix epoch: every message's MCAP log
+    /// time is this plus its `t_s` (absent in files written before it was added).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub started_unix_ns: Option<u64>,
     /// The daemon configuration in force, as free text (TOML).
     pub config: String,
     /// Free-text notes such as `wall` and `hairs`, sorted by key.
     pub notes: BTreeMap<String, String>,
+    /// The rig's geometry as the stream's `hello` describes it (the antenna, the wall, the
+    /// stage's soft limits), so a reader can draw the chain without the daemon's
+    /// configuration format; `None` in files written before it was added.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig: Option<RigInfo>,
 }
 
 impl TrialMetadata {
+    /// Unix-epoch nanoseconds of the trial's start: [`Self::started_unix_ns`], else
+    /// [`Self::started_unix_s`] rounded; `None` for a start that is not a Unix time.
+    pub fn start_unix_ns(&self) -> Option<u64> {
+        self.started_unix_ns.or_else(|| {
+            let ns = (self.started_unix_s * 1e9).round();
+            (ns.is_finite() && ns >= 0.0 && ns < u64::MAX as f64).then_some(ns as u64)
+        })
+    }
+
     /// The metadata as MCAP Metadata key/value strings.
     pub fn to_key_values(&self) -> BTreeMap<String, String> {
         let mut map = BTreeMap::new();
@@ -129,9 +116,17 @@ impl TrialMetadata {
             "started_unix_s".to_string(),
             format!("{}", self.started_unix_s),
         );
+        if let Some(ns) = self.started_unix_ns {
+            map.insert("started_unix_ns".to_string(), ns.to_string());
+        }
         map.insert("config".to_string(), self.config.clone());
         for (k, v) in &self.notes {
             map.insert(format!("notes.{k}"), v.clone());
+        }
+        if let Some(rig) = &self.rig
+            && let Ok(json) = serde_json::to_string(rig)
+        {
+            map.insert("rig".to_string(), json);
         }
         map
     }

@@ -31,13 +31,19 @@ pub enum RecordError {
         /// What serde_json said.
         source: serde_json::Error,
     },
-    /// A time stamp was negative or not finite.
+    /// A time stamp was negative or not finite (or a start time not a Unix time).
     #[error("{path}: time {t_s} s is not a finite time since the trial started")]
     BadTime {
         /// The trial file.
         path: PathBuf,
         /// The offending time, s.
         t_s: f64,
+    },
+    /// The recorder was already finished (it failed while finishing).
+    #[error("{path}: the recording is already closed")]
+    Finished {
+        /// The trial file.
+        path: PathBuf,
     },
     /// The file does not start like an MCAP file.
     #[error("{path}: not an MCAP file (no MCAP magic at the start)")]

@@ -1,0 +1,223 @@
+//! [`SimPhysics`]: the posture of the antenna against its wall for a base position and angle.
+
+use antenna_protocol::TouchBits;
+use nalgebra::Vector2;
+use sim_core::contact::{ContactSettings, QuasiStatic};
+use sim_core::{
+    Chain, ChainContact, Line, SolidSide, Surface, SurfaceMap, Wall, touch_bits_from_contacts,
+};
+
+use crate::spec::{AntennaSpec, FlatWallSpec};
+
+/// How far off the wall a turned antenna is put before it steps back, metres.
+const TURN_CLEARANCE_M: f64 = 1e-3;
+
+/// Why the physics could not be built or stepped.
+#[derive(Debug, thiserror::Error)]
+pub enum PhysicsError {
+    /// The stiffness profile's name is not one of sim-core's.
+    #[error("unknown stiffness profile {name:?}")]
+    UnknownProfile {
+        /// The name given.
+        name: String,
+    },
+    /// sim-core refused the antenna or the wall, or a step found no equilibrium.
+    #[error("{context}: {source}")]
+    Model {
+        /// What was being done, e.g. `the antenna with the stage at 150.0 mm`.
+        context: String,
+        /// sim-core's error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+}
+
+fn model<E: std::error::Error + Send + Sync + 'static>(
+    context: impl Into<String>,
+) -> impl FnOnce(E) -> PhysicsError {
+    let context = context.into();
+    move |source| PhysicsError::Model {
+        context,
+        source: Box::new(source),
+    }
+}
+
+/// The physical state the simulated segments sense.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SimState {
+    /// Joint angles `theta_1..theta_n`, radians.
+    pub joint_angles_rad: Vec<f64>,
+    /// Raw touch switches per segment.
+    pub touch: Vec<TouchBits>,
+    /// The wall's force on the tip, newtons (0 out of contact).
+    pub tip_force_n: f64,
+}
+
+/// The antenna against the wall: the posture for a stage position and base angle.
+#[derive(Debug)]
+pub struct SimPhysics {
+    sim: QuasiStatic,
+    contacts: Vec<ChainContact>,
+    touch_bits: Vec<u8>,
+}
+
+impl SimPhysics {
+    /// The antenna of `antenna` at rest in front of `wall`, the stage at 0.
+    ///
+    /// # Errors
+    /// [`PhysicsError::UnknownProfile`], or [`PhysicsError::Model`] naming what sim-core
+    /// refused (the stiffness bounds, the chain, the wall, a rest posture inside the wall).
+    pub fn new(antenna: &AntennaSpec, wall: &FlatWallSpec) -> Result<Self, PhysicsError> {
+        let lengths = vec![antenna.link_length_m; antenna.links + 1];
+        let profile = antenna
+            .profile()
+            .ok_or_else(|| PhysicsError::UnknownProfile {
+                name: antenna.stiffness_profile.clone(),
+            })?;
+        let k = profile
+            .stiffness_n_m_per_rad(
+                &lengths,
+                antenna.k_min_n_m_per_rad,
+                antenna.k_max_n_m_per_rad,
+            )
+            .map_err(model("sim.antenna stiffness"))?;
+        let chain = Chain::builder(antenna.links)
+            .link_length_m(antenna.link_length_m)
+            .base_angle_rad(antenna.base_angle_deg.to_radians())
+            .stiffnesses_nm_per_rad(k)
+            .build()
+            .map_err(model("sim.antenna"))?;
+        let wall = wall_of(wall)?;
+        let theta = chain.rest_theta();
+        let sim = QuasiStatic::new(
+            chain,
+            vec![wall],
+            Vector2::zeros(),
+            &theta,
+            ContactSettings::default(),
+        )
+        .map_err(model(
+            "sim.antenna at rest with the stage at 0 against sim.wall",
+        ))?;
+        Ok(Self {
+            touch_bits: vec![0; theta.len()],
+            sim,
+            contacts: Vec::new(),
+        })
+    }
+
+    /// The posture with the base at `base_x_m` along the track and the base link at
+    /// `base_angle_rad`: one quasi-static step from the last one.
+    ///
+    /// # Errors
+    /// [`PhysicsError::Model`] when the step or the turn finds no equilibrium.
+    pub fn update(&mut self, base_x_m: f64, base_angle_rad: f64) -> Result<SimState, PhysicsError> {
+        if base_angle_rad != self.sim.chain().base_angle_rad() {
+            self.turn_base(base_angle_rad)?;
+        }
+        self.sim
+            .step_to(Vector2::new(base_x_m, 0.0))
+            .map_err(model(format!(
+                "the antenna with the stage at {:.1} mm",
+                base_x_m * 1e3
+            )))?;
+        let contacts = self.sim.contacts();
+        self.contacts.clear();
+        self.contacts
+            .extend(contacts.iter().map(|c| c.chain_contact()));
+        touch_bits_from_contacts(&self.contacts, &mut self.touch_bits)
+            .map_err(model("touch bits"))?;
+        let n = self.sim.chain().n();
+        Ok(SimState {
+            joint_angles_rad: self.sim.theta_rad()[1..].to_vec(),
+            touch: self.touch_bits[1..]
+                .iter()
+                .map(|&b| TouchBits::from_bits_truncate(b))
+                .collect(),
+            tip_force_n: contacts
+                .iter()
+                .filter(|c| c.feature.link() == n)
+                .map(|c| c.normal_force_n)
+                .sum(),
+        })
+    }
+
+    /// Turns the base link to `base_angle_rad` keeping the joint angles: the solver is
+    /// rebuilt there, its base first backed off along the wall's normal by as much as the
+    /// turn would put the antenna into the wall (the next step brings it back on).
+    fn turn_base(&mut self, base_angle_rad: f64) -> Result<(), PhysicsError> {
+        let chain = self
+            .sim
+            .chain()
+            .with_base_angle_rad(base_angle_rad)
+            .map_err(model("base angle"))?;
+        let mut theta = self.sim.theta_rad().to_vec();
+        theta[0] = base_angle_rad;
+        let base = self.sim.base_m();
+        let walls = self.sim.walls().to_vec();
+        let poses = sim_core::frame_poses(&chain, &theta, sim_core::Frame::GROUND)
+            .map_err(model("poses after the turn"))?;
+        let mut back_m = Vector2::zeros();
+        for wall in &walls {
+            for link in 0..=chain.n() {
+                let p = base
+                    + poses
+                        .position_m(sim_core::Frame::link(link))
+                        .unwrap_or_default();
+                let d = wall.signed_distance(&p);
+                let inside_m = -d.gap_m + TURN_CLEARANCE_M;
+                if inside_m > 0.0 && inside_m * d.normal.norm() > back_m.norm() {
+                    back_m = d.normal * inside_m;
+                }
+            }
+        }
+        self.sim = QuasiStatic::new(chain, walls, base + back_m, &theta, *self.sim.settings())
+            .map_err(model("the antenna turned on its base"))?;
+        Ok(())
+    }
+}
+
+/// The flat wall as a sim-core wall: a line through `(0, distance_m)` at `-angle_deg` to the
+/// track (it comes closer as the stage moves forward), solid beyond it, smooth with `mu`.
+fn wall_of(wall: &FlatWallSpec) -> Result<Wall, PhysicsError> {
+    let line = Line::new(
+        Vector2::new(0.0, wall.distance_m),
+        -wall.angle_deg.to_radians(),
+        SolidSide::Left,
+    )
+    .map_err(model("sim.wall"))?;
+    let surface =
+        SurfaceMap::uniform(Surface::Smooth { mu: wall.mu }).map_err(model("sim.wall.mu"))?;
+    Ok(Wall::new(line, surface))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_antenna_bends_only_once_it_reaches_the_wall() {
+        let antenna = AntennaSpec::default();
+        let mut physics = SimPhysics::new(&antenna, &FlatWallSpec::default()).unwrap();
+        let base = antenna.base_angle_deg.to_radians();
+        let free = physics.update(0.0, base).unwrap();
+        assert_eq!(free.tip_force_n, 0.0);
+        assert!(free.joint_angles_rad.iter().all(|a| a.abs() < 1e-9));
+        let pressed = physics.update(0.15, base).unwrap();
+        assert!(pressed.tip_force_n > 0.0);
+        assert!(pressed.joint_angles_rad.iter().all(|a| a.abs() > 0.01));
+        assert!(pressed.joint_angles_rad.iter().sum::<f64>().abs() > 0.2);
+        assert!(pressed.touch[8].any());
+        let back = physics.update(0.0, base).unwrap();
+        assert!(back.joint_angles_rad.iter().all(|a| a.abs() < 1e-6));
+    }
+
+    #[test]
+    fn an_unknown_profile_is_named() {
+        let antenna = AntennaSpec {
+            stiffness_profile: "wobbly".to_owned(),
+            ..AntennaSpec::default()
+        };
+        let error = SimPhysics::new(&antenna, &FlatWallSpec::default()).unwrap_err();
+        assert_eq!(error.to_string(), "unknown stiffness profile \"wobbly\"");
+    }
+}

@@ -1,0 +1,230 @@
+//! What recording costs: the default trial (nine segments at 1 kHz on the simulated rig, the
+//! stage carrying the antenna along the wall) recorded as antennad's hub records it, once per
+//! way of recording, with the poll timing, the CPU share, the bytes per second written and
+//! the time each sync to the disk took. A measurement, not a test:
+//!
+//! ```text
+//! cargo run --release -p host-daemon --example record_cost [-- SECONDS [DIR]]
+//! ```
+//!
+//! Ways (one run each, default 10 s): not recording; uncompressed JSON chunks synced only at
+//! the end (what antennad wrote before zstd); zstd chunks synced only at the end; zstd synced
+//! every second (the default, `recording.sync_interval_s = 1`); zstd synced at every 100 ms
+//! flush (`recording.sync_interval_s = 0.1`). DIR (default: the current directory's
+//! `target/record-cost`) should be on the disk the recordings go to. It prints one Markdown
+//! table row per way. Jitter = |period - 1000 us| between successive poll starts, as in
+//! `poll_jitter`; CPU = utime + stime of the whole process over wall time.
+
+use antenna_data::record::{
+    ChunkCompression, RecorderOptions, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+    TrialRecorder,
+};
+use anyhow::{Context, Result};
+use host_daemon::acquisition::AcquisitionEvent;
+use host_daemon::config::Config;
+use host_daemon::samples::record_sample;
+use host_daemon::sim_rig::{TrialOptions, run_sim_trial};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+/// utime + stime of this process, seconds (clock ticks of 1/100 s, Linux's USER_HZ).
+fn cpu_s() -> Result<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").context("/proc/self/stat")?;
+    let after = stat.rsplit_once(')').context("stat format")?.1;
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let ticks: u64 = fields[11].parse::<u64>()? + fields[12].parse::<u64>()?;
+    Ok(ticks as f64 / 100.0)
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
+}
+
+/// One way of recording: a name and the recorder's options (`None`: no recording).
+type Way = (&'static str, Option<RecorderOptions>);
+
+/// What one run measured.
+struct Run {
+    polls: u64,
+    skipped: u64,
+    jitter_us: Vec<f64>,
+    cpu_percent: f64,
+    bytes: u64,
+    seconds: f64,
+    sync_ms: Vec<f64>,
+}
+
+fn run(
+    config: &Config,
+    seconds: f64,
+    options: Option<RecorderOptions>,
+    path: &Path,
+) -> Result<Run> {
+    let calibrations = config.bus.calibrations();
+    let metadata = TrialMetadata {
+        trial: "record-cost".to_owned(),
+        started_unix_s: 0.0,
+        started_unix_ns: Some(0),
+        config: config.to_recorded_toml(),
+        notes: Default::default(),
+        rig: Some(host_daemon::daemon::rig_info(config)),
+    };
+    let _ = std::fs::remove_file(path);
+    let mut recorder = options
+        .map(|o| TrialRecorder::create_with(path, &metadata, o))
+        .transpose()?;
+    let mut stamps: Vec<u64> = Vec::with_capacity((seconds * 1200.0) as usize);
+    let mut sync_ms = Vec::new();
+    let mut failed = None;
+    let cpu_before = cpu_s()?;
+    let wall = Instant::now();
+    let summary = run_sim_trial(
+        config,
+        &config.trials[0],
+        TrialOptions {
+            duration: Some(Duration::from_secs_f64(seconds)),
+            ..TrialOptions::default()
+        },
+        Arc::new(AtomicBool::new(false)),
+        |event| {
+            let Some(recorder) = recorder.as_mut() else {
+                if let AcquisitionEvent::Poll(p) = event {
+                    stamps.push(p.t_ns);
+                }
+                return;
+            };
+            let synced = recorder.synced();
+            let started = Instant::now();
+            let result = match event {
+                AcquisitionEvent::Poll(p) => {
+                    stamps.push(p.t_ns);
+                    recorder.record_segments(&SegmentsMessage {
+                        seq: Some(p.seq),
+                        t_s: p.t_ns as f64 * 1e-9,
+                        segments: p
+                            .readings
+                            .iter()
+                            .zip(&calibrations)
+                            .enumerate()
+                            .map(|(k, (r, &c))| record_sample(r, c, p.is_stale(k)))
+                            .collect(),
+                    })
+                }
+                AcquisitionEvent::Stage { t_ns, position_mm } => {
+                    recorder.record_stage(&StageMessage {
+                        t_s: *t_ns as f64 * 1e-9,
+                        position_m: position_mm * 1e-3,
+                    })
+                }
+                AcquisitionEvent::Base { t_ns, angle_rad } => {
+                    recorder.record_servo(&ServoMessage {
+                        t_s: *t_ns as f64 * 1e-9,
+                        base_angle_rad: *angle_rad,
+                    })
+                }
+                _ => Ok(()),
+            };
+            if recorder.synced() != synced {
+                sync_ms.push(started.elapsed().as_secs_f64() * 1e3);
+            }
+            if let Err(e) = result {
+                failed.get_or_insert(e);
+            }
+        },
+    )?;
+    let elapsed = wall.elapsed().as_secs_f64();
+    if let Some(recorder) = recorder {
+        recorder.finish()?;
+    }
+    let cpu_percent = 100.0 * (cpu_s()? - cpu_before) / elapsed;
+    if let Some(e) = failed {
+        return Err(e.into());
+    }
+    let period_ns = 1e9 / config.bus.poll_hz;
+    let jitter_us = stamps
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) as f64 - period_ns).abs() / 1e3)
+        .collect();
+    let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+    sync_ms.sort_by(f64::total_cmp);
+    Ok(Run {
+        polls: summary.polls,
+        skipped: summary.skipped,
+        jitter_us,
+        cpu_percent,
+        bytes,
+        seconds: summary.elapsed.as_secs_f64(),
+        sync_ms,
+    })
+}
+
+fn main() -> Result<()> {
+    let mut args = std::env::args().skip(1);
+    let seconds: f64 = args
+        .next()
+        .map(|s| s.parse())
+        .transpose()
+        .context("SECONDS")?
+        .unwrap_or(10.0);
+    let dir: PathBuf = args
+        .next()
+        .map_or_else(|| PathBuf::from("target/record-cost"), PathBuf::from);
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let config = Config::default();
+    let zstd = |sync_interval_s| RecorderOptions {
+        compression: ChunkCompression::Zstd,
+        sync_interval_s,
+    };
+    let ways: [Way; 5] = [
+        ("not recording", None),
+        (
+            "uncompressed, synced at the end (before)",
+            Some(RecorderOptions {
+                compression: ChunkCompression::None,
+                sync_interval_s: 0.0,
+            }),
+        ),
+        ("zstd, synced at the end", Some(zstd(0.0))),
+        ("**zstd, synced every 1 s (default)**", Some(zstd(1.0))),
+        ("zstd, synced every 100 ms flush", Some(zstd(0.1))),
+    ];
+    println!(
+        "{seconds} s per run, {} cores, files in {}",
+        std::thread::available_parallelism().map_or(0, |n| n.get()),
+        dir.display()
+    );
+    println!(
+        "| recording | polls | skipped | jitter p50 / p99 / max (us) | CPU (% of a core) | \
+         bytes/s | syncs | sync p50 / max (ms) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for (name, options) in ways {
+        let path = dir.join("record-cost.mcap");
+        let mut r = run(&config, seconds, options, &path)?;
+        r.jitter_us.sort_by(f64::total_cmp);
+        let bytes_per_s = if options.is_some() {
+            format!("{:.0}", r.bytes as f64 / r.seconds)
+        } else {
+            "-".to_owned()
+        };
+        println!(
+            "| {name} | {} | {} | {:.1} / {:.1} / {:.0} | {:.1} | {bytes_per_s} | {} | {:.2} / {:.2} |",
+            r.polls,
+            r.skipped,
+            percentile(&r.jitter_us, 0.5),
+            percentile(&r.jitter_us, 0.99),
+            r.jitter_us.last().copied().unwrap_or(f64::NAN),
+            r.cpu_percent,
+            r.sync_ms.len(),
+            percentile(&r.sync_ms, 0.5),
+            r.sync_ms.last().copied().unwrap_or(f64::NAN),
+        );
+        let _ = std::fs::remove_file(&path);
+    }
+    Ok(())
+}
