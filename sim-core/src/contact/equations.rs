@@ -61,7 +61,8 @@ pub(crate) struct StepProblem<'a> {
     pub hair_beta_rad: &'a [f64],
     pub proximal: Option<Proximal<'a>>,
     /// A hand holding the tip near this point (ground frame) with a stiff spring: the force
-    /// `k_hand (target - p_n)` acts on the tip, `k_hand = HAND_STIFFNESS c`.
+    /// `k_hand (target - p_n)` acts on the tip, `k_hand = HAND_STIFFNESS k_mean / R^2` (`R`
+    /// the chain's length: a thousand times the chain's own stiffness at its tip).
     pub hand_m: Option<Vector2<f64>>,
     pub tolerance_m: f64,
     /// The residual accepted from a solve that stalls above `tolerance_m`.
@@ -72,7 +73,7 @@ pub(crate) struct StepProblem<'a> {
     pub max_iterations: usize,
 }
 
-/// The hand spring's stiffness in units of the contact scale `c`.
+/// The hand spring's stiffness in units of the chain's stiffness at its tip, `k_mean / R^2`.
 pub(crate) const HAND_STIFFNESS: f64 = 1e3;
 
 /// The hysteresis of the contact modes, as a length (times `c` it is a force).
@@ -101,6 +102,8 @@ pub(crate) struct Equations {
     pub length_m: f64,
     /// The contact scale `c`, N/m.
     pub c_n_per_m: f64,
+    /// The hand spring's stiffness, N/m.
+    pub hand_stiffness_n_per_m: f64,
     /// The hand's force on the tip at the current posture.
     pub hand_force_n: Vector2<f64>,
     /// Per link `0..=n`: the sum of the forces on points of the link (contacts, and the tip
@@ -131,6 +134,8 @@ impl Equations {
         self.length_m = lengths.iter().sum::<f64>() / lengths.len() as f64;
         let k_ref = if k_mean > 0.0 { k_mean } else { 1e-3 };
         self.c_n_per_m = k_ref / (self.length_m * self.length_m);
+        let reach_m: f64 = lengths.iter().sum();
+        self.hand_stiffness_n_per_m = HAND_STIFFNESS * k_ref / (reach_m * reach_m);
         self.scale.clear();
         self.lo.clear();
         self.hi.clear();
@@ -191,7 +196,7 @@ impl Equations {
     /// is updated.
     fn hand_force(&self, p: &StepProblem<'_>) -> Vector2<f64> {
         match (p.hand_m, self.posture.end_m.last()) {
-            (Some(target), Some(tip)) => (target - tip) * HAND_STIFFNESS * self.c_n_per_m,
+            (Some(target), Some(tip)) => (target - tip) * self.hand_stiffness_n_per_m,
             _ => Vector2::zeros(),
         }
     }
@@ -368,6 +373,9 @@ impl Equations {
 
 /// The shear bound `B` of a pair and `dB/dN` (Tresca: the bound of the held normal force).
 pub(crate) fn bound_of(pair: &Pair) -> (f64, f64) {
+    if pair.frictionless {
+        return (0.0, 0.0);
+    }
     match pair.tresca_n {
         Some(held) => (pair.law.shear_bound(held).0, 0.0),
         None => pair.law.shear_bound(pair.normal_force_n),

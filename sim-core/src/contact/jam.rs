@@ -34,3 +34,220 @@ pub struct JammedContact {
     /// Its normal force at the last step solved, newtons.
     pub normal_force_n: f64,
 }
+
+// The diagnosis: a step the solver could not take, and the least penetration a posture near
+// the last one can reach with the base at the goal.
+
+use super::ContactError;
+use super::geometry::{PairGeometry, evaluate, generalized};
+use super::pair::{ChainPoint, PairKind};
+use super::posture::Posture;
+use super::quasistatic::{QuasiStatic, theta_of};
+use nalgebra::{DMatrix, DVector};
+
+/// A step is a jam when no posture near the last one gets the links out of the walls by
+/// better than this, metres.
+const JAM_DEPTH_M: f64 = 1e-6;
+
+/// Gauss-Newton iterations of the least-penetration search.
+const SEARCH_ITERATIONS: usize = 60;
+
+/// A joint this close to a limit is on its stop, radians.
+const ON_STOP_RAD: f64 = 1e-9;
+
+impl QuasiStatic {
+    /// Why a step to `goal` failed: a [`Jam`] where no posture near the last one (the joints
+    /// within their limits, friction and springs aside) keeps every link out of the walls
+    /// with the base at `goal`; otherwise `error` as it was (the solver's failure).
+    pub(super) fn diagnose_failure(
+        &mut self,
+        goal: Vector2<f64>,
+        error: ContactError,
+    ) -> ContactError {
+        if !matches!(error, ContactError::NoConvergence { .. }) {
+            return error;
+        }
+        let (depth, link) = self.least_penetration(goal);
+        if depth > JAM_DEPTH_M {
+            ContactError::Jammed(Box::new(self.jam(goal, depth, link)))
+        } else {
+            error
+        }
+    }
+
+    /// The least penetration (metres) of the links into the walls a projected Gauss-Newton
+    /// search reaches from the current posture with the base at `goal`, and the link that
+    /// stays deepest.
+    fn least_penetration(&mut self, goal: Vector2<f64>) -> (f64, usize) {
+        let n = self.chain.n();
+        let limits = self.chain.joint_limits().to_vec();
+        let mut x: Vec<f64> = self.theta[1..].to_vec();
+        let mut posture = Posture::default();
+        let beta = self.beta.clone();
+        let measure = |sim: &Self, posture: &mut Posture, x: &[f64]| -> (f64, f64, usize) {
+            posture.update(&sim.chain, goal, &theta_of(&sim.theta, x));
+            let mut sum = 0.0;
+            let (mut deepest, mut link) = (0.0_f64, 0);
+            for key in sim.touching(posture, &beta, 0.0) {
+                if matches!(key.kind, PairKind::Point(ChainPoint::HairTip(_))) {
+                    continue;
+                }
+                let mut geo = PairGeometry::at(key.link, 1.0, Vector2::zeros());
+                evaluate(
+                    &sim.chain,
+                    &sim.pieces.walls[key.piece],
+                    posture,
+                    &beta,
+                    &key,
+                    &mut geo,
+                );
+                if geo.gap_m < 0.0 {
+                    sum += 0.5 * geo.gap_m * geo.gap_m;
+                    if -geo.gap_m > deepest {
+                        deepest = -geo.gap_m;
+                        link = key.link;
+                    }
+                }
+            }
+            (sum, deepest, link)
+        };
+        let (mut merit, mut deepest, mut link) = measure(self, &mut posture, &x);
+        let mut damping = 1e-6;
+        let mut row = vec![0.0; n];
+        for _ in 0..SEARCH_ITERATIONS {
+            if deepest <= JAM_DEPTH_M * 1e-3 {
+                break;
+            }
+            // The penetrating pairs' gradients at the current posture.
+            posture.update(&self.chain, goal, &theta_of(&self.theta, &x));
+            let mut ata = DMatrix::<f64>::zeros(n, n);
+            let mut atr = DVector::<f64>::zeros(n);
+            for key in self.touching(&posture, &beta, 0.0) {
+                if matches!(key.kind, PairKind::Point(ChainPoint::HairTip(_))) {
+                    continue;
+                }
+                let mut geo = PairGeometry::at(key.link, 1.0, Vector2::zeros());
+                evaluate(
+                    &self.chain,
+                    &self.pieces.walls[key.piece],
+                    &posture,
+                    &beta,
+                    &key,
+                    &mut geo,
+                );
+                if geo.gap_m >= 0.0 || !geo.gap_m.is_finite() {
+                    continue;
+                }
+                generalized(&posture, &geo, geo.normal, &mut row);
+                for i in 0..n {
+                    atr[i] += row[i] * geo.gap_m;
+                    for j in 0..n {
+                        ata[(i, j)] += row[i] * row[j];
+                    }
+                }
+            }
+            // Joints on a stop that the step would push further are held.
+            let scale = (0..n).fold(0.0_f64, |a, i| a.max(ata[(i, i)])).max(1e-12);
+            let mut improved = false;
+            for _ in 0..12 {
+                let mut m = ata.clone();
+                for i in 0..n {
+                    m[(i, i)] += damping * scale;
+                }
+                let Some(dx) = m.lu().solve(&(-&atr)) else {
+                    damping *= 10.0;
+                    continue;
+                };
+                let trial: Vec<f64> = (0..n)
+                    .map(|i| (x[i] + dx[i]).clamp(limits[i + 1].cw_rad, limits[i + 1].ccw_rad))
+                    .collect();
+                let (m2, d2, l2) = measure(self, &mut posture, &trial);
+                if m2 < merit {
+                    x = trial;
+                    (merit, deepest, link) = (m2, d2, l2);
+                    damping = (damping * 0.1).max(1e-9);
+                    improved = true;
+                    break;
+                }
+                damping *= 10.0;
+            }
+            if !improved {
+                break;
+            }
+        }
+        (deepest, link)
+    }
+
+    /// The jam at the current state, for a step to `goal` that leaves link `link` at least
+    /// `depth_m` inside a wall.
+    fn jam(&self, goal: Vector2<f64>, depth_m: f64, link: usize) -> Jam {
+        let contacts: Vec<JammedContact> = self
+            .contacts()
+            .iter()
+            .filter(|c| c.normal_force_n > 0.0)
+            .map(|c| JammedContact {
+                feature: c.feature,
+                wall: c.wall,
+                point_m: c.point_m,
+                normal_force_n: c.normal_force_n,
+            })
+            .collect();
+        let limits = self.chain.joint_limits();
+        let mut joints_on_stops = Vec::new();
+        let mut stops = Vec::new();
+        for (j, (&t, lim)) in self.theta.iter().zip(limits).enumerate().skip(1) {
+            if t <= lim.cw_rad + ON_STOP_RAD {
+                joints_on_stops.push(j);
+                stops.push(format!("joint {j} on its clockwise stop"));
+            } else if t >= lim.ccw_rad - ON_STOP_RAD {
+                joints_on_stops.push(j);
+                stops.push(format!("joint {j} on its counter-clockwise stop"));
+            }
+        }
+        let pins: Vec<String> = contacts
+            .iter()
+            .map(|c| {
+                format!(
+                    "{} against wall {} at ({:.4}, {:.4}) m with {:.3} N",
+                    describe(c.feature, self.chain.n()),
+                    c.wall,
+                    c.point_m.x,
+                    c.point_m.y,
+                    c.normal_force_n
+                )
+            })
+            .collect();
+        let description = format!(
+            "no posture near the last one keeps link {link} out of the walls (it stays {:.3} mm \
+             inside); {}; pinned by {}",
+            depth_m * 1e3,
+            if stops.is_empty() {
+                "no joint on a stop".to_owned()
+            } else {
+                stops.join(", ")
+            },
+            if pins.is_empty() {
+                "no loaded contact".to_owned()
+            } else {
+                pins.join("; ")
+            }
+        );
+        Jam {
+            base_x_m: goal.x,
+            base_y_m: goal.y,
+            contacts,
+            joints_on_stops,
+            description,
+        }
+    }
+}
+
+/// A feature in words.
+fn describe(feature: Feature, n: usize) -> String {
+    match feature {
+        Feature::Vertex { link } if link == n => "the tip".to_owned(),
+        Feature::Vertex { link } => format!("joint {}", link + 1),
+        Feature::Link { link } => format!("link {link} between its joints"),
+        Feature::HairTip { link } => format!("the hair tip of link {link}"),
+    }
+}

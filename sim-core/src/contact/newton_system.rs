@@ -29,7 +29,7 @@
 
 use nalgebra::Vector2;
 
-use super::equations::{Equations, HAND_STIFFNESS, StepProblem, bound_of, hair_index};
+use super::equations::{Equations, StepProblem, bound_of, hair_index};
 use super::feature::Slip;
 use super::geometry::{PairGeometry, Turn, generalized, hair_of};
 use super::pair::Pair;
@@ -410,7 +410,6 @@ impl NewtonSystem {
         let n = chain.n();
         let c = pairs.len();
         let posture = &eq.posture;
-        let cn = eq.c_n_per_m;
         // The pairs' generalized normals and tangents.
         reset(&mut self.gn, c * n);
         reset(&mut self.gt, c * n);
@@ -501,7 +500,7 @@ impl NewtonSystem {
             }
         }
         if p.hand_m.is_some() {
-            let k_hand = HAND_STIFFNESS * cn;
+            let k_hand = eq.hand_stiffness_n_per_m;
             let tip = posture.end_m[n];
             for axis in [Vector2::x(), Vector2::y()] {
                 let v: Vec<f64> = (0..n)

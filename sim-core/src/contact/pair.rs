@@ -127,6 +127,9 @@ pub(crate) struct Pair {
     /// `Some(B)` where this step's solution bounded the shear force by `B` instead of the
     /// law's bound (a jam in the fixed point on the normal forces).
     pub relaxed_bound_n: Option<f64>,
+    /// Friction is off for this pair in this step (the step's frictional equilibrium was
+    /// not found: [`super::StepReport::friction_dropped`]).
+    pub frictionless: bool,
 }
 
 impl Pair {
@@ -154,6 +157,7 @@ impl Pair {
             slip: Slip::Stuck,
             tresca_n: None,
             relaxed_bound_n: None,
+            frictionless: false,
         }
     }
 

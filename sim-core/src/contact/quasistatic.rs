@@ -45,6 +45,12 @@ pub struct QuasiStatic {
     pub(super) anchoring_blocked: bool,
     /// The last plain (sub)step's base displacement and change of the joint angles.
     pub(super) secant: Option<(Vector2<f64>, Vec<f64>)>,
+    /// Friction is off for the rest of this step (see [`StepReport::friction_dropped`]).
+    pub(super) friction_off: bool,
+    /// Friction was dropped in the last step.
+    pub(super) friction_locked: bool,
+    /// One solve only: no fixed point on the normal forces where it fails.
+    pub(super) quick_attempt: bool,
 }
 
 impl QuasiStatic {
@@ -114,6 +120,9 @@ impl QuasiStatic {
             hand_force_n: Vector2::zeros(),
             anchoring_blocked: false,
             secant: None,
+            friction_off: false,
+            friction_locked: false,
+            quick_attempt: false,
         };
         sim.check_start()?;
         Ok(sim)
@@ -258,59 +267,119 @@ impl QuasiStatic {
                 return Ok(report);
             }
         }
+        let dense_before = self.ssn.system.dense_solves;
+        // Where friction locked the antenna in the last step, one plain solve with friction
+        // is tried before friction is dropped again.
+        let mut result = if self.friction_locked {
+            self.friction_locked = false;
+            self.quick_attempt = true;
+            let quick = self.attempt(base_m, None, &mut report);
+            self.quick_attempt = false;
+            match quick {
+                Ok(accepted) => {
+                    report.note_residual(accepted.residual_m, &self.settings);
+                    self.commit(base_m, accepted);
+                    report.substeps += 1;
+                    Ok(())
+                }
+                Err(_) => Err(ContactError::no_convergence(
+                    base_m,
+                    "friction still locks the antenna",
+                    report.iterations,
+                )),
+            }
+        } else {
+            self.advance(base_m, self.settings.max_step_iterations, &mut report)
+        };
+        if let Err(first) = result {
+            // No frictional equilibrium nearby (friction locks the antenna: sliding would
+            // need ever more normal force). Friction is dropped at every contact for the rest
+            // of the step, which the step reports; without friction either, it failed.
+            result = if self.has_friction() {
+                self.friction_off = true;
+                let retry = self.advance(base_m, self.settings.max_step_iterations, &mut report);
+                self.friction_off = false;
+                match retry {
+                    Ok(()) => {
+                        report.friction_dropped = true;
+                        self.friction_locked = true;
+                        Ok(())
+                    }
+                    Err(_) => Err(first),
+                }
+            } else {
+                Err(first)
+            };
+        }
+        report.dense_solves = self.ssn.system.dense_solves - dense_before;
+        if let Err(e) = result {
+            return Err(self.diagnose_failure(base_m, e));
+        }
+        self.certify(&mut report)?;
+        Ok(report)
+    }
+
+    /// Moves the base to `base_m` in substeps (halving a step that fails or jumps,
+    /// following a snap downhill where the smallest substep fails); the state is that of
+    /// the last substep solved.
+    fn advance(
+        &mut self,
+        base_m: Vector2<f64>,
+        budget_iterations: usize,
+        report: &mut StepReport,
+    ) -> Result<(), ContactError> {
         let full_m = (base_m - self.base_m).norm();
         let min_m = full_m / f64::powi(2.0, self.settings.max_substep_depth as i32);
         let mut goals = vec![base_m];
-        let dense_before = self.ssn.system.dense_solves;
-        let result = (|| {
-            while let Some(&goal) = goals.last() {
-                if report.iterations > self.settings.max_step_iterations {
-                    return Err(ContactError::no_convergence(
-                        goal,
-                        "the step took more Newton iterations than max_step_iterations",
-                        report.iterations,
-                    ));
+        let budget = report.iterations + budget_iterations;
+        while let Some(&goal) = goals.last() {
+            if report.iterations > budget {
+                return Err(ContactError::no_convergence(
+                    goal,
+                    "the step took more Newton iterations than max_step_iterations",
+                    report.iterations,
+                ));
+            }
+            match self.attempt(goal, None, report) {
+                Ok(accepted) => {
+                    report.note_residual(accepted.residual_m, &self.settings);
+                    let delta = goal - self.base_m;
+                    let dtheta: Vec<f64> = accepted.x[..self.chain.n()]
+                        .iter()
+                        .zip(&self.theta[1..])
+                        .map(|(a, b)| a - b)
+                        .collect();
+                    self.secant = (delta.norm() > 0.0).then_some((delta, dtheta));
+                    self.commit(goal, accepted);
+                    report.substeps += 1;
+                    goals.pop();
                 }
-                match self.attempt(goal, None, &mut report) {
-                    Ok(accepted) => {
-                        report.note_residual(accepted.residual_m, &self.settings);
-                        let delta = goal - self.base_m;
-                        let dtheta: Vec<f64> = accepted.x[..self.chain.n()]
-                            .iter()
-                            .zip(&self.theta[1..])
-                            .map(|(a, b)| a - b)
-                            .collect();
-                        self.secant = (delta.norm() > 0.0).then_some((delta, dtheta));
-                        self.commit(goal, accepted);
+                Err(_) => {
+                    let d = goal - self.base_m;
+                    if d.norm() > min_m && d.norm() > 0.0 {
+                        goals.push(self.base_m + d * 0.5);
+                    } else {
+                        let followed = match self.follow_snap(goal, budget, report) {
+                            Err(e) if self.release_anchors(report) => {
+                                let retry = self.follow_snap(goal, budget, report);
+                                retry.map_err(|_| e)
+                            }
+                            other => other,
+                        };
+                        self.anchoring_blocked = false;
+                        followed?;
                         report.substeps += 1;
                         goals.pop();
                     }
-                    Err(_) => {
-                        let d = goal - self.base_m;
-                        if d.norm() > min_m && d.norm() > 0.0 {
-                            goals.push(self.base_m + d * 0.5);
-                        } else {
-                            let followed = match self.follow_snap(goal, &mut report) {
-                                Err(e) if self.release_anchors(&mut report) => {
-                                    let retry = self.follow_snap(goal, &mut report);
-                                    retry.map_err(|_| e)
-                                }
-                                other => other,
-                            };
-                            self.anchoring_blocked = false;
-                            followed?;
-                            report.substeps += 1;
-                            goals.pop();
-                        }
-                    }
                 }
             }
-            Ok(())
-        })();
-        report.dense_solves = self.ssn.system.dense_solves - dense_before;
-        result?;
-        self.certify(&mut report)?;
-        Ok(report)
+        }
+        Ok(())
+    }
+
+    /// Whether any wall has friction (or anchoring) anywhere.
+    fn has_friction(&self) -> bool {
+        self.walls.iter().any(|w| w.surfaces.has_friction())
     }
 
     /// Runs the independent check on the state reached and refuses it if it fails.

@@ -25,6 +25,10 @@ pub struct StepReport {
     /// **Relaxed:** contacts that jammed (Coulomb's law has no quasi-static answer for them:
     /// sliding would need ever more normal force) and slid without friction for the step.
     pub jams: usize,
+    /// **Relaxed:** no frictional equilibrium was found near the state (friction locks the
+    /// antenna against the wall: sliding would need ever more normal force), and friction
+    /// was dropped at every contact for the rest of the step.
+    pub friction_dropped: bool,
     /// The final residual of the equations, metres.
     pub residual_m: f64,
     /// **Relaxed:** the residual of some solve was accepted above
@@ -45,7 +49,10 @@ impl StepReport {
     /// Whether the solver relaxed anything to get through the step: friction dropped on a
     /// jam, an anchor torn out, a residual accepted above the tolerance.
     pub fn relaxed(&self) -> bool {
-        self.jams > 0 || self.anchors_released > 0 || self.residual_above_tolerance
+        self.jams > 0
+            || self.anchors_released > 0
+            || self.residual_above_tolerance
+            || self.friction_dropped
     }
 
     /// What was relaxed, in words (empty when nothing was).
@@ -56,6 +63,9 @@ impl StepReport {
                 "friction dropped at {} jammed contact(s)",
                 self.jams
             ));
+        }
+        if self.friction_dropped {
+            out.push("friction dropped at every contact (friction locked the antenna)".to_owned());
         }
         if self.anchors_released > 0 {
             out.push(format!(
@@ -87,6 +97,7 @@ impl StepReport {
         self.anchors_released += r.anchors_released;
         self.fixed_point_solves += r.fixed_point_solves;
         self.jams += r.jams;
+        self.friction_dropped |= r.friction_dropped;
         self.residual_m = r.residual_m;
         self.residual_above_tolerance |= r.residual_above_tolerance;
         self.dense_solves += r.dense_solves;

@@ -30,9 +30,10 @@ pub struct ContactSettings {
     pub penetration_tolerance_m: f64,
     /// Pseudo-time steps allowed to follow one snap downhill. Default 2000.
     pub max_snap_steps: usize,
-    /// Newton iterations allowed for one call of `step_to`, substeps and snaps included: a
-    /// step that needs more fails with [`ContactError::NoConvergence`] rather than run on.
-    /// Default 100000.
+    /// Newton iterations allowed for one call of `step_to`, substeps and snaps included (and
+    /// again for the step without friction where friction locked the antenna): a step that
+    /// needs more fails with [`ContactError::NoConvergence`] rather than run on. Default
+    /// 10000.
     pub max_step_iterations: usize,
 }
 
@@ -47,7 +48,7 @@ impl Default for ContactSettings {
             margin_m: 2e-3,
             penetration_tolerance_m: 1e-9,
             max_snap_steps: 2_000,
-            max_step_iterations: 100_000,
+            max_step_iterations: 10_000,
         }
     }
 }

@@ -18,13 +18,14 @@ impl QuasiStatic {
     pub(super) fn follow_snap(
         &mut self,
         goal: Vector2<f64>,
+        budget: usize,
         report: &mut StepReport,
     ) -> Result<(), ContactError> {
         report.snapped = true;
         self.secant = None;
         let mut gamma = 1.0;
         for _ in 0..self.settings.max_snap_steps {
-            if report.iterations > self.settings.max_step_iterations {
+            if report.iterations > budget {
                 break;
             }
             report.snap_steps += 1;

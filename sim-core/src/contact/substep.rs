@@ -30,6 +30,10 @@ pub(super) struct Accepted {
 /// refined instead.
 const ROUNDS: usize = 8;
 
+/// Newton iterations of a quick attempt (one plain solve with friction after a step where
+/// friction locked the antenna): a step that can stick again converges in a few.
+const QUICK_ITERATIONS: usize = 12;
+
 impl QuasiStatic {
     /// Tries one (sub)step from the committed state to the base at `goal` (with a proximal
     /// term when following a snap).
@@ -43,6 +47,11 @@ impl QuasiStatic {
         self.start.update(&self.chain, self.base_m, &self.theta);
         self.probe.update(&self.chain, goal, &self.theta);
         let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
+        if self.friction_off {
+            for pair in &mut pairs {
+                pair.frictionless = true;
+            }
+        }
         let mut anchoring = super::anchoring::AnchorRounds::default();
         for _round in 0..ROUNDS {
             let mut hair_links: Vec<usize> =
@@ -100,12 +109,19 @@ impl QuasiStatic {
                 // the edge of its friction cone, and never come to rest.
                 acceptable_m: self.settings.acceptable_m,
                 max_departure_rad: 2.0 * self.settings.jump_rad,
-                max_iterations: self.settings.max_iterations,
+                max_iterations: if self.quick_attempt {
+                    QUICK_ITERATIONS.min(self.settings.max_iterations)
+                } else {
+                    self.settings.max_iterations
+                },
             };
             let x_start = x.clone();
             let pairs_start = pairs.clone();
             let mut outcome = self.ssn.solve(&problem, &mut x, &mut pairs);
             report.iterations += outcome.iterations;
+            if !outcome.converged && self.quick_attempt {
+                return Err(Reject::NoConvergence);
+            }
             if !outcome.converged {
                 // Coulomb's law makes the step's equations non-monotone: solve the Tresca
                 // problems of the fixed point instead ([`super::tresca`]).
@@ -119,7 +135,10 @@ impl QuasiStatic {
             // Pairs that are no longer what touches (a feature's foot past its link's end)
             // let go, and any point now inside a wall joins: the step is solved again.
             let mut changed = self.drop_stale_pairs(&mut pairs);
-            let missed = self.missed_pairs(&x, &hair_links, &pairs, goal);
+            let mut missed = self.missed_pairs(&x, &hair_links, &pairs, goal);
+            for pair in &mut missed {
+                pair.frictionless = self.friction_off;
+            }
             changed |= !missed.is_empty();
             pairs.extend(missed);
             // Hair anchoring on rough surfaces (model.md 7).
@@ -135,6 +154,13 @@ impl QuasiStatic {
                 .fold(0.0_f64, |a, (x, t)| a.max((x - t).abs()));
             if jump > self.settings.jump_rad {
                 return Err(Reject::Jump);
+            }
+            if self.friction_off {
+                for pair in &mut pairs {
+                    if pair.law.shear_bound(pair.normal_force_n.max(0.0)).0 > 0.0 {
+                        pair.relaxed_bound_n = Some(0.0);
+                    }
+                }
             }
             return Ok(Accepted {
                 x,

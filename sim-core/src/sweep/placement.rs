@@ -132,7 +132,7 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
                     t_s: 0.0,
                     source,
                 })?;
-                accumulate(&mut total, &r);
+                total.accumulate(&r);
             }
             let note = format!(
                 "approach: the base started {distance_m} m back from wall {wall} along its \
@@ -155,6 +155,17 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
             let w = wall_of(*wall)?;
             let along = motion_direction(scene);
             let pin = point_ahead(w, base, along, *ahead_m);
+            let reach_m: f64 = chain.link_lengths_m().iter().sum();
+            let distance_m = (pin - base).norm();
+            if distance_m.is_nan() || distance_m >= reach_m {
+                return Err(SweepError::Placement(format!(
+                    "the tip cannot reach wall {wall} {ahead_m} m ahead of the base: the wall \
+                     point there, ({:.4}, {:.4}) m, is {distance_m:.4} m from the base pivot \
+                     and the antenna is {reach_m:.4} m long; move the base nearer the wall or \
+                     choose another ahead_m",
+                    pin.x, pin.y
+                )));
+            }
             let problem = EquilibriumProblem::new(&chain).with_tip_pin_m(pin - base);
             let eq = solve_equilibrium(&problem, start, &SolveOptions::default())?;
             if !eq.converged {
@@ -164,51 +175,85 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
                     pin.x, pin.y, eq.kkt_residual
                 )));
             }
-            // The pinned posture ignores the walls: hold the tip there and bring the held
-            // antenna onto the walls from where it is clear of them.
+            let crossing = deepest_crossing(&chain, &scene.walls, base, &eq.theta_rad);
+            let tolerance = scene.settings.penetration_tolerance_m;
+            if crossing.as_ref().is_none_or(|c| c.depth_m <= tolerance) {
+                // The pinned posture is clear of the walls, its tip on the wall: put it there,
+                // let go and let it settle with friction.
+                let mut sim = new_sim(base, &eq.theta_rad)?;
+                let report = settle(&mut sim)?;
+                let flip = super::distal_flip(&sim, along.y.atan2(along.x));
+                let note = format!(
+                    "tip placed on wall {wall} at ({:.4}, {:.4}) m ({ahead_m} m ahead of the \
+                     base): the pinned equilibrium from a {start:?} start ({} iterations), let \
+                     go and settled with friction{}; {} contact(s), distal segment at {:.1} deg \
+                     to the wall",
+                    pin.x,
+                    pin.y,
+                    eq.iterations,
+                    snapped(&report),
+                    sim.contacts().len(),
+                    flip.map_or(f64::NAN, |f| f.angle_to_wall_rad.to_degrees()),
+                );
+                return Ok((sim, note, report));
+            }
+            // The pinned posture ignores the walls and crosses one: hold the tip there and
+            // bring the held antenna onto the walls from where it is clear of them.
+            let crossing_words = crossing
+                .as_ref()
+                .map(|c| {
+                    format!(
+                        "the {start:?} posture pinned there puts {} {:.2} mm inside wall {} at \
+                         ({:.4}, {:.4}) m",
+                        c.what,
+                        c.depth_m * 1e3,
+                        c.wall,
+                        c.point_m.x,
+                        c.point_m.y
+                    )
+                })
+                .unwrap_or_default();
+            let explain = |why: String| {
+                SweepError::Placement(format!(
+                    "with the tip pinned at ({:.4}, {:.4}) m on wall {wall}, {crossing_words}, \
+                     and bringing the antenna onto the wall held by its tip failed: {why}; try \
+                     another ahead_m or start",
+                    pin.x, pin.y
+                ))
+            };
             let away = w.signed_distance(&pin).normal;
             // Back off along the normal until clear (on a curved wall one step may not do).
             let mut clear_m = 0.0;
             for _ in 0..50 {
                 let depth =
-                    deepest_penetration(&chain, &scene.walls, base + away * clear_m, &eq.theta_rad);
+                    deepest_crossing(&chain, &scene.walls, base + away * clear_m, &eq.theta_rad)
+                        .map_or(0.0, |c| c.depth_m);
                 if depth <= 0.0 {
                     break;
                 }
                 clear_m += depth + 1e-3;
             }
             let from = base + away * clear_m;
-            let mut sim = new_sim(from, &eq.theta_rad).map_err(|e| {
-                SweepError::Placement(format!(
-                    "with the tip pinned at ({:.4}, {:.4}) m and the base {clear_m:.4} m back \
-                     from wall {wall}, the chain ({start:?} start) is still in a wall: {e}; \
-                     try another ahead_m or start",
-                    pin.x, pin.y
-                ))
-            })?;
+            let mut sim = new_sim(from, &eq.theta_rad).map_err(|e| explain(e.to_string()))?;
             sim.hold_tip(Some(pin - base));
-            let mut total = settle(&mut sim)?;
+            let mut total = settle(&mut sim).map_err(|e| explain(e.to_string()))?;
             let steps = ((clear_m / 2e-4).ceil() as usize).max(1);
             for k in 1..=steps {
                 let at = from + (base - from) * (k as f64 / steps as f64);
-                let r = sim.step_to(at).map_err(|source| SweepError::Step {
-                    step: 0,
-                    t_s: 0.0,
-                    source,
-                })?;
-                accumulate(&mut total, &r);
+                let r = sim.step_to(at).map_err(|e| explain(e.to_string()))?;
+                total.accumulate(&r);
             }
             let held_n = sim.hand_force_n();
             sim.hold_tip(None);
-            let report = settle(&mut sim)?;
-            accumulate(&mut total, &report);
+            let report = settle(&mut sim).map_err(|e| explain(e.to_string()))?;
+            total.accumulate(&report);
             let flip = super::distal_flip(&sim, along.y.atan2(along.x));
             let note = format!(
                 "tip placed on wall {wall} at ({:.4}, {:.4}) m ({ahead_m} m ahead of the base): \
-                 the pinned equilibrium from a {start:?} start ({} iterations), held by the tip \
-                 and brought {clear_m:.4} m onto the wall in {steps} steps (the hand held it with \
-                 ({:.4}, {:.4}) N), let go and settled with friction{}; {} contact(s), distal \
-                 segment at {:.1} deg to the wall",
+                 the pinned equilibrium from a {start:?} start ({} iterations) crosses a wall \
+                 ({crossing_words}), so it was held by the tip and brought {clear_m:.4} m onto \
+                 the wall in {steps} steps (the hand held it with ({:.4}, {:.4}) N), let go and \
+                 settled with friction{}; {} contact(s), distal segment at {:.1} deg to the wall",
                 pin.x,
                 pin.y,
                 eq.iterations,
@@ -223,26 +268,47 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
     }
 }
 
-/// The deepest penetration of any link or open hair tip of the posture into any wall (0 if
-/// clear), metres.
-fn deepest_penetration(
+/// Where a posture crosses a wall: the deepest crossing of a link or an open hair tip.
+struct Crossing {
+    /// What crosses, in words.
+    what: String,
+    /// The wall.
+    wall: usize,
+    /// How deep, metres.
+    depth_m: f64,
+    /// Where, ground frame.
+    point_m: Vector2<f64>,
+}
+
+/// The deepest crossing of any link or open hair tip of the posture into any wall (`None`
+/// if nothing reaches into a wall).
+fn deepest_crossing(
     chain: &crate::Chain,
     walls: &[Wall],
     base: Vector2<f64>,
     theta: &[f64],
-) -> f64 {
-    let Ok(poses) = crate::frame_poses(chain, theta, crate::Frame::GROUND) else {
-        return 0.0;
+) -> Option<Crossing> {
+    let poses = crate::frame_poses(chain, theta, crate::Frame::GROUND).ok()?;
+    let mut deepest: Option<Crossing> = None;
+    let mut consider = |what: &dyn Fn() -> String, wall: usize, gap_m: f64, point_m| {
+        if gap_m < 0.0 && deepest.as_ref().is_none_or(|d| -gap_m > d.depth_m) {
+            deepest = Some(Crossing {
+                what: what(),
+                wall,
+                depth_m: -gap_m,
+                point_m,
+            });
+        }
     };
-    let mut deepest = 0.0_f64;
     let mut at = base;
     for link in 0..=chain.n() {
         let Some(end) = poses.position_m(crate::Frame::link(link)) else {
             continue;
         };
         let end = base + end;
-        for wall in walls {
-            deepest = deepest.max(-wall.segment_contact(&at, &end).wall.gap_m);
+        for (w, wall) in walls.iter().enumerate() {
+            let sc = wall.segment_contact(&at, &end);
+            consider(&|| format!("link {link}"), w, sc.wall.gap_m, sc.point_m);
         }
         at = end;
     }
@@ -254,8 +320,15 @@ fn deepest_penetration(
         .collect();
     if let Ok(hairs) = crate::hair_poses(chain, theta, &open, crate::Frame::GROUND) {
         for h in hairs {
-            for wall in walls {
-                deepest = deepest.max(-wall.signed_distance(&(base + h.tip_m)).gap_m);
+            let tip = base + h.tip_m;
+            for (w, wall) in walls.iter().enumerate() {
+                let link = h.link;
+                consider(
+                    &|| format!("the hair tip of link {link}"),
+                    w,
+                    wall.signed_distance(&tip).gap_m,
+                    tip,
+                );
             }
         }
     }
@@ -279,18 +352,6 @@ fn settle(sim: &mut QuasiStatic) -> Result<StepReport, SweepError> {
         t_s: 0.0,
         source,
     })
-}
-
-fn accumulate(total: &mut StepReport, r: &StepReport) {
-    total.substeps += r.substeps;
-    total.snapped |= r.snapped;
-    total.snap_steps += r.snap_steps;
-    total.iterations += r.iterations;
-    total.resolves += r.resolves;
-    total.anchors_released += r.anchors_released;
-    total.fixed_point_solves += r.fixed_point_solves;
-    total.jams += r.jams;
-    total.residual_m = r.residual_m;
 }
 
 fn snapped(report: &StepReport) -> &'static str {

@@ -157,6 +157,13 @@ impl SurfaceMap {
         &self.boundaries
     }
 
+    /// Whether any zone has friction or anchors hairs (`mu > 0` or rough).
+    pub fn has_friction(&self) -> bool {
+        std::iter::once(&self.first)
+            .chain(self.boundaries.iter().map(|(_, s)| s))
+            .any(|s| s.mu() > 0.0 || s.is_rough())
+    }
+
     /// The surface at a point of the wall (found by [`super::Wall::signed_distance`]).
     pub fn surface_at(&self, point: &WallPoint) -> Surface {
         let at_m = match self.axis {
