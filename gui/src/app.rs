@@ -626,6 +626,19 @@ impl MonitorApp {
                                 )
                                 .wrap_mode(egui::TextWrapMode::Extend),
                             );
+                            if state.relaxed_steps > 0 {
+                                let here = self
+                                    .view
+                                    .cursor_s(state.history.latest_t_s())
+                                    .map(|t| state.relaxations_at(t))
+                                    .unwrap_or_default();
+                                let mut text =
+                                    format!("solver relaxed {} step(s)", state.relaxed_steps);
+                                if !here.is_empty() {
+                                    text.push_str(&format!("; this one: {}", here.join(", ")));
+                                }
+                                ui.label(RichText::new(text).color(Color32::from_rgb(220, 120, 0)));
+                            }
                         }
                         Source::Idle => {
                             ui.label("no source");

@@ -73,6 +73,10 @@ pub struct SweepRunState {
     pub placement_note: Option<String>,
     /// Where the sweep is.
     pub phase: SweepPhase,
+    /// Steps in which the solver relaxed something to get through (friction dropped,
+    /// anchors torn out, a residual accepted above the tolerance): every step is certified
+    /// by sim-core's independent check, and these are said on screen.
+    pub relaxed_steps: usize,
 }
 
 impl SweepRunState {
@@ -109,6 +113,13 @@ impl SweepRunState {
     pub fn step_at(&self, t_s: f64) -> Option<&SweepStep> {
         let after = self.steps.partition_point(|s| s.t_s <= t_s);
         self.steps.get(after.saturating_sub(1))
+    }
+
+    /// What the solver relaxed in the step showing instant `t_s` (empty when nothing).
+    pub fn relaxations_at(&self, t_s: f64) -> Vec<String> {
+        self.step_at(t_s)
+            .map(|s| s.report.relaxations())
+            .unwrap_or_default()
     }
 
     /// The chain at instant `t_s` ([`Self::step_at`]) as a frame; `None` before the
@@ -160,6 +171,9 @@ impl SweepRunState {
                 .first()
                 .map(|theta_0| theta_0 - self.chain.base_angle_rad()),
         })?;
+        if step.report.relaxed() {
+            self.relaxed_steps += 1;
+        }
         self.steps.push(step);
         Ok(())
     }
@@ -199,6 +213,7 @@ impl SweepWorker {
             step_s: sweep_scene.motion.step_s,
             placement_note: None,
             phase: SweepPhase::Placing,
+            relaxed_steps: 0,
         };
         let shared = Arc::new(Mutex::new(state));
         let cancel = Arc::new(AtomicBool::new(false));
@@ -412,5 +427,30 @@ mod tests {
         );
         assert_eq!(state.frame_count(), 0);
         assert!(state.progress().contains("stopped at step 0 of 20"));
+    }
+
+    #[test]
+    fn relaxed_steps_are_counted_and_said_step_by_step() {
+        let path = scene_file("relaxed", SCENE);
+        let worker = SweepWorker::start(&path, MAX_SWEEP_STEPS).unwrap();
+        wait(&worker);
+        std::fs::remove_file(&path).ok();
+        let mut state = worker.lock();
+        assert_eq!(state.relaxed_steps, 0);
+        assert!(state.relaxations_at(0.1).is_empty());
+        // A step whose solve dropped friction (sim-core reports it in the step's report).
+        let mut step = state.steps[20].clone();
+        step.step = 21;
+        step.t_s = 0.21;
+        step.report.friction_dropped = true;
+        step.report.jams = 2;
+        state.push(step).unwrap();
+        assert_eq!(state.relaxed_steps, 1);
+        let said = state.relaxations_at(0.21).join("; ");
+        assert!(
+            said.contains("friction dropped at every contact") && said.contains("2 jammed"),
+            "{said}"
+        );
+        assert!(state.relaxations_at(0.2).is_empty());
     }
 }

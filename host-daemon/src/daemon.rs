@@ -669,6 +669,8 @@ impl Daemon {
             status_due: Instant::now(),
             outcomes: Vec::new(),
             finished: false,
+            sim_state: sim_state.clone(),
+            sim_relaxed_logged: 0,
         };
         if let Some(name) = &options.first_trial {
             let name = hub
@@ -894,6 +896,10 @@ struct Hub {
     status_due: Instant,
     outcomes: Vec<TrialOutcome>,
     finished: bool,
+    /// The simulated rig's physics (its contact solver's relaxations are logged).
+    sim_state: Option<Shared<SimState>>,
+    /// Relaxed steps of the simulation already logged.
+    sim_relaxed_logged: u64,
 }
 
 impl Hub {
@@ -1238,7 +1244,30 @@ impl Hub {
         });
     }
 
+    /// Logs what the simulation's contact solver relaxed since the last poll (a line per
+    /// relaxed step, with the stage position).
+    fn log_sim_relaxations(&mut self) {
+        let Some(state) = &self.sim_state else {
+            return;
+        };
+        let (relaxed, said) = match state.lock() {
+            Ok(s) => (s.relaxed_steps, s.relaxations.join(", ")),
+            Err(_) => return,
+        };
+        if relaxed > self.sim_relaxed_logged {
+            self.sim_relaxed_logged = relaxed;
+            let at = self
+                .stage_mm
+                .map_or_else(String::new, |mm| format!(" at stage {mm:.1} mm"));
+            self.log.line(format!(
+                "antennad: simulation{at}: the contact solver relaxed a step ({said}); \
+                 {relaxed} relaxed step(s) so far"
+            ));
+        }
+    }
+
     fn on_poll(&mut self, poll: &PollRecord) {
+        self.log_sim_relaxations();
         for (k, (reading, status)) in poll.readings.iter().zip(&mut self.health).enumerate() {
             match reading.result {
                 Ok(_) => status.ok += 1,

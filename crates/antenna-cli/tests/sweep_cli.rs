@@ -23,6 +23,8 @@ enum Kind {
     OptInt,
     OptNum,
     Array,
+    Object,
+    OptStr,
 }
 
 fn has_kind(v: &Value, kind: Kind) -> bool {
@@ -42,6 +44,8 @@ fn has_kind(v: &Value, kind: Kind) -> bool {
         Kind::OptInt => v.is_null() || v.is_u64(),
         Kind::OptNum => v.is_null() || v.is_number(),
         Kind::Array => v.is_array(),
+        Kind::Object => v.is_object(),
+        Kind::OptStr => v.is_null() || v.is_string(),
     }
 }
 
@@ -99,6 +103,19 @@ const STEP_FIELDS: &[(&str, Kind)] = &[
     ("snap_steps", Kind::Int),
     ("iterations", Kind::Int),
     ("residual_m", Kind::Num),
+    ("relaxations", Kind::Array),
+    ("certificate", Kind::Object),
+];
+
+const CERTIFICATE_FIELDS: &[(&str, Kind)] = &[
+    ("torque_residual_nm", Kind::Num),
+    ("limit_sign_violation_nm", Kind::Num),
+    ("penetration_m", Kind::Num),
+    ("cone_violation_n", Kind::Num),
+    ("separation_m", Kind::Num),
+    ("stuck_slip_m", Kind::Num),
+    ("slip_force_violation_n", Kind::Num),
+    ("wrong_way_slip_m", Kind::Num),
 ];
 
 const CONTACT_FIELDS: &[(&str, Kind)] = &[
@@ -111,6 +128,7 @@ const CONTACT_FIELDS: &[(&str, Kind)] = &[
     ("shear_force_n", Kind::Num),
     ("force_n", Kind::Point),
     ("state", Kind::Str),
+    ("relaxed_shear_bound_n", Kind::OptNum),
     ("anchored", Kind::Bool),
     ("slip_m", Kind::Num),
 ];
@@ -139,6 +157,17 @@ const SUMMARY_FIELDS: &[(&str, Kind)] = &[
     ("mapping_max_error_mm", Kind::OptNum),
     ("substeps", Kind::Int),
     ("iterations", Kind::Int),
+    ("iterations_median", Kind::OptInt),
+    ("iterations_p99", Kind::OptInt),
+    ("relaxed_steps", Kind::Int),
+    ("friction_dropped_steps", Kind::Int),
+    ("jammed_contacts", Kind::Int),
+    ("anchors_released", Kind::Int),
+    ("residual_above_tolerance_steps", Kind::Int),
+    ("max_torque_residual_nm", Kind::Num),
+    ("max_penetration_m", Kind::Num),
+    ("outcome", Kind::Str),
+    ("stopped_by", Kind::OptStr),
 ];
 
 #[test]
@@ -178,6 +207,17 @@ fn jsonl_has_a_placement_line_one_line_per_step_and_a_summary() {
     let mut contacts = 0;
     for (k, line) in lines[1..lines.len() - 1].iter().enumerate() {
         check_fields(line, STEP_FIELDS, &format!("step line {k}"));
+        check_fields(
+            &line["certificate"],
+            CERTIFICATE_FIELDS,
+            &format!("step line {k}: certificate"),
+        );
+        assert!(
+            line["relaxations"]
+                .as_array()
+                .is_some_and(|a| a.iter().all(Value::is_string)),
+            "step line {k}: relaxations"
+        );
         assert_eq!(line["type"], "step");
         assert_eq!(line["step"].as_u64(), Some(k as u64));
         let t = line["t_s"].as_f64().unwrap();
@@ -222,6 +262,8 @@ fn jsonl_has_a_placement_line_one_line_per_step_and_a_summary() {
 
     let summary = lines.last().unwrap();
     check_fields(summary, SUMMARY_FIELDS, "summary");
+    assert_eq!(summary["outcome"], "finished");
+    assert_eq!(summary["stopped_by"], Value::Null);
     assert_eq!(summary["type"], "summary");
     assert_eq!(summary["steps"], 20);
     assert!((summary["sweep_time_s"].as_f64().unwrap() - 0.2).abs() < 1e-9);

@@ -50,6 +50,12 @@ pub struct SimState {
     pub touch: Vec<TouchBits>,
     /// The wall's force on the tip, newtons (0 out of contact).
     pub tip_force_n: f64,
+    /// Steps so far in which the contact solver relaxed something to get through (friction
+    /// dropped, a residual accepted above the tolerance): every step is certified by
+    /// sim-core's independent check, and these are said.
+    pub relaxed_steps: u64,
+    /// What the last step relaxed, in words (empty when nothing).
+    pub relaxations: Vec<String>,
 }
 
 /// The antenna against the wall: the posture for a stage position and base angle.
@@ -58,6 +64,7 @@ pub struct SimPhysics {
     sim: QuasiStatic,
     contacts: Vec<ChainContact>,
     touch_bits: Vec<u8>,
+    relaxed_steps: u64,
 }
 
 impl SimPhysics {
@@ -102,6 +109,7 @@ impl SimPhysics {
             touch_bits: vec![0; theta.len()],
             sim,
             contacts: Vec::new(),
+            relaxed_steps: 0,
         })
     }
 
@@ -114,12 +122,16 @@ impl SimPhysics {
         if base_angle_rad != self.sim.chain().base_angle_rad() {
             self.turn_base(base_angle_rad)?;
         }
-        self.sim
+        let report = self
+            .sim
             .step_to(Vector2::new(base_x_m, 0.0))
             .map_err(model(format!(
                 "the antenna with the stage at {:.1} mm",
                 base_x_m * 1e3
             )))?;
+        if report.relaxed() {
+            self.relaxed_steps += 1;
+        }
         let contacts = self.sim.contacts();
         self.contacts.clear();
         self.contacts
@@ -138,6 +150,8 @@ impl SimPhysics {
                 .filter(|c| c.feature.link() == n)
                 .map(|c| c.normal_force_n)
                 .sum(),
+            relaxed_steps: self.relaxed_steps,
+            relaxations: report.relaxations(),
         })
     }
 

@@ -33,7 +33,9 @@ pub struct StudyRow {
     pub hairs: String,
     /// The walls' surface (`scene` when the axis is absent).
     pub surface: String,
-    /// `ok`, or `failed` (the sweep stopped: the metrics cover the steps done).
+    /// `ok`; `jammed` (the antenna jammed against a wall: a physical outcome, the error
+    /// names the contacts and the joints on their stops); or `failed` (the sweep stopped:
+    /// the metrics cover the steps done).
     pub status: String,
     /// Why it failed (`null` when it did not).
     pub error: Option<String>,
@@ -71,6 +73,14 @@ pub struct StudyRow {
     pub mapping_mean_error_mm: Option<f64>,
     /// Wall-clock time of the sweep, milliseconds.
     pub wall_clock_ms: Option<f64>,
+    /// Steps in which the solver relaxed something to get through (friction dropped on a
+    /// jam or where friction locked the antenna, anchored hairs torn out, a residual
+    /// accepted above the tolerance); `0` when nothing was relaxed.
+    pub relaxed_steps: Option<usize>,
+    /// Newton iterations per step, median.
+    pub iterations_median: Option<usize>,
+    /// Newton iterations per step, 99th percentile.
+    pub iterations_p99: Option<usize>,
 }
 
 /// The CSV header, in [`StudyRow`]'s field order.
@@ -100,6 +110,9 @@ pub const CSV_COLUMNS: &[&str] = &[
     "mapping_points",
     "mapping_mean_error_mm",
     "wall_clock_ms",
+    "relaxed_steps",
+    "iterations_median",
+    "iterations_p99",
 ];
 
 impl StudyRow {
@@ -138,7 +151,12 @@ impl StudyRow {
             surface: variant
                 .surface
                 .map_or_else(|| "scene".to_string(), |s| s.label()),
-            status: if error.is_none() { "ok" } else { "failed" }.to_string(),
+            status: match (&error, summary) {
+                (None, _) => "ok",
+                (Some(_), Some(s)) if s.outcome == "jammed" => "jammed",
+                (Some(_), _) => "failed",
+            }
+            .to_string(),
             error,
             steps: summary.map(|s| s.steps),
             sweep_time_s: summary.map(|s| s.sweep_time_s),
@@ -157,6 +175,9 @@ impl StudyRow {
             mapping_points: summary.map(|s| s.mapping_points),
             mapping_mean_error_mm: summary.and_then(|s| s.mapping_mean_error_mm),
             wall_clock_ms: summary.map(|s| s.wall_clock_ms),
+            relaxed_steps: summary.map(|s| s.relaxed_steps),
+            iterations_median: summary.and_then(|s| s.iterations_median),
+            iterations_p99: summary.and_then(|s| s.iterations_p99),
         }
     }
 
@@ -225,6 +246,9 @@ mod tests {
             mapping_points: Some(4),
             mapping_mean_error_mm: Some(1.25),
             wall_clock_ms: Some(12.0),
+            relaxed_steps: Some(0),
+            iterations_median: Some(1),
+            iterations_p99: Some(3),
         };
         let value = serde_json::to_value(&row).unwrap_or_default();
         let keys: Vec<&String> = value
@@ -237,6 +261,6 @@ mod tests {
         }
         let line = row.csv_line();
         assert!(line.starts_with("3,linear,30.0,0.2,distal,smooth mu=0.3,failed,\"step 4 (t = 0.04 s) failed: \"\"why\"\", and more\",3,0.03,,,false,"), "{line}");
-        assert!(line.ends_with(",4,1.25,12.0"), "{line}");
+        assert!(line.ends_with(",4,1.25,12.0,0,1,3"), "{line}");
     }
 }

@@ -27,6 +27,10 @@ pub struct RunCounts {
     pub runs: usize,
     /// Rows whose status is `failed`.
     pub failed: usize,
+    /// Rows whose status is `jammed` (the antenna jammed: a physical outcome).
+    pub jammed: usize,
+    /// Rows with steps the solver relaxed something in.
+    pub relaxed: usize,
 }
 
 /// Runs the grid points of `options.shard` on `options.jobs` threads and hands each row to
@@ -75,8 +79,13 @@ pub fn run_study<E>(
                     return Err(e);
                 }
                 counts.runs += 1;
-                if row.status != "ok" {
-                    counts.failed += 1;
+                match row.status.as_str() {
+                    "ok" => {}
+                    "jammed" => counts.jammed += 1,
+                    _ => counts.failed += 1,
+                }
+                if row.relaxed_steps.is_some_and(|r| r > 0) {
+                    counts.relaxed += 1;
                 }
                 progress.set(counts.runs);
             }

@@ -20,6 +20,11 @@ pub enum SweepFailure {
     /// A step found no equilibrium (exit status 1): the message names the step and its time.
     #[error("{0}")]
     NoConvergence(String),
+    /// The antenna jammed against a wall (exit status 1: an answer that is not a success):
+    /// a physical outcome, not a failure of the solver. The message names the step, the
+    /// contacts that pin the antenna and the joints on their stops.
+    #[error("{0}")]
+    Jammed(String),
     /// The solver broke down numerically (exit status 3).
     #[error("{0}")]
     Breakdown(String),
@@ -55,6 +60,18 @@ impl SweepFailure {
             SweepError::Step {
                 step: 0, source, ..
             } => placement_step(&at_start, source),
+            SweepError::Step {
+                step,
+                t_s,
+                source: ContactError::Jammed(jam),
+            } => SweepFailure::Jammed(format!("{path}: step {step} (t = {t_s:.4} s): {jam}")),
+            SweepError::Step {
+                step,
+                t_s,
+                source: source @ ContactError::Uncertified { .. },
+            } => SweepFailure::Breakdown(format!(
+                "{path}: step {step} (t = {t_s:.4} s) is refused: {source}"
+            )),
             SweepError::Step { step, t_s, source } => SweepFailure::NoConvergence(format!(
                 "{path}: step {step} (t = {t_s:.4} s) failed: {source}"
             )),
@@ -69,7 +86,7 @@ impl SweepFailure {
     pub fn exit_status(&self) -> u8 {
         match self {
             SweepFailure::BadInput(_) => 2,
-            SweepFailure::NoConvergence(_) => 1,
+            SweepFailure::NoConvergence(_) | SweepFailure::Jammed(_) => 1,
             SweepFailure::Breakdown(_) => 3,
         }
     }
@@ -80,6 +97,12 @@ fn placement_step(at_start: &str, source: ContactError) -> SweepFailure {
     match source {
         ContactError::NoConvergence { .. } => SweepFailure::NoConvergence(format!(
             "{at_start}: the placement (step 0, t = 0 s) found no equilibrium: {source}"
+        )),
+        ContactError::Jammed(jam) => SweepFailure::Jammed(format!(
+            "{at_start}: the placement (step 0, t = 0 s): {jam}"
+        )),
+        source @ ContactError::Uncertified { .. } => SweepFailure::Breakdown(format!(
+            "{at_start}: the placement (step 0, t = 0 s) is refused: {source}"
         )),
         other => SweepFailure::BadInput(format!("{at_start}: {other}")),
     }

@@ -122,7 +122,15 @@ impl SweepRun {
         } else {
             match self.sweep.next_step()? {
                 Ok(step) => Ok(step),
-                Err(e) => Err(SweepFailure::from_sweep_error(&self.scene, e)),
+                Err(e) => {
+                    let failure = SweepFailure::from_sweep_error(&self.scene, e);
+                    let outcome = match failure {
+                        SweepFailure::Jammed(_) => "jammed",
+                        _ => "failed",
+                    };
+                    self.stats.stop(outcome, failure.to_string());
+                    Err(failure)
+                }
             }
         };
         Some(step.map(|step| {

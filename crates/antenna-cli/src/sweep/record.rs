@@ -3,7 +3,7 @@
 //! then a `summary` line. Every field is documented in the README.
 
 use serde::{Deserialize, Serialize};
-use sim_core::contact::{Contact, Feature, Slip};
+use sim_core::contact::{Contact, EquilibriumCheck, Feature, Slip};
 use sim_core::sweep::{Motion, SweepStep};
 
 use super::{StepMetrics, SweepSummary};
@@ -109,6 +109,51 @@ pub struct StepRecord {
     pub iterations: usize,
     /// The final residual of the step's equations, metres.
     pub residual_m: f64,
+    /// What the solver relaxed to get through the step, in words (empty when nothing):
+    /// friction dropped on a jam or where friction locked the antenna, anchored hairs torn
+    /// out, a residual accepted above the tolerance.
+    pub relaxations: Vec<String>,
+    /// The independent check of the step's state (every step passes it, or the sweep
+    /// stops): the largest residual of each equilibrium condition.
+    pub certificate: CertificateRecord,
+}
+
+/// The independent check of a step's state ([`EquilibriumCheck`]): the largest residual of
+/// each condition.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CertificateRecord {
+    /// Torque imbalance at a joint inside its limits or a hair inside its range, N m.
+    pub torque_residual_nm: f64,
+    /// A stop torque of the wrong sign, N m.
+    pub limit_sign_violation_nm: f64,
+    /// Penetration of a link or a hair tip into a wall, m.
+    pub penetration_m: f64,
+    /// Violation of the friction cone (or an anchored hair's holds), N.
+    pub cone_violation_n: f64,
+    /// Gap of a contact carrying a force, m.
+    pub separation_m: f64,
+    /// Slip of a stuck contact, m.
+    pub stuck_slip_m: f64,
+    /// Departure of a slipping contact's shear force from its friction limit, N.
+    pub slip_force_violation_n: f64,
+    /// Slip of a slipping contact along its own shear force, m.
+    pub wrong_way_slip_m: f64,
+}
+
+impl CertificateRecord {
+    /// The record of a check.
+    pub fn new(c: &EquilibriumCheck) -> CertificateRecord {
+        CertificateRecord {
+            torque_residual_nm: c.torque_residual_nm,
+            limit_sign_violation_nm: c.limit_sign_violation_nm,
+            penetration_m: c.penetration_m,
+            cone_violation_n: c.cone_violation_n,
+            separation_m: c.separation_m,
+            stuck_slip_m: c.stuck_slip_m,
+            slip_force_violation_n: c.slip_force_violation_n,
+            wrong_way_slip_m: c.wrong_way_slip_m,
+        }
+    }
 }
 
 impl StepRecord {
@@ -136,6 +181,8 @@ impl StepRecord {
             snap_steps: step.report.snap_steps,
             iterations: step.report.iterations,
             residual_m: step.report.residual_m,
+            relaxations: step.report.relaxations(),
+            certificate: CertificateRecord::new(&step.report.certificate),
         }
     }
 }
@@ -166,6 +213,9 @@ pub struct ContactRecord {
     pub force_n: [f64; 2],
     /// `"stuck"`, `"slipping-forward"` (along the wall's tangent) or `"slipping-backward"`.
     pub state: String,
+    /// Where this step's friction was relaxed at the contact (a jam), the shear bound that
+    /// held instead of the law's, newtons (`0`: it slid without friction); `null` otherwise.
+    pub relaxed_shear_bound_n: Option<f64>,
     /// Whether the contact is a hair tip anchored in a rough surface.
     pub anchored: bool,
     /// How far the contact slid along the wall's tangent during the step, metres.
@@ -198,6 +248,7 @@ impl ContactRecord {
                 [f.x, f.y]
             },
             state: state.to_string(),
+            relaxed_shear_bound_n: c.relaxed_shear_bound_n,
             anchored: c.is_anchored(),
             slip_m: c.slip_m,
         }

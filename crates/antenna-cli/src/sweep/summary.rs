@@ -63,6 +63,30 @@ pub struct SweepSummary {
     pub substeps: usize,
     /// Newton iterations over all steps.
     pub iterations: usize,
+    /// Newton iterations per step (the placement not counted): the median.
+    pub iterations_median: Option<usize>,
+    /// Newton iterations per step: the 99th percentile.
+    pub iterations_p99: Option<usize>,
+    /// Steps in which the solver relaxed something to get through (see each step's
+    /// `relaxations`).
+    pub relaxed_steps: usize,
+    /// Steps in which friction was dropped at every contact (friction locked the antenna).
+    pub friction_dropped_steps: usize,
+    /// Contacts that jammed and slid without friction, summed over the steps.
+    pub jammed_contacts: usize,
+    /// Anchored hairs torn out, summed over the steps.
+    pub anchors_released: usize,
+    /// Steps whose residual was accepted above the tolerance.
+    pub residual_above_tolerance_steps: usize,
+    /// The largest torque imbalance the independent check found over the steps, N m.
+    pub max_torque_residual_nm: f64,
+    /// The deepest penetration the independent check found over the steps, m.
+    pub max_penetration_m: f64,
+    /// `"finished"`, `"jammed"` (the antenna jammed against a wall: a physical outcome) or
+    /// `"failed"` (the solver found no equilibrium, or the input could not be swept).
+    pub outcome: String,
+    /// Why the sweep stopped early (`null` when it finished).
+    pub stopped_by: Option<String>,
 }
 
 /// The running statistics of a sweep; [`Self::summary`] reports them.
@@ -84,9 +108,23 @@ pub struct SweepStats {
     mapping: MappingAccumulator,
     substeps: usize,
     iterations: usize,
+    step_iterations: Vec<usize>,
+    relaxed_steps: usize,
+    friction_dropped_steps: usize,
+    jammed_contacts: usize,
+    anchors_released: usize,
+    residual_above_tolerance_steps: usize,
+    max_torque_residual_nm: f64,
+    max_penetration_m: f64,
+    stopped_by: Option<(String, String)>,
 }
 
 impl SweepStats {
+    /// Records why the sweep stopped early: `outcome` is `"jammed"` or `"failed"`.
+    pub fn stop(&mut self, outcome: &str, why: String) {
+        self.stopped_by = Some((outcome.to_string(), why));
+    }
+
     /// Adds a step (the placement, step 0, first).
     pub fn push(&mut self, step: &SweepStep, metrics: &StepMetrics) {
         let flipped = step.flipped();
@@ -128,6 +166,25 @@ impl SweepStats {
         }
         self.substeps += step.report.substeps;
         self.iterations += step.report.iterations;
+        let r = &step.report;
+        if step.step > 0 {
+            self.step_iterations.push(r.iterations);
+        }
+        if r.relaxed() {
+            self.relaxed_steps += 1;
+        }
+        if r.friction_dropped {
+            self.friction_dropped_steps += 1;
+        }
+        self.jammed_contacts += r.jams;
+        self.anchors_released += r.anchors_released;
+        if r.residual_above_tolerance {
+            self.residual_above_tolerance_steps += 1;
+        }
+        self.max_torque_residual_nm = self
+            .max_torque_residual_nm
+            .max(r.certificate.torque_residual_nm);
+        self.max_penetration_m = self.max_penetration_m.max(r.certificate.penetration_m);
     }
 
     /// The summary so far; `wall_clock_ms` is the caller's measure.
@@ -157,8 +214,33 @@ impl SweepStats {
             mapping_max_error_mm: mapping.max_error_mm,
             substeps: self.substeps,
             iterations: self.iterations,
+            iterations_median: percentile(&self.step_iterations, 0.5),
+            iterations_p99: percentile(&self.step_iterations, 0.99),
+            relaxed_steps: self.relaxed_steps,
+            friction_dropped_steps: self.friction_dropped_steps,
+            jammed_contacts: self.jammed_contacts,
+            anchors_released: self.anchors_released,
+            residual_above_tolerance_steps: self.residual_above_tolerance_steps,
+            max_torque_residual_nm: self.max_torque_residual_nm,
+            max_penetration_m: self.max_penetration_m,
+            outcome: self
+                .stopped_by
+                .as_ref()
+                .map_or_else(|| "finished".to_string(), |(o, _)| o.clone()),
+            stopped_by: self.stopped_by.as_ref().map(|(_, why)| why.clone()),
         }
     }
+}
+
+/// The `q`-quantile of `values` (nearest rank), `None` without values.
+fn percentile(values: &[usize], q: f64) -> Option<usize> {
+    if values.is_empty() {
+        return None;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_unstable();
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    Some(sorted[rank - 1])
 }
 
 /// A distance that varies by less than this over a sweep is constant (a base moving along a
@@ -255,6 +337,33 @@ impl SweepSummary {
             optional(self.mapping_mean_error_mm, 1.0, " mm"),
             optional(self.mapping_max_error_mm, 1.0, " mm")
         );
+        let _ = writeln!(
+            out,
+            "solver: Newton iterations per step median {}, p99 {}; every step certified (largest \
+             torque imbalance {:.1e} N m, deepest penetration {:.1e} m)",
+            self.iterations_median
+                .map_or_else(|| "-".to_string(), |v| v.to_string()),
+            self.iterations_p99
+                .map_or_else(|| "-".to_string(), |v| v.to_string()),
+            self.max_torque_residual_nm,
+            self.max_penetration_m
+        );
+        if self.relaxed_steps > 0 {
+            let _ = writeln!(
+                out,
+                "RELAXED in {} step(s): friction dropped at every contact in {}, {} jammed \
+                 contact(s) slid without friction, {} anchored hair(s) torn out, {} residual(s) \
+                 accepted above the tolerance",
+                self.relaxed_steps,
+                self.friction_dropped_steps,
+                self.jammed_contacts,
+                self.anchors_released,
+                self.residual_above_tolerance_steps
+            );
+        }
+        if let Some(why) = &self.stopped_by {
+            let _ = writeln!(out, "{}: {why}", self.outcome.to_uppercase());
+        }
         out
     }
 }

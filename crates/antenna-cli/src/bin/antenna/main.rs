@@ -208,7 +208,9 @@ impl From<SweepFailure> for Failure {
     fn from(e: SweepFailure) -> Self {
         match e {
             SweepFailure::BadInput(_) => Failure::BadInput(anyhow::Error::new(e)),
-            SweepFailure::NoConvergence(_) => Failure::NoSuccess(Some(anyhow::Error::new(e))),
+            SweepFailure::NoConvergence(_) | SweepFailure::Jammed(_) => {
+                Failure::NoSuccess(Some(anyhow::Error::new(e)))
+            }
             SweepFailure::Breakdown(_) => Failure::Breakdown(anyhow::Error::new(e)),
         }
     }

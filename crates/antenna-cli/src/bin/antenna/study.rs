@@ -17,8 +17,11 @@ use crate::Failure;
 /// carries its grid index, its axis values and the sweep's metrics (see the README for the
 /// file format and the columns). Sweeps run in parallel; rows come out in grid order.
 ///
-/// Exit status: 0 every sweep ran; 1 some failed (their rows say why; every row is still
-/// written); 2 bad input (what and where, nothing on stdout).
+/// Exit status: 0 every sweep ran (some may have jammed: the antenna jammed against a wall,
+/// a physical outcome with status `jammed`); 1 some failed (their rows say why; every row
+/// is still written); 2 bad input (what and where, nothing on stdout). Rows whose steps the
+/// solver relaxed something in (friction dropped, anchors torn out, a residual above the
+/// tolerance) count them in `relaxed_steps`.
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:
   antenna study examples/studies/profiles.toml
@@ -95,10 +98,12 @@ pub(crate) fn run(args: &StudyArgs) -> Result<(), Failure> {
     .context("writing the rows")?;
     out.flush().context("writing the rows")?;
     eprintln!(
-        "{} sweep(s) in {:.1} s, {} failed",
+        "{} sweep(s) in {:.1} s, {} failed, {} jammed, {} with relaxed steps",
         counts.runs,
         started.elapsed().as_secs_f64(),
-        counts.failed
+        counts.failed,
+        counts.jammed,
+        counts.relaxed
     );
     if counts.failed > 0 {
         return Err(Failure::NoSuccess(Some(anyhow!(

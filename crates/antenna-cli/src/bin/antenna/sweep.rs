@@ -26,9 +26,15 @@ const FLUSH_EVERY: Duration = Duration::from_millis(200);
 /// correlations of the points of bend and of contact with the base-to-wall distance, and
 /// the error of the wall map the robot would make from its sensed angles and touch bits.
 ///
-/// Exit status: 0 swept; 1 a step found no equilibrium (the message names the step and its
-/// time; the lines and the plot of the steps before it are still written); 2 bad input (what
-/// and where, nothing on stdout); 3 numerical breakdown.
+/// Every step is certified by an independent check of its equilibrium (torques, stops,
+/// non-penetration, Coulomb's law); what the solver relaxed to get through a step is in the
+/// step's `relaxations` and counted in the summary.
+///
+/// Exit status: 0 swept; 1 a step found no equilibrium, or the antenna jammed against a wall
+/// (a physical outcome: the message names the contacts that pin it and the joints on their
+/// stops); the lines (the summary line too, with `outcome` and `stopped_by`) and the plot of
+/// the steps before it are still written; 2 bad input (what and where, nothing on stdout); 3
+/// numerical breakdown (a step that failed its independent check).
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:
   antenna sweep examples/sweep_line_wall.toml
@@ -141,14 +147,13 @@ pub(crate) fn run(args: &SweepArgs) -> Result<(), Failure> {
     }
     progress.finish();
     let summary = run.summary();
-    if failure.is_none() {
-        if args.jsonl {
-            writeln!(out, "{}", json(&SweepLine::Summary(summary.clone()))?)
-                .map_err(write_error)?;
-        } else {
-            write!(out, "{}", summary.human()).map_err(write_error)?;
-        }
-    } else if !args.jsonl {
+    if args.jsonl {
+        // Also after a step that failed or jammed: the summary of the steps done, with its
+        // `outcome` and `stopped_by`.
+        writeln!(out, "{}", json(&SweepLine::Summary(summary.clone()))?).map_err(write_error)?;
+    } else if failure.is_none() {
+        write!(out, "{}", summary.human()).map_err(write_error)?;
+    } else {
         writeln!(
             out,
             "stopped after {} of {steps} steps; the summary of those:",
