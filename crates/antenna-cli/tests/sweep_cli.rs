@@ -392,6 +392,62 @@ fn bad_input_exits_2_with_the_file_and_the_key() {
     assert!(stderr(&out).contains("--duration-s -1: must be finite, >= 0"));
 }
 
+/// The four bad scenes of issue #13: a wall through the base, a placement inside a wall, a
+/// NaN in a scene, a negative friction coefficient. Each is a located error with exit status
+/// 2, nothing on stdout and no plot written, from `sweep` (with `--jsonl` and `--plot`) and
+/// from `solve`.
+#[test]
+fn bad_scenes_are_located_exit_2_and_write_nothing() {
+    let rest = "placement = \"rest\"";
+    let tip_on_wall = "placement = \"tip-on-wall\"\nahead_m = 0.0\nshape = \"C\"";
+    let cases: [(&str, String, String); 4] = [
+        (
+            "bad_wall_base",
+            WALL_SCENE.replace("point_m = [0.0, 0.2]", "point_m = [0.0, 0.01]"),
+            ":11:1: [[walls]] (wall 0): wall 0 crosses the base link".to_owned(),
+        ),
+        (
+            "bad_inside",
+            WALL_SCENE
+                .replace("point_m = [0.0, 0.2]", "point_m = [0.0, 0.1]")
+                .replace(tip_on_wall, rest),
+            ":23:13: `placement` in [start]: the start posture puts link".to_owned(),
+        ),
+        (
+            "bad_nan",
+            WALL_SCENE.replace("angle_deg = -8.0", "angle_deg = nan"),
+            ":14:13: `angle_deg` in [[walls]] (wall 0): NaN is not a finite number".to_owned(),
+        ),
+        (
+            "bad_mu",
+            WALL_SCENE.replace("solid = \"left\"", "solid = \"left\"\nmu = -0.3"),
+            ":16:6: `mu` in [[walls]] (wall 0): -0.3 must be >= 0".to_owned(),
+        ),
+    ];
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("antenna-cli-tests");
+    for (name, text, expected) in cases {
+        assert_ne!(text, WALL_SCENE, "{name}: the scene was not changed");
+        let path = scratch(&format!("{name}.toml"), &text);
+        let plot = dir.join(format!("{name}.svg"));
+        let _ = std::fs::remove_file(&plot);
+        let plot_arg = plot.display().to_string();
+        for args in [
+            vec!["sweep", &path, "--jsonl", "--plot", &plot_arg],
+            vec!["solve", &path, "--json"],
+        ] {
+            let out = run(&args);
+            let err = stderr(&out);
+            assert_eq!(out.status.code(), Some(2), "{name} {args:?}: {err}");
+            assert!(stdout(&out).is_empty(), "{name} {args:?}: {}", stdout(&out));
+            assert!(
+                err.contains(&format!("{path}{expected}")),
+                "{name} {args:?}: expected `{path}{expected}` in: {err}"
+            );
+            assert!(!plot.exists(), "{name}: a plot was written");
+        }
+    }
+}
+
 #[test]
 fn help_has_examples() {
     for cmd in ["sweep", "study"] {

@@ -51,8 +51,9 @@ pub enum ContactError {
     },
     /// The base link (or the base pivot) is inside a wall: nothing the joints do can free it.
     #[error(
-        "the base link is inside wall {wall} (by {depth_m} m) with the base at \
-         ({base_x_m}, {base_y_m}) m: move the base or the wall"
+        "wall {wall} crosses the base link (by {depth_m:.3e} m) with the base pivot at \
+         ({base_x_m:.4}, {base_y_m:.4}) m: nothing the joints do can free it; move the base or \
+         the wall"
     )]
     BaseInsideWall {
         /// The wall's index.

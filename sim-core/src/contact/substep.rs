@@ -115,6 +115,11 @@ impl QuasiStatic {
                     self.settings.max_iterations
                 },
             };
+            // A bound relaxed by a fixed point of an earlier round does not carry over: this
+            // round solves Coulomb's law again (and records its own relaxations).
+            for pair in &mut pairs {
+                pair.relaxed_bound_n = None;
+            }
             let x_start = x.clone();
             let pairs_start = pairs.clone();
             let mut outcome = self.ssn.solve(&problem, &mut x, &mut pairs);
@@ -161,6 +166,9 @@ impl QuasiStatic {
                         pair.relaxed_bound_n = Some(0.0);
                     }
                 }
+            } else {
+                // The jams of the fixed point that gave this answer (not of earlier rounds).
+                report.jams += pairs.iter().filter(|p| p.relaxed_bound_n.is_some()).count();
             }
             return Ok(Accepted {
                 x,

@@ -7,7 +7,8 @@
 //! normal forces stop changing: then the answer is Coulomb's. Where the iteration does not
 //! settle, the contacts whose normal force keeps growing are **jammed** (a frictional
 //! paradox: sliding needs ever more normal force the more friction it has): they slide
-//! without friction for the step, which is reported ([`super::StepReport::jams`]).
+//! without friction for the step, which is reported ([`super::StepReport::jams`], counted
+//! by the attempt that accepts the answer).
 
 use super::equations::StepProblem;
 use super::pair::Pair;
@@ -105,7 +106,6 @@ pub(crate) fn solve_by_fixed_point(
                 let bound = c.law.shear_bound(c.normal_force_n).0;
                 if c.shear_force_n.abs() > bound + 1e-12 && c.tresca_n != Some(0.0) {
                     c.tresca_n = Some(0.0);
-                    jammed += 1;
                     outside = true;
                 }
             }
@@ -114,7 +114,6 @@ pub(crate) fn solve_by_fixed_point(
             }
         }
     }
-    report.jams += jammed;
     for c in pairs.iter_mut() {
         c.relaxed_bound_n = c.tresca_n.map(|held| c.law.shear_bound(held).0);
         c.tresca_n = None;

@@ -5,7 +5,7 @@
 use nalgebra::Vector2;
 
 use super::{SweepError, SweepScene};
-use crate::contact::{QuasiStatic, StepReport};
+use crate::contact::{ContactError, QuasiStatic, StepReport};
 use crate::{EquilibriumProblem, InitialGuess, SolveOptions, Wall, solve_equilibrium};
 
 /// How the antenna starts.
@@ -72,6 +72,7 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
         sim.set_tip_force_n(scene.tip_force_n);
         Ok::<_, SweepError>(sim)
     };
+    base_link_clear(scene)?;
     match &scene.placement {
         Placement::Rest => {
             let mut sim = new_sim(base, &chain.rest_theta())?;
@@ -266,6 +267,36 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
             Ok((sim, note, total))
         }
     }
+}
+
+/// The base link (the rigid link from the base pivot at the base angle) must be clear of
+/// every wall before anything is placed: nothing the joints do can free it, so a wall through
+/// it is said first ([`ContactError::BaseInsideWall`]), not as the failure of a placement.
+fn base_link_clear(scene: &SweepScene) -> Result<(), SweepError> {
+    let chain = &scene.chain;
+    let base = scene.base_start_m;
+    let poses = crate::frame_poses(chain, &chain.rest_theta(), crate::Frame::GROUND)
+        .map_err(|e| SweepError::Placement(e.to_string()))?;
+    let Some(end) = poses.position_m(crate::Frame::link(0)) else {
+        return Ok(());
+    };
+    let end = base + end;
+    for (w, wall) in scene.walls.iter().enumerate() {
+        let gap_m = wall
+            .segment_contact(&base, &end)
+            .wall
+            .gap_m
+            .min(wall.signed_distance(&base).gap_m);
+        if gap_m.is_nan() || gap_m < -scene.settings.penetration_tolerance_m {
+            return Err(SweepError::Contact(ContactError::BaseInsideWall {
+                wall: w,
+                depth_m: -gap_m,
+                base_x_m: base.x,
+                base_y_m: base.y,
+            }));
+        }
+    }
+    Ok(())
 }
 
 /// Where a posture crosses a wall: the deepest crossing of a link or an open hair tip.

@@ -204,6 +204,8 @@ pub struct SceneLocations {
     /// `[start]` (its `placement` key, or the table when the key is absent): a placement that
     /// fails.
     pub start_placement: Option<Location>,
+    /// Each `[[walls]]` table, in file order: a wall through the base link.
+    pub walls: Vec<Option<Location>>,
 }
 
 impl Scene {
@@ -369,6 +371,12 @@ impl RawScene {
                 .as_ref()
                 .and_then(|s| s.get_ref().initial.as_ref())
                 .and_then(|i| source.at(i.span())),
+            walls: self
+                .walls
+                .iter()
+                .flatten()
+                .map(|w| source.at(w.span()))
+                .collect(),
             start_placement: self.start.as_ref().and_then(|s| {
                 s.get_ref()
                     .placement_span()

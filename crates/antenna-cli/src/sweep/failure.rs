@@ -75,6 +75,13 @@ impl SweepFailure {
             SweepError::Step { step, t_s, source } => SweepFailure::NoConvergence(format!(
                 "{path}: step {step} (t = {t_s:.4} s) failed: {source}"
             )),
+            SweepError::Contact(source @ ContactError::BaseInsideWall { wall, .. }) => {
+                let at_wall = match scene.locations.walls.get(wall).copied().flatten() {
+                    Some(l) => format!("{path}:{l}: [[walls]] (wall {wall})"),
+                    None => format!("{path}: [[walls]] (wall {wall})"),
+                };
+                SweepFailure::BadInput(format!("{at_wall}: {source}"))
+            }
             SweepError::Contact(source) => placement_step(&at_start, source),
             SweepError::Mapping(inner) => SweepFailure::Breakdown(format!(
                 "{path}: the touch bits of a step could not be derived: {inner}"
