@@ -45,6 +45,9 @@ const SEED_LINK_M: f64 = 0.04;
 /// The sweep, seconds, and its step.
 const DURATION_S: f64 = 10.0;
 const STEP_S: f64 = 0.01;
+/// Each configuration sweeps at least this long per round (short sweeps are repeated and
+/// the median kept), seconds.
+const MIN_MEASURE_S: f64 = 0.05;
 /// The issue's goal: N = 150 within this factor of N = 9, per step.
 const GOAL_RATIO: f64 = 40.0;
 
@@ -63,10 +66,7 @@ fn antenna(links: usize) -> BoxResult<Chain> {
         .link_length_m(l)
         .base_angle_rad(30f64.to_radians())
         .stiffnesses_nm_per_rad(k)
-        .joint_limit(JointLimit::new(
-            (-90f64).to_radians(),
-            90f64.to_radians(),
-        ))
+        .joint_limit(JointLimit::new((-90f64).to_radians(), 90f64.to_radians()))
         .build()?)
 }
 
@@ -86,7 +86,11 @@ fn settings(links: usize, scaled_jump: bool) -> ContactSettings {
 
 fn scene(links: usize, scaled_jump: bool) -> BoxResult<SweepScene> {
     let wall = Wall::new(
-        Line::new(Vector2::new(0.0, 0.2), (-8f64).to_radians(), SolidSide::Left)?,
+        Line::new(
+            Vector2::new(0.0, 0.2),
+            (-8f64).to_radians(),
+            SolidSide::Left,
+        )?,
         SurfaceMap::uniform(Surface::Smooth { mu: 0.3 })?,
     );
     Ok(SweepScene {
@@ -206,6 +210,18 @@ fn write_section(workspace: &Path, section: &str) -> BoxResult<()> {
     Ok(())
 }
 
+/// The note on the jump test (the default-settings table).
+const NOTE: &str = "**Note: the jump test per joint.** With the default settings, at N >= 130 \
+the placement's release (a zero-length step, `QuasiStatic::settle`) converges to another \
+equilibrium, the antenna projecting forward with its tip on the wall 0.32 m ahead, without \
+reporting a snap: the jump test bounds each joint's change by `jump_rad` = 0.05 rad, and 149 \
+joints may each turn that much (7 rad in all) in one accepted step. At N = 110 the same \
+release is caught as a snap (the tip moves 5 mm) and the antenna stays bent back, as at \
+N <= 90. With `jump_rad` scaled to the link the release is refined, followed as a snap, and \
+the antenna stays bent back at every N, which is why the first table scales it. A threshold \
+per length of antenna (a change of curvature) rather than per joint would make the default \
+right at every N; the solver is not changed here.";
+
 /// The table row of configuration `i`; returns the median ratio to N = 9 per step.
 fn row(md: &mut String, runs: &[Vec<Run>], i: usize, links: usize) -> BoxResult<f64> {
     let per_step = |r: &Run| r.sweep_s / r.steps.max(1) as f64;
@@ -234,7 +250,7 @@ fn row(md: &mut String, runs: &[Vec<Run>], i: usize, links: usize) -> BoxResult<
     let steps = r0.steps.max(1) as f64;
     writeln!(
         md,
-        "| {links} | {} | {} | {} | {:.2} / {} / {} / {} | {:.2} / {} | {} | {} | {} | {:.2} | {} | {} | ({:.1}, {:.1}) |",
+        "| {links} | {} | {} | {} | {:.2} / {} / {} / {} | {:.2} / {} | {} | {} | {} | {:.2} | {} | {:.1}% | ({:.1}, {:.1}) |",
         human(median(&times)),
         range(&ratios, &|v| format!("{v:.1}")),
         range(&it_ratios, &|v| format!("{v:.1}")),
@@ -249,7 +265,7 @@ fn row(md: &mut String, runs: &[Vec<Run>], i: usize, links: usize) -> BoxResult<
         r0.dense_solves,
         r0.contacts as f64 / steps,
         human(median(&check_per_step)),
-        range(&shares, &|v| format!("{:.1}%", 100.0 * v)),
+        100.0 * median(&shares),
         r0.tip_end.x * 1e3,
         r0.tip_end.y * 1e3,
     )?;
@@ -304,7 +320,17 @@ fn main() -> BoxResult<()> {
         for i in 0..configs.len() {
             let at = (i + round) % configs.len();
             let (links, scaled) = configs[at];
-            let run = sweep_once(links, scaled)?;
+            // Short sweeps are repeated (at least MIN_MEASURE_S of sweeping) and the run
+            // of median time kept.
+            let mut repeats = vec![sweep_once(links, scaled)?];
+            let mut spent = repeats[0].sweep_s;
+            while spent < MIN_MEASURE_S {
+                let again = sweep_once(links, scaled)?;
+                spent += again.sweep_s;
+                repeats.push(again);
+            }
+            repeats.sort_by(|a, b| a.sweep_s.total_cmp(&b.sweep_s));
+            let run = repeats.swap_remove(repeats.len() / 2);
             eprintln!(
                 "round {round}, N = {links}{}: {} per step, check {:.1}%",
                 if scaled { "" } else { ", default jump_rad" },
@@ -329,7 +355,8 @@ fn main() -> BoxResult<()> {
          the sweep's steps, each certified inside `step_to` by `QuasiStatic::check`; \
          \"certification\": the same `check()` called once more after every step on the \
          state reached, timed on its own, over the sweep's time. {rounds} rounds, the \
-         configurations interleaved; ratios to N = 9 taken within a round, the median over \
+         configurations interleaved, a sweep shorter than 50 ms repeated within its round \
+         (the median kept); ratios to N = 9 taken within a round, the median over \
          the rounds (min..max in brackets). Newton iterations, substeps, snaps, relaxed steps \
          (`StepReport::relaxed`: friction dropped at a jam and the like), dense fallbacks and \
          contacts are those of the first round's sweep (the runs are deterministic). One \
@@ -372,6 +399,71 @@ fn main() -> BoxResult<()> {
         md,
         "\n| goal | measured | met |\n|---|---:|:---:|\n| time per step, N = 150 within {GOAL_RATIO}x of N = 9 (the jump threshold scaled) | {ratio_150:.1}x | {} |",
         if ratio_150 <= GOAL_RATIO { "yes" } else { "no" }
+    )?;
+    let r = |i: usize| &runs[0][i];
+    let iterations =
+        |run: &Run| run.iterations.iter().sum::<usize>() as f64 / run.steps.max(1) as f64;
+    let last = LINKS.len() - 1;
+    let shares: Vec<f64> = (0..LINKS.len())
+        .map(|i| {
+            median(
+                &runs
+                    .iter()
+                    .map(|r| r[i].check_s / r[i].sweep_s)
+                    .collect::<Vec<_>>(),
+            )
+        })
+        .collect();
+    let check_ratio = median(
+        &runs
+            .iter()
+            .map(|r| {
+                (r[last].check_s / r[last].steps.max(1) as f64)
+                    / (r[0].check_s / r[0].steps.max(1) as f64)
+            })
+            .collect::<Vec<_>>(),
+    );
+    let default_150 = configs.len() - 1;
+    let plain_ratio = median(
+        &runs
+            .iter()
+            .map(|r| {
+                (r[default_150].sweep_s / r[default_150].steps.max(1) as f64)
+                    / (r[0].sweep_s / r[0].steps.max(1) as f64)
+            })
+            .collect::<Vec<_>>(),
+    );
+    writeln!(
+        md,
+        "\n**Reading.** The goal is missed by the number of Newton iterations in a few hard \
+         steps more than by the cost of an iteration: at N = 150 the median step is still {} \
+         Newton iteration(s), but the p99 is {} and the worst {}. The bent-back distal part \
+         lies on the wall over many closely spaced vertices; where contacts move from vertex \
+         to vertex it jams ({} steps relaxed: friction dropped at jammed contacts) and is \
+         refined into substeps (up to {}), and those steps are most of the sweep's time ({:.1} \
+         iterations per step on average against {:.1} at N = 9). Without them (the \
+         default-settings row at N = 150: one contact, {:.1} iterations per step, another \
+         sweep) a step costs x{:.1} N = 9's. The certification is one pass over the links, \
+         the walls and the contacts: {:.1}% of the sweep at N = 9, where a step is about one \
+         Newton iteration, {:.1}-{:.1}% from N = 36 on; its time per step grows less than N \
+         (x{:.1} at N = 150).\n\n{NOTE}",
+        percentile(&r(last).iterations, 0.5),
+        percentile(&r(last).iterations, 0.99),
+        r(last).iterations.iter().max().copied().unwrap_or(0),
+        r(last).relaxed,
+        r(last).substeps.iter().max().copied().unwrap_or(0),
+        iterations(r(last)),
+        iterations(r(0)),
+        iterations(r(default_150)),
+        plain_ratio,
+        100.0 * shares[0],
+        100.0 * shares[2..].iter().copied().fold(f64::INFINITY, f64::min),
+        100.0
+            * shares[2..]
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max),
+        check_ratio,
     )?;
     writeln!(md, "{END}")?;
     write_section(&workspace, &md)?;
