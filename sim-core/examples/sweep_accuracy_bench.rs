@@ -623,11 +623,12 @@ that needs only the summary metrics may take 0.02 s (about half the time, the sa
 angles to 1e-9 rad on the line and the sinusoid and to 1e-3 rad at the trapezoid's corners); \
 above 0.05 s the event errors grow and from 0.2 s the sinusoid goes astray. Lower \
 `ContactSettings::tolerance_m` from 1e-12 m to 1e-10 m: the secant predictor leaves most \
-steps one or two Newton iterations from the answer, and the last of them, from about 1e-10 \
-to 1e-16, is the one 1e-10 m saves: about a quarter of the iterations on the line and the \
-trapezoid (a few per cent along the sinusoid, whose iterations go to the crest steps), for \
-joint angles that move by less than 1e-8 rad and a certification that does not change (it \
-checks 10 x `acceptable_m` = 1e-8 m either way). Looser is not worth it: at 1e-8 m the \
+steps one or two Newton iterations from the answer, and a 1e-10 m tolerance typically saves \
+the last of them (the one that takes the residual to rounding): about a quarter of the \
+iterations on the line and the trapezoid (a few per cent along the sinusoid, whose iterations \
+go to the crest steps), for joint angles that move by less than 1e-8 rad and a certification \
+that does not change (it checks 10 x `acceptable_m` = 1e-8 m either way); the line's one \
+relaxed step at 1e-12 m (a residual accepted above the tolerance) is gone at 1e-10 m. Looser is not worth it: at 1e-8 m the \
 sinusoid's angles move by 8e-5 rad, and at 1e-7 m the trapezoid and the sinusoid take another \
 branch at an event (0.2 rad and 0.015 rad).\n\n\
 **Anomaly.** The sinusoid at 0.002 s stops at t = 16.392 s: the solver accepts a step whose \
