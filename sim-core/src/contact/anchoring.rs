@@ -7,7 +7,6 @@
 //! wedge the antenna so that no posture nearby is an equilibrium, the anchors are torn out
 //! and the step is solved without them, which the step reports (a relaxation).
 
-use super::equations::hair_index;
 use super::feature::FrictionLaw;
 use super::geometry::hair_of;
 use super::pair::{Pair, PairKey};
@@ -40,8 +39,11 @@ impl QuasiStatic {
                 continue;
             };
             let hair = hair_of(&self.chain, link);
-            let beta = x
-                .get(n + hair_index(hair_links, link))
+            // A hair tip that joined in this round (no coordinate yet) is open on its stop.
+            let beta = hair_links
+                .iter()
+                .position(|&l| l == link)
+                .and_then(|i| x.get(n + i))
                 .copied()
                 .unwrap_or(hair.open_angle_rad);
             let on_stop = beta >= hair.open_angle_rad - 1e-12;

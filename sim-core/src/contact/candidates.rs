@@ -45,7 +45,7 @@ impl QuasiStatic {
                 &old.key,
                 &mut geo,
             );
-            if geo.valid {
+            if geo.valid && self.pair_on_real_wall(&old.key, &geo.point_m, geo.gap_m) {
                 carry(&mut c, old);
                 out.push(c);
             } else if let Some(next) = out
@@ -76,13 +76,15 @@ impl QuasiStatic {
             for link in 1..=n {
                 let point = ChainPoint::Vertex(link);
                 let (_, _, x) = chain_point(&self.chain, posture, beta, point);
-                if piece.signed_distance(&x).gap_m < within_m {
+                let gap_m = piece.signed_distance(&x).gap_m;
+                if gap_m < within_m && self.on_real_wall(w, &x, gap_m) {
                     keys.push(PairKey::point(point, w));
                 }
                 if self.chain.hairs().get(link).is_some_and(Option::is_some) {
                     let point = ChainPoint::HairTip(link);
                     let (_, _, x) = chain_point(&self.chain, posture, beta, point);
-                    if piece.signed_distance(&x).gap_m < within_m {
+                    let gap_m = piece.signed_distance(&x).gap_m;
+                    if gap_m < within_m && self.on_real_wall(w, &x, gap_m) {
                         keys.push(PairKey::point(point, w));
                     }
                 }
@@ -165,13 +167,41 @@ impl QuasiStatic {
         let before = pairs.len();
         let mut active = false;
         pairs.retain(|c| {
-            let keep = c.geo.valid;
+            let keep = c.geo.valid && self.pair_on_real_wall(&c.key, &c.geo.point_m, c.geo.gap_m);
             if !keep && (c.normal_active || c.normal_force_n != 0.0) {
                 active = true;
             }
             keep
         });
         active && pairs.len() < before
+    }
+}
+
+impl QuasiStatic {
+    /// Whether chain point `x_m`, `gap_m` from piece `piece`, touches the wall the piece was
+    /// cut from there.
+    ///
+    /// A piece of a polyline cut at a concave corner goes on straight past the cut (so that
+    /// its signed distance stays smooth there). Near the cut that extension lies inside the
+    /// neighbouring piece, where the wall's own signed distance is at most the piece's; but
+    /// farther on it can pass through the free space in front of another part of the wall
+    /// (a short edge's line reaching back over a bump), where the wall is farther than the
+    /// piece says: that is no wall at all, and a point touching only it is not a contact.
+    pub(super) fn on_real_wall(&self, piece: usize, x_m: &Vector2<f64>, gap_m: f64) -> bool {
+        !self.pieces.cut[piece]
+            || self.walls[self.pieces.piece_of[piece]]
+                .signed_distance(x_m)
+                .gap_m
+                <= gap_m + self.settings.margin_m
+    }
+
+    /// [`Self::on_real_wall`] for a point pair (feature pairs are corners and crests of the
+    /// wall itself).
+    fn pair_on_real_wall(&self, key: &PairKey, x_m: &Vector2<f64>, gap_m: f64) -> bool {
+        match key.kind {
+            PairKind::Point(_) => self.on_real_wall(key.piece, x_m, gap_m),
+            PairKind::Link { .. } => true,
+        }
     }
 }
 

@@ -19,6 +19,9 @@ pub(crate) struct Pieces {
     pub walls: Vec<Wall>,
     /// `piece_of[i]`: the index of the wall piece `i` belongs to.
     pub piece_of: Vec<usize>,
+    /// `cut[i]`: piece `i` is one of several cut from its wall (its ends at the cuts go on
+    /// straight past them).
+    pub cut: Vec<bool>,
 }
 
 impl Pieces {
@@ -28,14 +31,18 @@ impl Pieces {
         for (w, wall) in walls.iter().enumerate() {
             match &wall.shape {
                 WallShape::Polyline(polyline) => {
-                    for piece in polyline.split_at_concave_corners() {
+                    let split = polyline.split_at_concave_corners();
+                    let cut = split.len() > 1;
+                    for piece in split {
                         pieces.walls.push(Wall::new(piece, wall.surfaces.clone()));
                         pieces.piece_of.push(w);
+                        pieces.cut.push(cut);
                     }
                 }
                 _ => {
                     pieces.walls.push(wall.clone());
                     pieces.piece_of.push(w);
+                    pieces.cut.push(false);
                 }
             }
         }
