@@ -187,12 +187,13 @@ impl QuasiStatic {
     /// farther on it can pass through the free space in front of another part of the wall
     /// (a short edge's line reaching back over a bump), where the wall is farther than the
     /// piece says: that is no wall at all, and a point touching only it is not a contact.
+    /// (On a piece's own edges the wall's distance is never more than the piece's.)
     pub(super) fn on_real_wall(&self, piece: usize, x_m: &Vector2<f64>, gap_m: f64) -> bool {
         !self.pieces.cut[piece]
             || self.walls[self.pieces.piece_of[piece]]
                 .signed_distance(x_m)
                 .gap_m
-                <= gap_m + self.settings.margin_m
+                <= gap_m + self.settings.penetration_tolerance_m
     }
 
     /// [`Self::on_real_wall`] for a point pair (feature pairs are corners and crests of the
