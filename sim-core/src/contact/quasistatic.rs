@@ -53,6 +53,21 @@ pub struct QuasiStatic {
     pub(super) quick_attempt: bool,
 }
 
+/// How many times a step that fails its check is halved before it is refused.
+const CERTIFY_SPLITS: usize = 3;
+
+/// The state a step changes ([`QuasiStatic::step_to`] takes a refused step again from it).
+struct SavedState {
+    base_m: Vector2<f64>,
+    theta: Vec<f64>,
+    beta: Vec<f64>,
+    pairs: Vec<Pair>,
+    hand_force_n: Vector2<f64>,
+    secant: Option<(Vector2<f64>, Vec<f64>)>,
+    friction_locked: bool,
+    anchoring_blocked: bool,
+}
+
 impl QuasiStatic {
     /// A chain at `theta_rad` (`n + 1` entries, `theta_0` the base angle) with its base pivot
     /// at `base_m`, among `walls`. Hairs start open. No contact forces act yet: call
@@ -248,11 +263,79 @@ impl QuasiStatic {
     /// halves (up to `2^max_substep_depth` substeps); where the posture's branch of
     /// equilibria ends, the posture follows the downhill path to the next one (a snap).
     ///
+    /// Every step is certified by [`Self::check`]; a step whose answer fails the check is
+    /// taken again from where it started in two halves (each certified, down to an eighth
+    /// of the step) before it is refused.
+    ///
     /// # Errors
-    /// [`ContactError::NotFinite`], [`ContactError::BaseInsideWall`], or
-    /// [`ContactError::NoConvergence`] (the state is then that of the last substep solved).
+    /// [`ContactError::NotFinite`], [`ContactError::BaseInsideWall`],
+    /// [`ContactError::NoConvergence`] (the state is then that of the last substep solved),
+    /// [`ContactError::Jammed`], or [`ContactError::Uncertified`] (the state is the one
+    /// that failed the check).
     pub fn step_to(&mut self, base_m: Vector2<f64>) -> Result<StepReport, ContactError> {
         finite("base_m", &[base_m.x, base_m.y])?;
+        self.step_certified(base_m, CERTIFY_SPLITS)
+    }
+
+    /// [`Self::step_to`] with `splits` halvings left for a step that fails its check.
+    fn step_certified(
+        &mut self,
+        base_m: Vector2<f64>,
+        splits: usize,
+    ) -> Result<StepReport, ContactError> {
+        let from_m = self.base_m;
+        if splits == 0 || (base_m - from_m).norm() == 0.0 {
+            return self.step_once(base_m);
+        }
+        let saved = self.saved_state();
+        match self.step_once(base_m) {
+            Err(refused @ ContactError::Uncertified { .. }) => {
+                self.restore_state(saved);
+                let mid_m = from_m + (base_m - from_m) * 0.5;
+                let mut report = match self.step_certified(mid_m, splits - 1) {
+                    Ok(r) => r,
+                    Err(ContactError::Uncertified { .. }) => return Err(refused),
+                    Err(other) => return Err(other),
+                };
+                let second = self.step_certified(base_m, splits - 1)?;
+                report.accumulate(&second);
+                report.certificate = second.certificate;
+                report.dense_solves += second.dense_solves;
+                Ok(report)
+            }
+            other => other,
+        }
+    }
+
+    /// What a step changes, to take it again.
+    fn saved_state(&self) -> SavedState {
+        SavedState {
+            base_m: self.base_m,
+            theta: self.theta.clone(),
+            beta: self.beta.clone(),
+            pairs: self.pairs.clone(),
+            hand_force_n: self.hand_force_n,
+            secant: self.secant.clone(),
+            friction_locked: self.friction_locked,
+            anchoring_blocked: self.anchoring_blocked,
+        }
+    }
+
+    fn restore_state(&mut self, saved: SavedState) {
+        self.base_m = saved.base_m;
+        self.theta = saved.theta;
+        self.beta = saved.beta;
+        self.pairs = saved.pairs;
+        self.hand_force_n = saved.hand_force_n;
+        self.secant = saved.secant;
+        self.friction_locked = saved.friction_locked;
+        self.anchoring_blocked = saved.anchoring_blocked;
+        self.friction_off = false;
+        self.quick_attempt = false;
+    }
+
+    /// One step to `base_m`, certified (see [`Self::step_to`]).
+    fn step_once(&mut self, base_m: Vector2<f64>) -> Result<StepReport, ContactError> {
         let mut report = StepReport::default();
         if self.walls.is_empty() {
             // No wall, no contact: the posture is the free equilibrium under the tip load,
