@@ -17,6 +17,10 @@ use super::posture::Posture;
 use super::quasistatic::{QuasiStatic, theta_of};
 use crate::FeatureContact;
 
+/// How many pieces per chain point, and corners or crests per link, the broad phase keeps
+/// (the nearest).
+const NEAREST: usize = 3;
+
 impl QuasiStatic {
     /// The pairs of a step to the base at `goal` (see the module docs).
     pub(super) fn candidates(&self, goal: Vector2<f64>) -> Result<Vec<Pair>, ContactError> {
@@ -72,22 +76,31 @@ impl QuasiStatic {
         let n = self.chain.n();
         let mut keys = Vec::new();
         let mut features: Vec<FeatureContact> = Vec::new();
-        for (w, piece) in self.pieces.walls.iter().enumerate() {
-            for link in 1..=n {
-                let point = ChainPoint::Vertex(link);
+        // Per chain point and per link, the nearest few (a rough or digitized wall puts
+        // dozens of pieces and corners within the margin of one link; the nearest are what
+        // it can touch next, and anything the solve pushes into a wall joins after it).
+        let keep = if within_m > 0.0 { NEAREST } else { usize::MAX };
+        let mut near: Vec<(f64, PairKey)> = Vec::new();
+        let take = |near: &mut Vec<(f64, PairKey)>, keys: &mut Vec<PairKey>| {
+            near.sort_by(|a, b| a.0.total_cmp(&b.0));
+            keys.extend(near.drain(..).take(keep).map(|(_, k)| k));
+        };
+        for link in 1..=n {
+            let mut points = vec![ChainPoint::Vertex(link)];
+            if self.chain.hairs().get(link).is_some_and(Option::is_some) {
+                points.push(ChainPoint::HairTip(link));
+            }
+            for point in points {
                 let (_, _, x) = chain_point(&self.chain, posture, beta, point);
-                let gap_m = piece.signed_distance(&x).gap_m;
-                if gap_m < within_m && self.on_real_wall(w, &x, gap_m) {
-                    keys.push(PairKey::point(point, w));
-                }
-                if self.chain.hairs().get(link).is_some_and(Option::is_some) {
-                    let point = ChainPoint::HairTip(link);
-                    let (_, _, x) = chain_point(&self.chain, posture, beta, point);
+                for (w, piece) in self.pieces.walls.iter().enumerate() {
                     let gap_m = piece.signed_distance(&x).gap_m;
                     if gap_m < within_m && self.on_real_wall(w, &x, gap_m) {
-                        keys.push(PairKey::point(point, w));
+                        near.push((gap_m, PairKey::point(point, w)));
                     }
                 }
+                take(&mut near, &mut keys);
+            }
+            for (w, piece) in self.pieces.walls.iter().enumerate() {
                 features.clear();
                 piece.shape.features_near_segment(
                     &posture.start_of(link),
@@ -97,11 +110,13 @@ impl QuasiStatic {
                 );
                 for fc in &features {
                     if fc.supported && fc.s >= -FOOT_TOLERANCE && fc.s <= 1.0 + FOOT_TOLERANCE {
-                        keys.push(PairKey::link(link, fc.feature, w));
+                        near.push((fc.gap_m, PairKey::link(link, fc.feature, w)));
                     }
                 }
             }
+            take(&mut near, &mut keys);
         }
+        keys.sort();
         keys
     }
 

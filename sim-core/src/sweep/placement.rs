@@ -178,20 +178,51 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
             }
             let crossing = deepest_crossing(&chain, &scene.walls, base, &eq.theta_rad);
             let tolerance = scene.settings.penetration_tolerance_m;
+            let clear = |theta: &[f64]| {
+                deepest_crossing(&chain, &scene.walls, base, theta)
+                    .is_none_or(|c| c.depth_m <= tolerance)
+            };
+            // The pinned posture from the requested start, or, where it crosses a wall, the
+            // first of the other starts whose pinned posture is clear (said in the note).
+            let mut placed = None;
             if crossing.as_ref().is_none_or(|c| c.depth_m <= tolerance) {
+                placed = Some((eq.theta_rad.clone(), eq.iterations, String::new()));
+            } else {
+                for other in other_starts(start) {
+                    let Ok(alt) = solve_equilibrium(&problem, &other, &SolveOptions::default())
+                    else {
+                        continue;
+                    };
+                    if alt.converged && clear(&alt.theta_rad) {
+                        let c = crossing.as_ref();
+                        placed = Some((
+                            alt.theta_rad,
+                            alt.iterations,
+                            format!(
+                                " (the {start:?} start's pinned posture puts {} {:.2} mm inside \
+                                 wall {}, so the {other:?} start's was used)",
+                                c.map_or("a link", |c| c.what.as_str()),
+                                c.map_or(0.0, |c| c.depth_m * 1e3),
+                                c.map_or(*wall, |c| c.wall),
+                            ),
+                        ));
+                        break;
+                    }
+                }
+            }
+            if let Some((theta, iterations, instead)) = placed {
                 // The pinned posture is clear of the walls, its tip on the wall: put it there,
                 // let go and let it settle with friction.
-                let mut sim = new_sim(base, &eq.theta_rad)?;
+                let mut sim = new_sim(base, &theta)?;
                 let report = settle(&mut sim)?;
                 let flip = super::distal_flip(&sim, along.y.atan2(along.x));
                 let note = format!(
                     "tip placed on wall {wall} at ({:.4}, {:.4}) m ({ahead_m} m ahead of the \
-                     base): the pinned equilibrium from a {start:?} start ({} iterations), let \
-                     go and settled with friction{}; {} contact(s), distal segment at {:.1} deg \
-                     to the wall",
+                     base): the pinned equilibrium from a {start:?} start ({iterations} \
+                     iterations){instead}, let go and settled with friction{}; {} contact(s), \
+                     distal segment at {:.1} deg to the wall",
                     pin.x,
                     pin.y,
-                    eq.iterations,
                     snapped(&report),
                     sim.contacts().len(),
                     flip.map_or(f64::NAN, |f| f.angle_to_wall_rad.to_degrees()),
@@ -267,6 +298,20 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
             Ok((sim, note, total))
         }
     }
+}
+
+/// The starts tried after `start` when its pinned posture crosses a wall.
+fn other_starts(start: &InitialGuess) -> Vec<InitialGuess> {
+    [
+        InitialGuess::C,
+        InitialGuess::S,
+        InitialGuess::Mirror(Box::new(InitialGuess::C)),
+        InitialGuess::Mirror(Box::new(InitialGuess::S)),
+        InitialGuess::Straight,
+    ]
+    .into_iter()
+    .filter(|s| s != start)
+    .collect()
 }
 
 /// The base link (the rigid link from the base pivot at the base angle) must be clear of
