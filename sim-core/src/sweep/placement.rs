@@ -156,6 +156,7 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
             let w = wall_of(*wall)?;
             let along = motion_direction(scene);
             let pin = point_ahead(w, base, along, *ahead_m);
+            let mut start_note = String::new();
             let reach_m: f64 = chain.link_lengths_m().iter().sum();
             let distance_m = (pin - base).norm();
             if distance_m.is_nan() || distance_m >= reach_m {
@@ -168,13 +169,29 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
                 )));
             }
             let problem = EquilibriumProblem::new(&chain).with_tip_pin_m(pin - base);
-            let eq = solve_equilibrium(&problem, start, &SolveOptions::default())?;
+            let mut eq = solve_equilibrium(&problem, start, &SolveOptions::default())?;
             if !eq.converged {
-                return Err(SweepError::Placement(format!(
-                    "the pinned equilibrium with the tip at ({:.4}, {:.4}) m did not converge \
-                     (KKT residual {:e})",
-                    pin.x, pin.y, eq.kkt_residual
-                )));
+                // Another start's pinned equilibrium (said in the note), or the error.
+                let residual = eq.kkt_residual;
+                let found = other_starts(start).into_iter().find_map(|other| {
+                    solve_equilibrium(&problem, &other, &SolveOptions::default())
+                        .ok()
+                        .filter(|alt| alt.converged)
+                        .map(|alt| (other, alt))
+                });
+                let Some((other, alt)) = found else {
+                    return Err(SweepError::Placement(format!(
+                        "the pinned equilibrium with the tip at ({:.4}, {:.4}) m did not \
+                         converge from a {start:?} start (KKT residual {residual:e}) nor from \
+                         any other start",
+                        pin.x, pin.y
+                    )));
+                };
+                eq = alt;
+                start_note = format!(
+                    " (from the {start:?} start it did not converge, KKT residual \
+                     {residual:.1e}; the {other:?} start's is used)"
+                );
             }
             let crossing = deepest_crossing(&chain, &scene.walls, base, &eq.theta_rad);
             let tolerance = scene.settings.penetration_tolerance_m;
@@ -182,38 +199,13 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
                 deepest_crossing(&chain, &scene.walls, base, theta)
                     .is_none_or(|c| c.depth_m <= tolerance)
             };
-            // The pinned posture from the requested start, or, where it crosses a wall, the
-            // first of the other starts whose pinned posture is clear (said in the note).
-            let mut placed = None;
-            if crossing.as_ref().is_none_or(|c| c.depth_m <= tolerance) {
-                placed = Some((eq.theta_rad.clone(), eq.iterations, String::new()));
-            } else {
-                for other in other_starts(start) {
-                    let Ok(alt) = solve_equilibrium(&problem, &other, &SolveOptions::default())
-                    else {
-                        continue;
-                    };
-                    if alt.converged && clear(&alt.theta_rad) {
-                        let c = crossing.as_ref();
-                        placed = Some((
-                            alt.theta_rad,
-                            alt.iterations,
-                            format!(
-                                " (the {start:?} start's pinned posture puts {} {:.2} mm inside \
-                                 wall {}, so the {other:?} start's was used)",
-                                c.map_or("a link", |c| c.what.as_str()),
-                                c.map_or(0.0, |c| c.depth_m * 1e3),
-                                c.map_or(*wall, |c| c.wall),
-                            ),
-                        ));
-                        break;
-                    }
-                }
-            }
-            if let Some((theta, iterations, instead)) = placed {
+            // The pinned posture from the requested start where it is clear of the walls;
+            // else the antenna held by its tip and brought onto the walls; else the first of
+            // the other starts whose pinned posture is clear (said in the note).
+            let place_clear = |theta: &[f64], iterations: usize, instead: &str| {
                 // The pinned posture is clear of the walls, its tip on the wall: put it there,
                 // let go and let it settle with friction.
-                let mut sim = new_sim(base, &theta)?;
+                let mut sim = new_sim(base, theta)?;
                 let report = settle(&mut sim)?;
                 let flip = super::distal_flip(&sim, along.y.atan2(along.x));
                 let note = format!(
@@ -227,7 +219,10 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
                     sim.contacts().len(),
                     flip.map_or(f64::NAN, |f| f.angle_to_wall_rad.to_degrees()),
                 );
-                return Ok((sim, note, report));
+                Ok::<_, SweepError>((sim, note, report))
+            };
+            if crossing.as_ref().is_none_or(|c| c.depth_m <= tolerance) {
+                return place_clear(&eq.theta_rad, eq.iterations, &start_note);
             }
             // The pinned posture ignores the walls and crosses one: hold the tip there and
             // bring the held antenna onto the walls from where it is clear of them.
@@ -253,49 +248,72 @@ pub(super) fn place(scene: &SweepScene) -> Result<(QuasiStatic, String, StepRepo
                     pin.x, pin.y
                 ))
             };
-            let away = w.signed_distance(&pin).normal;
-            // Back off along the normal until clear (on a curved wall one step may not do).
-            let mut clear_m = 0.0;
-            for _ in 0..50 {
-                let depth =
-                    deepest_crossing(&chain, &scene.walls, base + away * clear_m, &eq.theta_rad)
-                        .map_or(0.0, |c| c.depth_m);
-                if depth <= 0.0 {
-                    break;
+            let held = || -> Result<(QuasiStatic, String, StepReport), SweepError> {
+                let away = w.signed_distance(&pin).normal;
+                // Back off along the normal until clear (on a curved wall one step may not do).
+                let mut clear_m = 0.0;
+                for _ in 0..50 {
+                    let depth = deepest_crossing(
+                        &chain,
+                        &scene.walls,
+                        base + away * clear_m,
+                        &eq.theta_rad,
+                    )
+                    .map_or(0.0, |c| c.depth_m);
+                    if depth <= 0.0 {
+                        break;
+                    }
+                    clear_m += depth + 1e-3;
                 }
-                clear_m += depth + 1e-3;
-            }
-            let from = base + away * clear_m;
-            let mut sim = new_sim(from, &eq.theta_rad).map_err(|e| explain(e.to_string()))?;
-            sim.hold_tip(Some(pin - base));
-            let mut total = settle(&mut sim).map_err(|e| explain(e.to_string()))?;
-            let steps = ((clear_m / 2e-4).ceil() as usize).max(1);
-            for k in 1..=steps {
-                let at = from + (base - from) * (k as f64 / steps as f64);
-                let r = sim.step_to(at).map_err(|e| explain(e.to_string()))?;
-                total.accumulate(&r);
-            }
-            let held_n = sim.hand_force_n();
-            sim.hold_tip(None);
-            let report = settle(&mut sim).map_err(|e| explain(e.to_string()))?;
-            total.accumulate(&report);
-            let flip = super::distal_flip(&sim, along.y.atan2(along.x));
-            let note = format!(
-                "tip placed on wall {wall} at ({:.4}, {:.4}) m ({ahead_m} m ahead of the base): \
-                 the pinned equilibrium from a {start:?} start ({} iterations) crosses a wall \
-                 ({crossing_words}), so it was held by the tip and brought {clear_m:.4} m onto \
+                let from = base + away * clear_m;
+                let mut sim = new_sim(from, &eq.theta_rad).map_err(|e| explain(e.to_string()))?;
+                sim.hold_tip(Some(pin - base));
+                let mut total = settle(&mut sim).map_err(|e| explain(e.to_string()))?;
+                let steps = ((clear_m / 2e-4).ceil() as usize).max(1);
+                for k in 1..=steps {
+                    let at = from + (base - from) * (k as f64 / steps as f64);
+                    let r = sim.step_to(at).map_err(|e| explain(e.to_string()))?;
+                    total.accumulate(&r);
+                }
+                let held_n = sim.hand_force_n();
+                sim.hold_tip(None);
+                let report = settle(&mut sim).map_err(|e| explain(e.to_string()))?;
+                total.accumulate(&report);
+                let flip = super::distal_flip(&sim, along.y.atan2(along.x));
+                let note = format!(
+                    "tip placed on wall {wall} at ({:.4}, {:.4}) m ({ahead_m} m ahead of the base): \
+                 the pinned equilibrium from a {start:?} start ({} iterations){start_note} \
+                 crosses a wall ({crossing_words}), so it was held by the tip and brought {clear_m:.4} m onto \
                  the wall in {steps} steps (the hand held it with ({:.4}, {:.4}) N), let go and \
                  settled with friction{}; {} contact(s), distal segment at {:.1} deg to the wall",
-                pin.x,
-                pin.y,
-                eq.iterations,
-                held_n.x,
-                held_n.y,
-                snapped(&report),
-                sim.contacts().len(),
-                flip.map_or(f64::NAN, |f| f.angle_to_wall_rad.to_degrees()),
-            );
-            Ok((sim, note, total))
+                    pin.x,
+                    pin.y,
+                    eq.iterations,
+                    held_n.x,
+                    held_n.y,
+                    snapped(&report),
+                    sim.contacts().len(),
+                    flip.map_or(f64::NAN, |f| f.angle_to_wall_rad.to_degrees()),
+                );
+                Ok((sim, note, total))
+            };
+            let held_error = match held() {
+                Ok(placed) => return Ok(placed),
+                Err(e) => e,
+            };
+            for other in other_starts(start) {
+                let Ok(alt) = solve_equilibrium(&problem, &other, &SolveOptions::default()) else {
+                    continue;
+                };
+                if alt.converged && clear(&alt.theta_rad) {
+                    let instead = format!(
+                        " ({crossing_words}, and bringing it onto the wall held by its tip \
+                         failed; the {other:?} start's pinned posture is clear and was used)"
+                    );
+                    return place_clear(&alt.theta_rad, alt.iterations, &instead);
+                }
+            }
+            Err(held_error)
         }
     }
 }
