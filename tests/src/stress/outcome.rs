@@ -1,0 +1,400 @@
+//! Running one sweep, re-checking every step, and classifying how it ended.
+//!
+//! sim-core certifies every step itself (`QuasiStatic::step_to` runs an independent check
+//! and refuses a state that fails it); the harness checks again after every step, placement
+//! included, with `QuasiStatic::check` against `QuasiStatic::certify_tolerances`, and calls
+//! a step the solver returned but the check refuses [`Outcome::Uncertified`].
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use sim_core::contact::{ContactError, Jam, QuasiStatic};
+use sim_core::sweep::{Sweep, SweepError};
+
+use super::case::{Case, PlacementKind, Sample};
+use super::walls::WallKind;
+
+/// How a sweep ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Outcome {
+    /// Every step returned `Ok` and passed the harness's check.
+    Finished,
+    /// A step ended with [`ContactError::Jammed`]: the antenna physically cannot go on.
+    Jammed {
+        /// The step (0: during the placement).
+        step: usize,
+        /// What pins it, in sim-core's words.
+        description: String,
+        /// The contacts that pin it.
+        contacts: Vec<String>,
+        /// The joints on their stops.
+        joints_on_stops: Vec<usize>,
+    },
+    /// The placement could not be done and said why.
+    PlacementRefused {
+        /// The message.
+        message: String,
+    },
+    /// Anything else: what the suite exists to find.
+    SolverFailure {
+        /// The step that failed (0: the placement), if known.
+        step: Option<usize>,
+        /// The message.
+        message: String,
+    },
+    /// A step returned `Ok` but its state fails the harness's check: a bug.
+    Uncertified {
+        /// The step (0: the placed posture).
+        step: usize,
+        /// What failed.
+        failures: Vec<String>,
+    },
+    /// The generator could not build the case: a bug of the suite.
+    InvalidCase {
+        /// The message.
+        message: String,
+    },
+}
+
+impl Outcome {
+    /// A short label.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Outcome::Finished => "finished",
+            Outcome::Jammed { .. } => "jammed",
+            Outcome::PlacementRefused { .. } => "placement refused",
+            Outcome::SolverFailure { .. } => "solver failure",
+            Outcome::Uncertified { .. } => "uncertified",
+            Outcome::InvalidCase { .. } => "invalid case",
+        }
+    }
+
+    /// Whether this is a failure the suite asserts against (solver failure, uncertified
+    /// step, invalid case).
+    pub fn is_failure(&self) -> bool {
+        matches!(
+            self,
+            Outcome::SolverFailure { .. }
+                | Outcome::Uncertified { .. }
+                | Outcome::InvalidCase { .. }
+        )
+    }
+
+    /// The full message (empty for a finished sweep).
+    pub fn message(&self) -> String {
+        match self {
+            Outcome::Finished => String::new(),
+            Outcome::Jammed {
+                step,
+                description,
+                contacts,
+                joints_on_stops,
+            } => format!(
+                "step {step}: jammed: {description}; contacts [{}]; joints on stops {:?}",
+                contacts.join("; "),
+                joints_on_stops
+            ),
+            Outcome::PlacementRefused { message } | Outcome::InvalidCase { message } => {
+                message.clone()
+            }
+            Outcome::SolverFailure { message, .. } => message.clone(),
+            Outcome::Uncertified { step, failures } => {
+                format!(
+                    "step {step}: Ok from the solver but fails the check: {}",
+                    failures.join(", ")
+                )
+            }
+        }
+    }
+
+    /// The reason with its numbers replaced by `#`, to count alike reasons together.
+    pub fn reason(&self) -> String {
+        match self {
+            Outcome::Jammed { description, .. } => generalize(description),
+            Outcome::Uncertified { failures, .. } => {
+                let names: Vec<String> = failures.iter().map(|f| generalize(f)).collect();
+                format!("uncertified: {}", names.join(", "))
+            }
+            other => generalize(&other.message()),
+        }
+    }
+}
+
+/// `text` with every number replaced by `#`.
+pub fn generalize(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        let prev_alnum = i > 0 && (chars[i - 1].is_alphanumeric() || chars[i - 1] == '_');
+        let starts_number = !prev_alnum
+            && (c.is_ascii_digit()
+                || (c == '-' && chars.get(i + 1).is_some_and(char::is_ascii_digit)));
+        if starts_number {
+            i += 1;
+            while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
+                i += 1;
+            }
+            // An exponent.
+            if i + 1 < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+                let mut j = i + 1;
+                if chars[j] == '-' || chars[j] == '+' {
+                    j += 1;
+                }
+                if chars.get(j).is_some_and(char::is_ascii_digit) {
+                    i = j;
+                    while i < chars.len() && chars[i].is_ascii_digit() {
+                        i += 1;
+                    }
+                }
+            }
+            out.push('#');
+        } else {
+            out.push(c);
+            i += 1;
+        }
+    }
+    out
+}
+
+/// One sweep's record.
+#[derive(Clone, Debug)]
+pub struct SweepRecord {
+    /// The case's seed.
+    pub seed: u64,
+    /// The case's index.
+    pub index: u64,
+    /// The case's sample.
+    pub sample: Sample,
+    /// `N` (0 for an invalid case).
+    pub links: usize,
+    /// The wall's kind (`None` for an invalid case).
+    pub wall_kind: Option<WallKind>,
+    /// The placement's kind (`None` for an invalid case).
+    pub placement_kind: Option<PlacementKind>,
+    /// The case's replay line.
+    pub replay: String,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// The steps it was to take.
+    pub planned_steps: usize,
+    /// The steps solved after the placement.
+    pub steps: usize,
+    /// Of those, the steps that ended with a contact.
+    pub contact_steps: usize,
+    /// Of those, the steps where the solver relaxed something.
+    pub relaxed_steps: usize,
+    /// What was relaxed (generalized), and in how many steps.
+    pub relaxations: BTreeMap<String, usize>,
+    /// Newton iterations of each solved step.
+    pub iterations: Vec<u32>,
+    /// Steps that snapped.
+    pub snaps: usize,
+    /// The placement's note (empty if it failed).
+    pub placement_note: String,
+    /// Wall-clock time of the placement and the steps, seconds.
+    pub wall_clock_s: f64,
+}
+
+impl SweepRecord {
+    /// Newton iterations over the solved steps.
+    pub fn total_iterations(&self) -> u64 {
+        self.iterations.iter().map(|&i| u64::from(i)).sum()
+    }
+
+    /// The outcome with the steps done and the time taken, for reports.
+    pub fn outcome_line(&self) -> String {
+        format!(
+            "{} after {} of {} steps ({} Newton iterations, {:.2} s): {}",
+            self.outcome.label(),
+            self.steps,
+            self.planned_steps,
+            self.total_iterations(),
+            self.wall_clock_s,
+            self.outcome.message()
+        )
+    }
+}
+
+impl SweepRecord {
+    /// A record of a case that could not be built.
+    pub fn invalid(seed: u64, index: u64, sample: Sample, message: String) -> SweepRecord {
+        SweepRecord {
+            seed,
+            index,
+            sample,
+            links: 0,
+            wall_kind: None,
+            placement_kind: None,
+            replay: format!("replay {}:{seed}:{index} | (not built)", sample.name()),
+            outcome: Outcome::InvalidCase { message },
+            planned_steps: 0,
+            steps: 0,
+            contact_steps: 0,
+            relaxed_steps: 0,
+            relaxations: BTreeMap::new(),
+            iterations: Vec::new(),
+            snaps: 0,
+            placement_note: String::new(),
+            wall_clock_s: 0.0,
+        }
+    }
+}
+
+/// The suite's budget of Newton iterations for the steps of a sweep of `steps` steps:
+/// 20,000 plus 100 per step. A healthy step takes a few; a sweep that needs more than this
+/// is stopped and counted as a solver failure (it would take minutes: a step of a
+/// 4-link antenna on a sinusoid has been seen to take 60,000 iterations). Counted in
+/// iterations, not seconds, so the outcome does not depend on the machine.
+pub fn iteration_budget(steps: usize) -> usize {
+    20_000 + 100 * steps
+}
+
+/// The harness's own check of the current state: the failures, if it fails.
+fn recheck(sim: &QuasiStatic) -> Option<Vec<String>> {
+    let tolerances = sim.certify_tolerances();
+    let check = sim.check();
+    if check.holds_within(&tolerances) {
+        None
+    } else {
+        Some(check.failures(&tolerances))
+    }
+}
+
+/// A jam's outcome.
+fn jammed(step: usize, jam: &Jam) -> Outcome {
+    Outcome::Jammed {
+        step,
+        description: jam.description.clone(),
+        contacts: jam
+            .contacts
+            .iter()
+            .map(|c| {
+                format!(
+                    "{:?} on wall {} at ({:.4}, {:.4}) m, N = {:.3e} N",
+                    c.feature, c.wall, c.point_m.x, c.point_m.y, c.normal_force_n
+                )
+            })
+            .collect(),
+        joints_on_stops: jam.joints_on_stops.clone(),
+    }
+}
+
+/// Whether a contact error says the start itself was bad input.
+fn bad_start(e: &ContactError) -> bool {
+    matches!(
+        e,
+        ContactError::StartInsideWall { .. }
+            | ContactError::BaseInsideWall { .. }
+            | ContactError::OutsideLimits { .. }
+    )
+}
+
+/// How a sweep error ends the sweep.
+pub fn classify(e: &SweepError) -> Outcome {
+    let message = e.to_string();
+    match e {
+        SweepError::Placement(_) | SweepError::PlacementSolve(_) => {
+            Outcome::PlacementRefused { message }
+        }
+        SweepError::Step {
+            step,
+            source: ContactError::Jammed(jam),
+            ..
+        } => jammed(*step, jam),
+        SweepError::Contact(ContactError::Jammed(jam)) => jammed(0, jam),
+        SweepError::Step {
+            step: 0, source, ..
+        } if bad_start(source) => Outcome::PlacementRefused { message },
+        SweepError::Contact(source) if bad_start(source) => Outcome::PlacementRefused { message },
+        SweepError::Step { step, .. } => Outcome::SolverFailure {
+            step: Some(*step),
+            message,
+        },
+        _ => Outcome::SolverFailure {
+            step: None,
+            message,
+        },
+    }
+}
+
+/// Runs `case`'s sweep to its end (or its first error), checking every step; with
+/// `budgeted`, stops it once its steps have taken more than [`iteration_budget`] Newton
+/// iterations (a solver failure).
+pub fn run_case(case: &Case, budgeted: bool) -> SweepRecord {
+    let started = Instant::now();
+    let mut rec = SweepRecord {
+        seed: case.seed,
+        index: case.index,
+        sample: case.sample,
+        links: case.links,
+        wall_kind: Some(case.wall.kind),
+        placement_kind: Some(case.placement_kind),
+        replay: case.replay_line(),
+        outcome: Outcome::Finished,
+        planned_steps: case.steps(),
+        steps: 0,
+        contact_steps: 0,
+        relaxed_steps: 0,
+        relaxations: BTreeMap::new(),
+        iterations: Vec::with_capacity(case.steps()),
+        snaps: 0,
+        placement_note: String::new(),
+        wall_clock_s: 0.0,
+    };
+    let budget = budgeted.then(|| iteration_budget(case.steps()));
+    rec.outcome = sweep(case, &mut rec, budget);
+    rec.wall_clock_s = started.elapsed().as_secs_f64();
+    rec
+}
+
+fn sweep(case: &Case, rec: &mut SweepRecord, budget: Option<usize>) -> Outcome {
+    let mut sweep = match Sweep::new(case.scene.clone()) {
+        Ok(s) => s,
+        Err(e) => return classify(&e),
+    };
+    rec.placement_note = sweep.placement_note().to_owned();
+    if let Some(failures) = recheck(sweep.sim()) {
+        return Outcome::Uncertified { step: 0, failures };
+    }
+    let mut total = 0usize;
+    while let Some(result) = sweep.next_step() {
+        let step = match result {
+            Ok(step) => step,
+            Err(e) => return classify(&e),
+        };
+        rec.steps += 1;
+        rec.iterations
+            .push(u32::try_from(step.report.iterations).unwrap_or(u32::MAX));
+        rec.contact_steps += usize::from(!step.contacts.is_empty());
+        rec.snaps += usize::from(step.report.snapped);
+        if step.report.relaxed() {
+            rec.relaxed_steps += 1;
+            for r in step.report.relaxations() {
+                *rec.relaxations.entry(generalize(&r)).or_default() += 1;
+            }
+        }
+        if let Some(failures) = recheck(sweep.sim()) {
+            return Outcome::Uncertified {
+                step: step.step,
+                failures,
+            };
+        }
+        total += step.report.iterations;
+        if let Some(budget) = budget.filter(|b| total > *b) {
+            let slowest = rec.iterations.iter().max().copied().unwrap_or(0);
+            return Outcome::SolverFailure {
+                step: Some(step.step),
+                message: format!(
+                    "step {}: over the suite's budget: the sweep's steps took {total} Newton \
+                     iterations by now (budget {budget} for {} steps; the slowest step {slowest}); \
+                     stopped",
+                    step.step,
+                    case.steps()
+                ),
+            };
+        }
+    }
+    Outcome::Finished
+}

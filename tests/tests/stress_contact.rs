@@ -1,0 +1,403 @@
+//! The contact stress suite (`antenna_tests::stress`): random walls (polylines with convex
+//! and concave corners of 5-85 deg and edges shorter than a link, corners exactly on the
+//! start posture's joints, sinusoids down to a crest radius of half a link, noisy digitized
+//! walls, lines), mu in {0, 0.3, 0.6, 1.0}, the seven Table 4.1 profiles, no hairs or distal
+//! hairs, N in {4, 9, 18, 36, 72, 150}, every placement. Every sweep must finish with every
+//! step certified, or end with a typed outcome: jammed (the antenna physically cannot go on)
+//! or its placement refused with a reason. Solver failures and uncertified steps fail.
+//!
+//! - `cargo test -p antenna-tests --test stress_contact -- --nocapture`: the CI sample (a
+//!   fixed seed), with its table.
+//! - `ANTENNA_SOAK=1 cargo test -p antenna-tests --release --test stress_contact --
+//!   --nocapture`: at least 2,000 sweeps (`ANTENNA_SOAK_SWEEPS`, default 2000) from
+//!   `ANTENNA_SOAK_SEED` (default below), longer ones, the table, every unfinished sweep.
+//! - `ANTENNA_STRESS_REPLAY=ci:SEED:INDEX[,INDEX...]` (or `soak:...`): reruns those cases
+//!   alone and prints what happened (the replay lines printed for unfinished sweeps say
+//!   which), without the suite's iteration budget unless `ANTENNA_STRESS_BUDGET=1`.
+//! - `ANTENNA_STRESS_THREADS`: worker threads (default: every core).
+#![allow(clippy::unwrap_used)]
+
+use std::time::Instant;
+
+use antenna_tests::stress::case::{
+    ANTENNA_LENGTH_M, Case, LINK_COUNTS, MUS, PlacementKind, PosturePoints, Sample,
+};
+use antenna_tests::stress::walls::{
+    self, AnchorStyle, Profile, Underlying, WallFrame, WallKind, crest_radius_m,
+    draw_anchored_polyline, draw_digitized, draw_polyline, draw_sinusoid,
+};
+use antenna_tests::stress::{
+    case_rng, default_threads, run_cases, run_index, summary_markdown, unfinished_report,
+};
+use nalgebra::Vector2;
+use sim_core::sweep::Placement;
+use sim_core::{Polyline, SolidSide, WallShape};
+
+/// The CI sample's seed.
+const CI_SEED: u64 = 20_261_122;
+/// The CI sample's size (tuned to about 60 s in the test profile on two shared cores).
+const CI_SWEEPS: u64 = 100;
+/// The soak's default seed.
+const SOAK_SEED: u64 = 4_221;
+/// The soak's default (and least) size.
+const SOAK_SWEEPS: u64 = 2_000;
+
+fn env_u64(name: &str) -> Option<u64> {
+    std::env::var(name).ok().and_then(|v| v.trim().parse().ok())
+}
+
+/// `ANTENNA_STRESS_REPLAY=ci:SEED:I,J,...`: rerun those cases and print them.
+fn replay(spec: &str) {
+    let mut parts = spec.split(':');
+    let sample = parts.next().and_then(Sample::parse).expect("ci or soak");
+    let seed: u64 = parts.next().and_then(|s| s.parse().ok()).expect("a seed");
+    let indices: Vec<u64> = parts
+        .next()
+        .expect("indices")
+        .split(',')
+        .map(|i| i.trim().parse().unwrap())
+        .collect();
+    // Without the suite's iteration budget unless ANTENNA_STRESS_BUDGET=1: the whole story.
+    let budgeted = std::env::var("ANTENNA_STRESS_BUDGET").is_ok_and(|v| v.trim() == "1");
+    for index in indices {
+        let case = Case::generate(seed, index, sample).unwrap();
+        println!("{}", case.replay_line());
+        println!("scene: {:?}", case.scene);
+        let rec = run_index(seed, index, sample, budgeted);
+        println!("placement: {}", rec.placement_note);
+        println!(
+            "{} ({} steps in contact, {} relaxed)",
+            rec.outcome_line(),
+            rec.contact_steps,
+            rec.relaxed_steps
+        );
+    }
+}
+
+#[test]
+fn contact_sweeps_finish_with_every_step_certified() {
+    if let Ok(spec) = std::env::var("ANTENNA_STRESS_REPLAY") {
+        replay(&spec);
+        return;
+    }
+    let soak = std::env::var("ANTENNA_SOAK").is_ok_and(|v| v.trim() == "1");
+    let (seed, count, sample) = if soak {
+        (
+            env_u64("ANTENNA_SOAK_SEED").unwrap_or(SOAK_SEED),
+            env_u64("ANTENNA_SOAK_SWEEPS").unwrap_or(SOAK_SWEEPS),
+            Sample::Soak,
+        )
+    } else {
+        (CI_SEED, CI_SWEEPS, Sample::Ci)
+    };
+    let threads = default_threads();
+    let started = Instant::now();
+    let records = run_cases(seed, 0..count, sample, threads, if soak { 100 } else { 0 });
+    let elapsed = started.elapsed().as_secs_f64();
+    println!(
+        "\n# Contact stress: {} sample, seed {seed}, {count} sweeps, {threads} thread(s), \
+         {elapsed:.1} s\n",
+        sample.name()
+    );
+    println!("{}", summary_markdown(&records));
+    println!("{}", unfinished_report(&records));
+    let failures = records.iter().filter(|r| r.outcome.is_failure()).count();
+    assert_eq!(
+        failures, 0,
+        "{failures} of {count} sweeps ended in a solver failure, an uncertified step or an \
+         invalid case (listed above with their replay lines)"
+    );
+}
+
+/// Corners of drawn polylines (not the ones placed on a posture): every one turns 5-85 deg,
+/// and over a sample both convex and concave corners reach both ends of the range; some
+/// edges are shorter than a link.
+#[test]
+fn polyline_corners_span_5_to_85_degrees_both_ways() {
+    let mut convex = (f64::INFINITY, 0.0_f64);
+    let mut concave = (f64::INFINITY, 0.0_f64);
+    let mut short_edges = 0;
+    let frame = WallFrame {
+        origin_m: Vector2::new(0.0, 0.2),
+        angle_rad: -8f64.to_radians(),
+    };
+    for i in 0..600 {
+        let mut rng = case_rng(7, i);
+        let link_m = ANTENNA_LENGTH_M / LINK_COUNTS[i as usize % LINK_COUNTS.len()] as f64;
+        let profile = if i % 2 == 0 {
+            draw_polyline(&mut rng, link_m, (-0.3, 0.5))
+        } else {
+            let style = [
+                AnchorStyle::StepUp,
+                AnchorStyle::StepDown,
+                AnchorStyle::Tooth,
+                AnchorStyle::Pocket,
+            ][(i as usize / 2) % 4];
+            draw_anchored_polyline(&mut rng, link_m, (-0.3, 0.5), style)
+        };
+        let Profile::Polyline { knots, .. } = &profile else {
+            panic!("not a polyline");
+        };
+        assert!(knots.windows(2).all(|w| w[1].0 > w[0].0), "not a graph");
+        let spec = walls::WallSpec {
+            kind: WallKind::Polyline,
+            frame,
+            profile,
+            mu: 0.3,
+            corner_at: None,
+        };
+        spec.build().unwrap();
+        for c in spec.corners() {
+            assert!(
+                (5.0 - 1e-9..=85.0 + 1e-9).contains(&c.turn_deg),
+                "corner of {} deg",
+                c.turn_deg
+            );
+            let e = if c.convex { &mut convex } else { &mut concave };
+            e.0 = e.0.min(c.turn_deg);
+            e.1 = e.1.max(c.turn_deg);
+        }
+        short_edges += usize::from(spec.shortest_edge_m().unwrap() < link_m);
+    }
+    for (name, (lo, hi)) in [("convex", convex), ("concave", concave)] {
+        assert!(
+            lo < 7.0 && hi > 83.0,
+            "{name} corners span only {lo}..{hi} deg"
+        );
+    }
+    assert!(
+        short_edges > 300,
+        "{short_edges} of 600 walls have an edge shorter than a link"
+    );
+}
+
+/// Corners are put exactly on a point of the start posture: for rest and angles placements
+/// a vertex of the wall is bit for bit a joint, the tip or a hair tip of the posture (and
+/// the posture is clear of the wall); for tip-on-wall a vertex lies on the pin line.
+#[test]
+fn corners_sit_exactly_on_start_posture_points() {
+    let (mut on_rest_or_angles, mut on_tip) = (0, 0);
+    for index in 0..400 {
+        let case = Case::generate(11, index, Sample::Soak).unwrap();
+        let Some(at) = &case.wall.corner_at else {
+            continue;
+        };
+        let vertices = case.wall.vertices_m();
+        let chain = &case.scene.chain;
+        match &case.scene.placement {
+            Placement::Rest | Placement::Angles(_) => {
+                let theta = match &case.scene.placement {
+                    Placement::Angles(a) => {
+                        let mut t = vec![chain.base_angle_rad()];
+                        t.extend_from_slice(a);
+                        t
+                    }
+                    _ => chain.rest_theta(),
+                };
+                let posture = PosturePoints::new(chain, &theta, Vector2::zeros()).unwrap();
+                let points: Vec<Vector2<f64>> = posture
+                    .ends_m
+                    .iter()
+                    .copied()
+                    .chain(posture.hair_tips_m.iter().map(|h| h.1))
+                    .collect();
+                assert!(
+                    vertices.iter().any(|v| points.contains(v)),
+                    "{}: no vertex on the posture ({at})",
+                    case.replay_line()
+                );
+                let gap = posture.min_gap(&case.scene.walls[0]).0;
+                assert!(
+                    gap >= -1e-12,
+                    "{}: posture {gap} m inside",
+                    case.replay_line()
+                );
+                on_rest_or_angles += 1;
+            }
+            Placement::TipOnWall { ahead_m, .. } => {
+                assert!(
+                    vertices.iter().any(|v| (v.x - ahead_m).abs() < 1e-12),
+                    "{}: no vertex at the pin",
+                    case.replay_line()
+                );
+                on_tip += 1;
+            }
+            Placement::Approach { .. } => panic!("approach cases are not anchored"),
+        }
+    }
+    assert!(
+        on_rest_or_angles >= 10 && on_tip >= 10,
+        "{on_rest_or_angles} rest/angles and {on_tip} tip-on-wall cases with anchored corners"
+    );
+}
+
+/// Sinusoid crests bend down to a radius of exactly half a link (and no tighter), as
+/// sim-core's own curvature at the crest says too.
+#[test]
+fn sinusoid_crests_reach_half_a_link() {
+    for links in LINK_COUNTS {
+        let link_m = ANTENNA_LENGTH_M / links as f64;
+        let mut smallest = f64::INFINITY;
+        for i in 0..200 {
+            let mut rng = case_rng(links as u64, i);
+            let Profile::Sinusoid {
+                amplitude_m,
+                frequency_per_m,
+                phase_rad,
+            } = draw_sinusoid(&mut rng, link_m)
+            else {
+                panic!("not a sinusoid");
+            };
+            assert!((walls::AMPLITUDE_M.0..=walls::AMPLITUDE_M.1).contains(&amplitude_m));
+            let r = crest_radius_m(amplitude_m, frequency_per_m);
+            assert!(
+                r >= 0.5 * link_m * (1.0 - 1e-9),
+                "radius {r} under half a link"
+            );
+            assert!(r <= walls::MAX_CREST_RADIUS_M * (1.0 + 1e-9));
+            smallest = smallest.min(r);
+            // The crest that bulges toward the antenna (v = -A): sim-core's curvature there.
+            let frame = WallFrame {
+                origin_m: Vector2::new(0.01, 0.2),
+                angle_rad: -0.1,
+            };
+            let spec = walls::WallSpec {
+                kind: WallKind::Sinusoid,
+                frame,
+                profile: Profile::Sinusoid {
+                    amplitude_m,
+                    frequency_per_m,
+                    phase_rad,
+                },
+                mu: 0.0,
+                corner_at: None,
+            };
+            let wall = spec.build().unwrap();
+            let k = std::f64::consts::TAU * frequency_per_m;
+            let u = (1.5 * std::f64::consts::PI - phase_rad) / k;
+            let probe = frame.to_ground(u, -amplitude_m - 1e-4);
+            let at = wall.signed_distance(&probe);
+            assert!(
+                (at.curvature_per_m * r - 1.0).abs() < 1e-6,
+                "sim-core's crest curvature {} 1/m, drawn radius {r} m",
+                at.curvature_per_m
+            );
+        }
+        assert!(
+            (smallest / link_m - 0.5).abs() < 1e-9,
+            "N = {links}: the tightest crest is {} links",
+            smallest / link_m
+        );
+    }
+}
+
+/// Digitized walls: valid sim-core polylines of at most 300 vertices, sampled every 1-5 mm
+/// with noise of the drawn size.
+#[test]
+fn digitized_walls_are_valid_polylines() {
+    let frame = WallFrame {
+        origin_m: Vector2::new(0.0, 0.18),
+        angle_rad: -5f64.to_radians(),
+    };
+    let (mut lines, mut trapezoids) = (0, 0);
+    for i in 0..120 {
+        let mut rng = case_rng(3, i);
+        let link_m = ANTENNA_LENGTH_M / LINK_COUNTS[i as usize % LINK_COUNTS.len()] as f64;
+        let profile = draw_digitized(&mut rng, link_m, (-0.3, 0.5), &frame).unwrap();
+        let Profile::Digitized {
+            points,
+            underlying,
+            spacing_m,
+            noise_m,
+        } = &profile
+        else {
+            panic!("not digitized");
+        };
+        assert!(
+            points.len() <= walls::MAX_DIGITIZED_POINTS,
+            "{} points",
+            points.len()
+        );
+        assert!((walls::SPACING_M.0..=walls::SPACING_M.1).contains(spacing_m));
+        assert!((walls::NOISE_M.0..=walls::NOISE_M.1).contains(noise_m));
+        let ground: Vec<Vector2<f64>> =
+            points.iter().map(|&(u, v)| frame.to_ground(u, v)).collect();
+        let polyline = Polyline::new(ground.clone(), SolidSide::Left).unwrap();
+        let spec = walls::WallSpec {
+            kind: WallKind::Digitized,
+            frame,
+            profile: profile.clone(),
+            mu: 0.6,
+            corner_at: None,
+        };
+        let wall = spec.build().unwrap();
+        assert_eq!(wall.shape, WallShape::Polyline(polyline));
+        let interior = &points[1..points.len() - 1];
+        match underlying {
+            Underlying::Line => {
+                lines += 1;
+                // The noise across the line is what was drawn.
+                let var = interior.iter().map(|p| p.1 * p.1).sum::<f64>() / interior.len() as f64;
+                let ratio = var.sqrt() / noise_m;
+                assert!(
+                    (0.7..1.3).contains(&ratio),
+                    "noise {ratio} x the drawn size"
+                );
+                let mean_step =
+                    (interior[interior.len() - 1].0 - interior[0].0) / (interior.len() - 1) as f64;
+                assert!((mean_step / spacing_m - 1.0).abs() < 0.05);
+            }
+            Underlying::Trapezoid => trapezoids += 1,
+        }
+    }
+    assert!(lines > 30 && trapezoids > 30);
+}
+
+/// A case is a pure function of (seed, index, sample).
+#[test]
+fn same_seed_same_case() {
+    for index in 0..40 {
+        let a = Case::generate(CI_SEED, index, Sample::Ci).unwrap();
+        let b = Case::generate(CI_SEED, index, Sample::Ci).unwrap();
+        assert_eq!(format!("{:?}", a.scene), format!("{:?}", b.scene));
+        assert_eq!(a.replay_line(), b.replay_line());
+        let c = Case::generate(CI_SEED, index + 1, Sample::Ci).unwrap();
+        assert_ne!(format!("{:?}", a.scene), format!("{:?}", c.scene));
+    }
+}
+
+/// The CI sample reaches every axis: every N (72 and 150 only in short sweeps), wall kind,
+/// placement, mu, profile, hair layout, and corners on the posture.
+#[test]
+fn ci_sample_spans_every_axis() {
+    let cases: Vec<Case> = (0..CI_SWEEPS)
+        .map(|i| Case::generate(CI_SEED, i, Sample::Ci).unwrap())
+        .collect();
+    for n in LINK_COUNTS {
+        let of_n: Vec<&Case> = cases.iter().filter(|c| c.links == n).collect();
+        assert!(!of_n.is_empty(), "no case with N = {n}");
+        if n >= 72 {
+            assert!(of_n.len() <= 10 && of_n.iter().all(|c| c.steps() <= 50));
+        }
+    }
+    for kind in WallKind::ALL {
+        assert!(
+            cases.iter().any(|c| c.wall.kind == kind),
+            "no {kind:?} wall"
+        );
+    }
+    for kind in PlacementKind::ALL {
+        assert!(
+            cases.iter().any(|c| c.placement_kind == kind),
+            "no {kind:?}"
+        );
+    }
+    for mu in MUS {
+        assert!(cases.iter().any(|c| c.wall.mu == mu), "no mu = {mu}");
+    }
+    for p in antenna_tests::reproduce::TABLE_4_1_PROFILES {
+        assert!(cases.iter().any(|c| c.profile == p), "no {}", p.name());
+    }
+    assert!(cases.iter().any(|c| c.hairs) && cases.iter().any(|c| !c.hairs));
+    assert!(cases.iter().any(|c| c.wall.corner_at.is_some()));
+}
