@@ -12,9 +12,12 @@
 //!   --nocapture`: at least 2,000 sweeps (`ANTENNA_SOAK_SWEEPS`, default 2000) from
 //!   `ANTENNA_SOAK_SEED` (default below), longer ones, the table, every unfinished sweep.
 //! - `ANTENNA_STRESS_REPLAY=ci:SEED:INDEX[,INDEX...]` (or `soak:...`): reruns those cases
-//!   alone and prints what happened (the replay lines printed for unfinished sweeps say
-//!   which), without the suite's iteration budget unless `ANTENNA_STRESS_BUDGET=1`.
+//!   alone, in this process and without a time limit, and prints what happened (the replay
+//!   lines printed for unfinished sweeps say which).
 //! - `ANTENNA_STRESS_THREADS`: worker threads (default: every core).
+//! - Each sweep runs in a child process (this binary, running only the main test with
+//!   `ANTENNA_STRESS_CHILD` set) that is killed past its time limit (a hung sweep must not
+//!   hang CI). `ANTENNA_STRESS_LIST=1` prints every sweep's outcome.
 #![allow(clippy::unwrap_used)]
 
 use std::time::Instant;
@@ -27,7 +30,8 @@ use antenna_tests::stress::walls::{
     draw_anchored_polyline, draw_digitized, draw_polyline, draw_sinusoid,
 };
 use antenna_tests::stress::{
-    case_rng, default_threads, run_cases, run_index, summary_markdown, unfinished_report,
+    CHILD_ENV, ChildCommand, Outcome, RunOptions, SweepRecord, TimeLimit, case_rng, child_main,
+    default_threads, run_cases, run_index, summary_markdown, unfinished_report,
 };
 use nalgebra::Vector2;
 use sim_core::sweep::Placement;
@@ -36,7 +40,7 @@ use sim_core::{Polyline, SolidSide, WallShape};
 /// The CI sample's seed.
 const CI_SEED: u64 = 20_261_122;
 /// The CI sample's size (tuned to about 60 s in the test profile on two shared cores).
-const CI_SWEEPS: u64 = 100;
+const CI_SWEEPS: u64 = 80;
 /// The soak's default seed.
 const SOAK_SEED: u64 = 4_221;
 /// The soak's default (and least) size.
@@ -57,13 +61,11 @@ fn replay(spec: &str) {
         .split(',')
         .map(|i| i.trim().parse().unwrap())
         .collect();
-    // Without the suite's iteration budget unless ANTENNA_STRESS_BUDGET=1: the whole story.
-    let budgeted = std::env::var("ANTENNA_STRESS_BUDGET").is_ok_and(|v| v.trim() == "1");
     for index in indices {
         let case = Case::generate(seed, index, sample).unwrap();
         println!("{}", case.replay_line());
         println!("scene: {:?}", case.scene);
-        let rec = run_index(seed, index, sample, budgeted);
+        let rec = run_index(seed, index, sample, false);
         println!("placement: {}", rec.placement_note);
         println!(
             "{} ({} steps in contact, {} relaxed)",
@@ -74,8 +76,37 @@ fn replay(spec: &str) {
     }
 }
 
+/// This test's name: children run it with [`CHILD_ENV`] set.
+const MAIN_TEST: &str = "contact_sweeps_finish_with_every_step_certified";
+
+/// Per-sweep time limits, `base + per link-step * N * steps` up to a most: in the test
+/// profile (opt-level 1, debug assertions) 4 s + 1 ms * N * steps up to 15 s, in a release
+/// build 3 s + 0.3 ms * N * steps up to 20 s. A sweep the solver finishes takes far less
+/// (the slowest finished sweep of the CI sample: 2.4 s, N = 72 on a sinusoid, in the test
+/// profile; most take milliseconds); sweeps stuck in their placement or in one step for
+/// minutes reach them.
+fn time_limit(optimized: bool) -> TimeLimit {
+    if optimized {
+        TimeLimit {
+            base_s: 3.0,
+            per_link_step_s: 3e-4,
+            max_s: 20.0,
+        }
+    } else {
+        TimeLimit {
+            base_s: 4.0,
+            per_link_step_s: 1e-3,
+            max_s: 15.0,
+        }
+    }
+}
+
 #[test]
 fn contact_sweeps_finish_with_every_step_certified() {
+    if let Ok(spec) = std::env::var(CHILD_ENV) {
+        child_main(&spec).unwrap();
+        return;
+    }
     if let Ok(spec) = std::env::var("ANTENNA_STRESS_REPLAY") {
         replay(&spec);
         return;
@@ -90,22 +121,41 @@ fn contact_sweeps_finish_with_every_step_certified() {
     } else {
         (CI_SEED, CI_SWEEPS, Sample::Ci)
     };
-    let threads = default_threads();
+    let optimized = !cfg!(debug_assertions);
+    let options = RunOptions {
+        threads: default_threads(),
+        progress_every: if soak { 100 } else { 0 },
+        command: ChildCommand::current_test(MAIN_TEST).unwrap(),
+        limit: time_limit(optimized),
+    };
     let started = Instant::now();
-    let records = run_cases(seed, 0..count, sample, threads, if soak { 100 } else { 0 });
+    let records = run_cases(seed, 0..count, sample, &options);
     let elapsed = started.elapsed().as_secs_f64();
     println!(
-        "\n# Contact stress: {} sample, seed {seed}, {count} sweeps, {threads} thread(s), \
+        "\n# Contact stress: {} sample, seed {seed}, {count} sweeps, {} thread(s), {} build, \
          {elapsed:.1} s\n",
-        sample.name()
+        sample.name(),
+        options.threads,
+        if optimized { "release" } else { "test-profile" },
     );
     println!("{}", summary_markdown(&records));
+    if std::env::var("ANTENNA_STRESS_LIST").is_ok_and(|v| v.trim() == "1") {
+        for r in &records {
+            println!("- {}\n  -> {}", r.replay, r.outcome_line());
+        }
+    }
     println!("{}", unfinished_report(&records));
+    println!(
+        "Rerun one case: ANTENNA_STRESS_REPLAY={}:{seed}:INDEX cargo test -p antenna-tests{} \
+         --test stress_contact -- {MAIN_TEST} --nocapture",
+        sample.name(),
+        if optimized { " --release" } else { "" }
+    );
     let failures = records.iter().filter(|r| r.outcome.is_failure()).count();
     assert_eq!(
         failures, 0,
-        "{failures} of {count} sweeps ended in a solver failure, an uncertified step or an \
-         invalid case (listed above with their replay lines)"
+        "{failures} of {count} sweeps ended in a solver failure, a timeout, an uncertified step \
+         or an invalid case (listed above with their replay lines)"
     );
 }
 
@@ -400,4 +450,55 @@ fn ci_sample_spans_every_axis() {
     }
     assert!(cases.iter().any(|c| c.hairs) && cases.iter().any(|c| !c.hairs));
     assert!(cases.iter().any(|c| c.wall.corner_at.is_some()));
+}
+
+/// A record survives the trip through a child process's output, every outcome.
+#[test]
+fn records_round_trip_through_text() {
+    let case = Case::generate(CI_SEED, 3, Sample::Ci).unwrap();
+    let outcomes = [
+        Outcome::Finished,
+        Outcome::Jammed {
+            step: 17,
+            description: "tip\tpinned\nby a corner \\ and link 3".into(),
+            contacts: vec!["Vertex { link: 8 } on wall 0".into(), "x".into()],
+            joints_on_stops: vec![3, 4],
+        },
+        Outcome::PlacementRefused {
+            message: "placement: no".into(),
+        },
+        Outcome::SolverFailure {
+            step: None,
+            message: "panic: x".into(),
+        },
+        Outcome::SolverFailure {
+            step: Some(4),
+            message: String::new(),
+        },
+        Outcome::Uncertified {
+            step: 2,
+            failures: vec!["penetration 1e-3 m".into()],
+        },
+        Outcome::InvalidCase {
+            message: "bad".into(),
+        },
+        Outcome::TimedOut {
+            limit_s: 12.5,
+            last_step: Some(40),
+        },
+    ];
+    for outcome in outcomes {
+        let mut rec = SweepRecord::new(&case);
+        rec.outcome = outcome;
+        rec.steps = 41;
+        rec.iterations = vec![1, 2, 300];
+        rec.relaxations
+            .insert("friction dropped at # jammed contact(s)".into(), 2);
+        rec.wall_clock_s = 0.123_456_789;
+        rec.placement_note = "tip placed\ton the wall".into();
+        let text = format!("running 1 test\n{}test ok\n", rec.to_wire());
+        let back = SweepRecord::from_wire(&text).unwrap();
+        assert_eq!(format!("{back:?}"), format!("{rec:?}"));
+    }
+    assert!(SweepRecord::from_wire("<<<stress-record\nseed\t1\n").is_none());
 }

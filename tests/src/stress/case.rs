@@ -737,7 +737,7 @@ impl Case {
     /// `ANTENNA_STRESS_REPLAY=<sample>:<seed>:<index>`).
     pub fn replay_line(&self) -> String {
         format!(
-            "replay {}:{}:{} | N={} profile={} hairs={} base={:.3}deg v={}mm/s steps={}{} | \
+            "ANTENNA_STRESS_REPLAY={}:{}:{} | N={} profile={} hairs={} base={:.3}deg v={}mm/s steps={}{} | \
              placement: {} | wall: {}",
             self.sample.name(),
             self.seed,

@@ -8,7 +8,8 @@
 //! noisy digitized line or trapezoid) with a smooth surface of friction `mu`, a placement
 //! (rest, explicit angles, approach, tip on the wall from a C or an S start) and a motion
 //! along `+x`. [`run_case`] runs its sweep and re-checks every step independently;
-//! [`run_cases`] runs many on every core; [`summary_markdown`] writes the table.
+//! [`run_cases`] runs many on every core, each in a child process with a time limit;
+//! [`summary_markdown`] writes the table.
 //!
 //! `tests/tests/stress_contact.rs` runs a fixed sample in CI and, with `ANTENNA_SOAK=1`, a
 //! soak of at least 2,000 sweeps.
@@ -18,10 +19,14 @@ pub mod outcome;
 pub mod parallel;
 pub mod table;
 pub mod walls;
+pub mod wire;
 
 pub use case::{Case, PlacementKind, Sample};
 pub use outcome::{Outcome, SweepRecord, run_case};
-pub use parallel::{default_threads, run_cases, run_index};
+pub use parallel::{
+    CHILD_ENV, ChildCommand, RunOptions, TimeLimit, child_main, default_threads, run_cases,
+    run_in_child, run_index,
+};
 pub use table::{summary_markdown, unfinished_report};
 pub use walls::{Corner, Profile, WallFrame, WallKind, WallSpec};
 

@@ -5,7 +5,9 @@
 //! included, with `QuasiStatic::check` against `QuasiStatic::certify_tolerances`, and calls
 //! a step the solver returned but the check refuses [`Outcome::Uncertified`].
 
+use std::any::Any;
 use std::collections::BTreeMap;
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::Instant;
 
 use sim_core::contact::{ContactError, Jam, QuasiStatic};
@@ -42,7 +44,8 @@ pub enum Outcome {
         /// The message.
         message: String,
     },
-    /// A step returned `Ok` but its state fails the harness's check: a bug.
+    /// A step's state fails the check: sim-core's own (the step refused with
+    /// [`ContactError::Uncertified`]) or the harness's (the step returned `Ok`): a bug.
     Uncertified {
         /// The step (0: the placed posture).
         step: usize,
@@ -53,6 +56,14 @@ pub enum Outcome {
     InvalidCase {
         /// The message.
         message: String,
+    },
+    /// The sweep ran past its time limit (in the placement, or in one step) and its process
+    /// was killed: a solver failure too (a sweep that takes minutes).
+    TimedOut {
+        /// The limit, seconds.
+        limit_s: f64,
+        /// The last step it had finished (0: the placement), if any.
+        last_step: Option<usize>,
     },
 }
 
@@ -66,17 +77,19 @@ impl Outcome {
             Outcome::SolverFailure { .. } => "solver failure",
             Outcome::Uncertified { .. } => "uncertified",
             Outcome::InvalidCase { .. } => "invalid case",
+            Outcome::TimedOut { .. } => "timed out",
         }
     }
 
     /// Whether this is a failure the suite asserts against (solver failure, uncertified
-    /// step, invalid case).
+    /// step, timeout, invalid case).
     pub fn is_failure(&self) -> bool {
         matches!(
             self,
             Outcome::SolverFailure { .. }
                 | Outcome::Uncertified { .. }
                 | Outcome::InvalidCase { .. }
+                | Outcome::TimedOut { .. }
         )
     }
 
@@ -100,10 +113,17 @@ impl Outcome {
             Outcome::SolverFailure { message, .. } => message.clone(),
             Outcome::Uncertified { step, failures } => {
                 format!(
-                    "step {step}: Ok from the solver but fails the check: {}",
+                    "step {step}: uncertified: {}",
                     failures.join(", ")
                 )
             }
+            Outcome::TimedOut { limit_s, last_step } => format!(
+                "still running after {limit_s:.1} s, {}: killed",
+                match last_step {
+                    None => "in the placement".to_owned(),
+                    Some(k) => format!("in step {} (step {k} was done)", k + 1),
+                }
+            ),
         }
     }
 
@@ -218,6 +238,30 @@ impl SweepRecord {
 }
 
 impl SweepRecord {
+    /// A record of `case` that has not run yet (outcome [`Outcome::Finished`], nothing
+    /// counted).
+    pub fn new(case: &Case) -> SweepRecord {
+        SweepRecord {
+            seed: case.seed,
+            index: case.index,
+            sample: case.sample,
+            links: case.links,
+            wall_kind: Some(case.wall.kind),
+            placement_kind: Some(case.placement_kind),
+            replay: case.replay_line(),
+            outcome: Outcome::Finished,
+            planned_steps: case.steps(),
+            steps: 0,
+            contact_steps: 0,
+            relaxed_steps: 0,
+            relaxations: BTreeMap::new(),
+            iterations: Vec::with_capacity(case.steps()),
+            snaps: 0,
+            placement_note: String::new(),
+            wall_clock_s: 0.0,
+        }
+    }
+
     /// A record of a case that could not be built.
     pub fn invalid(seed: u64, index: u64, sample: Sample, message: String) -> SweepRecord {
         SweepRecord {
@@ -227,7 +271,7 @@ impl SweepRecord {
             links: 0,
             wall_kind: None,
             placement_kind: None,
-            replay: format!("replay {}:{seed}:{index} | (not built)", sample.name()),
+            replay: format!("ANTENNA_STRESS_REPLAY={}:{seed}:{index} | (not built)", sample.name()),
             outcome: Outcome::InvalidCase { message },
             planned_steps: 0,
             steps: 0,
@@ -242,15 +286,6 @@ impl SweepRecord {
     }
 }
 
-/// The suite's budget of Newton iterations for the steps of a sweep of `steps` steps:
-/// 20,000 plus 100 per step. A healthy step takes a few; a sweep that needs more than this
-/// is stopped and counted as a solver failure (it would take minutes: a step of a
-/// 4-link antenna on a sinusoid has been seen to take 60,000 iterations). Counted in
-/// iterations, not seconds, so the outcome does not depend on the machine.
-pub fn iteration_budget(steps: usize) -> usize {
-    20_000 + 100 * steps
-}
-
 /// The harness's own check of the current state: the failures, if it fails.
 fn recheck(sim: &QuasiStatic) -> Option<Vec<String>> {
     let tolerances = sim.certify_tolerances();
@@ -258,7 +293,9 @@ fn recheck(sim: &QuasiStatic) -> Option<Vec<String>> {
     if check.holds_within(&tolerances) {
         None
     } else {
-        Some(check.failures(&tolerances))
+        let mut failures = vec!["Ok from the solver but fails the harness's check".to_owned()];
+        failures.extend(check.failures(&tolerances));
+        Some(failures)
     }
 }
 
@@ -281,6 +318,23 @@ fn jammed(step: usize, jam: &Jam) -> Outcome {
     }
 }
 
+/// The message of a panic's payload.
+pub fn panic_message(payload: &(dyn Any + Send)) -> String {
+    payload
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+        .unwrap_or_default()
+}
+
+/// A panic in sim-core during step `step` (0: the placement): a solver failure.
+fn panicked(step: usize, payload: &(dyn Any + Send)) -> Outcome {
+    Outcome::SolverFailure {
+        step: Some(step),
+        message: format!("step {step}: panic: {}", panic_message(payload)),
+    }
+}
+
 /// Whether a contact error says the start itself was bad input.
 fn bad_start(e: &ContactError) -> bool {
     matches!(
@@ -291,10 +345,26 @@ fn bad_start(e: &ContactError) -> bool {
     )
 }
 
+/// What sim-core says in a placement's message when the solver failed under it.
+const SOLVER_FAILED: [&str; 3] = [
+    "no equilibrium found",
+    "fails the independent check",
+    "did not converge",
+];
+
 /// How a sweep error ends the sweep.
 pub fn classify(e: &SweepError) -> Outcome {
     let message = e.to_string();
     match e {
+        // A placement that failed because the solver did: a solver failure (sim-core words
+        // it into the placement's message; these are its words for `NoConvergence` and
+        // `Uncertified`, and for a pinned equilibrium that did not converge).
+        SweepError::Placement(m) if SOLVER_FAILED.iter().any(|w| m.contains(w)) => {
+            Outcome::SolverFailure {
+                step: Some(0),
+                message,
+            }
+        }
         SweepError::Placement(_) | SweepError::PlacementSolve(_) => {
             Outcome::PlacementRefused { message }
         }
@@ -304,6 +374,19 @@ pub fn classify(e: &SweepError) -> Outcome {
             ..
         } => jammed(*step, jam),
         SweepError::Contact(ContactError::Jammed(jam)) => jammed(0, jam),
+        // sim-core's own check refused the state the solver reached.
+        SweepError::Step {
+            step,
+            source: ContactError::Uncertified { failures, .. },
+            ..
+        } => Outcome::Uncertified {
+            step: *step,
+            failures: vec![format!("refused by sim-core's own check: {failures}")],
+        },
+        SweepError::Contact(ContactError::Uncertified { failures, .. }) => Outcome::Uncertified {
+            step: 0,
+            failures: vec![format!("refused by sim-core's own check: {failures}")],
+        },
         SweepError::Step {
             step: 0, source, ..
         } if bad_start(source) => Outcome::PlacementRefused { message },
@@ -319,47 +402,41 @@ pub fn classify(e: &SweepError) -> Outcome {
     }
 }
 
-/// Runs `case`'s sweep to its end (or its first error), checking every step; with
-/// `budgeted`, stops it once its steps have taken more than [`iteration_budget`] Newton
-/// iterations (a solver failure).
-pub fn run_case(case: &Case, budgeted: bool) -> SweepRecord {
+/// Runs `case`'s sweep to its end (or its first error), checking every step. With
+/// `echo_progress`, prints a progress line ([`super::wire::PROGRESS`]) after the placement
+/// and after every step (for a parent process to see where a killed sweep was).
+pub fn run_case(case: &Case, echo_progress: bool) -> SweepRecord {
     let started = Instant::now();
-    let mut rec = SweepRecord {
-        seed: case.seed,
-        index: case.index,
-        sample: case.sample,
-        links: case.links,
-        wall_kind: Some(case.wall.kind),
-        placement_kind: Some(case.placement_kind),
-        replay: case.replay_line(),
-        outcome: Outcome::Finished,
-        planned_steps: case.steps(),
-        steps: 0,
-        contact_steps: 0,
-        relaxed_steps: 0,
-        relaxations: BTreeMap::new(),
-        iterations: Vec::with_capacity(case.steps()),
-        snaps: 0,
-        placement_note: String::new(),
-        wall_clock_s: 0.0,
-    };
-    let budget = budgeted.then(|| iteration_budget(case.steps()));
-    rec.outcome = sweep(case, &mut rec, budget);
+    let mut rec = SweepRecord::new(case);
+    rec.outcome = sweep(case, &mut rec, echo_progress);
     rec.wall_clock_s = started.elapsed().as_secs_f64();
     rec
 }
 
-fn sweep(case: &Case, rec: &mut SweepRecord, budget: Option<usize>) -> Outcome {
-    let mut sweep = match Sweep::new(case.scene.clone()) {
-        Ok(s) => s,
-        Err(e) => return classify(&e),
+fn sweep(case: &Case, rec: &mut SweepRecord, echo: bool) -> Outcome {
+    let progress = |step: usize| {
+        if echo {
+            println!("{}{step}", super::wire::PROGRESS);
+        }
+    };
+    let mut sweep = match catch_unwind(AssertUnwindSafe(|| Sweep::new(case.scene.clone()))) {
+        Ok(Ok(s)) => s,
+        Ok(Err(e)) => return classify(&e),
+        Err(payload) => return panicked(0, payload.as_ref()),
     };
     rec.placement_note = sweep.placement_note().to_owned();
     if let Some(failures) = recheck(sweep.sim()) {
         return Outcome::Uncertified { step: 0, failures };
     }
-    let mut total = 0usize;
-    while let Some(result) = sweep.next_step() {
+    progress(0);
+    loop {
+        let next = match catch_unwind(AssertUnwindSafe(|| sweep.next_step())) {
+            Ok(next) => next,
+            Err(payload) => return panicked(rec.steps + 1, payload.as_ref()),
+        };
+        let Some(result) = next else {
+            break;
+        };
         let step = match result {
             Ok(step) => step,
             Err(e) => return classify(&e),
@@ -381,20 +458,7 @@ fn sweep(case: &Case, rec: &mut SweepRecord, budget: Option<usize>) -> Outcome {
                 failures,
             };
         }
-        total += step.report.iterations;
-        if let Some(budget) = budget.filter(|b| total > *b) {
-            let slowest = rec.iterations.iter().max().copied().unwrap_or(0);
-            return Outcome::SolverFailure {
-                step: Some(step.step),
-                message: format!(
-                    "step {}: over the suite's budget: the sweep's steps took {total} Newton \
-                     iterations by now (budget {budget} for {} steps; the slowest step {slowest}); \
-                     stopped",
-                    step.step,
-                    case.steps()
-                ),
-            };
-        }
+        progress(step.step);
     }
     Outcome::Finished
 }

@@ -1,35 +1,44 @@
-//! Running many cases on every core.
+//! Running many cases on every core, each in a child process with a time limit.
+//!
+//! A sweep the solver cannot finish can spend minutes in its placement or in one step, where
+//! nothing can stop it from the outside of sim-core; so each case runs in a child process
+//! (the test binary itself, told which case by [`CHILD_ENV`]) that prints its record
+//! ([`super::wire`]) and is killed when it overruns its [`TimeLimit`]: the sweep is then
+//! [`Outcome::TimedOut`], a failure. Worker threads (one per core) each run one child at a
+//! time.
 
+use std::io::Read;
 use std::ops::Range;
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::mpsc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
+use super::StressError;
 use super::case::{Case, Sample};
-use super::outcome::{Outcome, SweepRecord, run_case};
+use super::outcome::{Outcome, SweepRecord, panic_message, run_case};
+use super::wire::PROGRESS;
 
-/// Builds and runs case `index` (with the iteration budget if `budgeted`, see
-/// [`super::outcome::iteration_budget`]); a generator error or a panic becomes the record's
-/// outcome.
-pub fn run_index(seed: u64, index: u64, sample: Sample, budgeted: bool) -> SweepRecord {
+/// The environment variable that makes the test binary a child running one case:
+/// `<sample>:<seed>:<index>`.
+pub const CHILD_ENV: &str = "ANTENNA_STRESS_CHILD";
+
+/// Builds and runs case `index` in this process (printing progress lines if
+/// `echo_progress`); a generator error or a panic becomes the record's outcome.
+pub fn run_index(seed: u64, index: u64, sample: Sample, echo_progress: bool) -> SweepRecord {
     let case = match Case::generate(seed, index, sample) {
         Ok(c) => c,
         Err(e) => return SweepRecord::invalid(seed, index, sample, e.to_string()),
     };
-    match catch_unwind(AssertUnwindSafe(|| run_case(&case, budgeted))) {
+    match catch_unwind(AssertUnwindSafe(|| {
+        run_case(&case, echo_progress)
+    })) {
         Ok(rec) => rec,
         Err(panic) => {
-            let what = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| (*s).to_owned()))
-                .unwrap_or_default();
-            let mut rec = SweepRecord::invalid(seed, index, sample, String::new());
-            rec.links = case.links;
-            rec.wall_kind = Some(case.wall.kind);
-            rec.placement_kind = Some(case.placement_kind);
-            rec.replay = case.replay_line();
+            let what = panic_message(panic.as_ref());
+            let mut rec = SweepRecord::new(&case);
             rec.outcome = Outcome::SolverFailure {
                 step: None,
                 message: format!("panic: {what}"),
@@ -37,6 +46,186 @@ pub fn run_index(seed: u64, index: u64, sample: Sample, budgeted: bool) -> Sweep
             rec
         }
     }
+}
+
+/// The child's side: runs the case `spec` (`<sample>:<seed>:<index>`, as in [`CHILD_ENV`])
+/// and prints its record.
+///
+/// # Errors
+/// [`StressError::Other`] for a malformed `spec`.
+pub fn child_main(spec: &str) -> Result<(), StressError> {
+    let bad = || {
+        StressError::Other(format!(
+            "{CHILD_ENV}={spec}: expected <sample>:<seed>:<index>"
+        ))
+    };
+    let mut parts = spec.trim().split(':');
+    let sample = parts.next().and_then(Sample::parse).ok_or_else(bad)?;
+    let seed = parts.next().and_then(|s| s.parse().ok()).ok_or_else(bad)?;
+    let index = parts.next().and_then(|s| s.parse().ok()).ok_or_else(bad)?;
+    let rec = run_index(seed, index, sample, true);
+    // On a line of its own (the test harness's "test ... " may precede it).
+    print!("\n{}", rec.to_wire());
+    Ok(())
+}
+
+/// How to start a child that runs one case.
+#[derive(Clone, Debug)]
+pub struct ChildCommand {
+    /// The program (the test binary).
+    pub program: PathBuf,
+    /// Its arguments (run only the one test).
+    pub args: Vec<String>,
+}
+
+impl ChildCommand {
+    /// This test binary, running only the test `test_name` (which must call [`child_main`]
+    /// when [`CHILD_ENV`] is set).
+    ///
+    /// # Errors
+    /// [`StressError::Other`] when the binary's path is unknown.
+    pub fn current_test(test_name: &str) -> Result<ChildCommand, StressError> {
+        let program = std::env::current_exe()
+            .map_err(|e| StressError::Other(format!("the test binary's path: {e}")))?;
+        Ok(ChildCommand {
+            program,
+            args: vec![
+                "--exact".into(),
+                test_name.into(),
+                "--nocapture".into(),
+                "--test-threads=1".into(),
+            ],
+        })
+    }
+}
+
+/// A sweep's time limit: `base_s + per_link_step_s * N * steps`, at most `max_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeLimit {
+    /// Seconds for any sweep (the process, the placement).
+    pub base_s: f64,
+    /// Seconds per step and link.
+    pub per_link_step_s: f64,
+    /// The most any sweep gets, seconds.
+    pub max_s: f64,
+}
+
+impl TimeLimit {
+    /// The limit for `case`, seconds.
+    pub fn for_case(&self, case: &Case) -> f64 {
+        (self.base_s + self.per_link_step_s * (case.links * case.steps()) as f64).min(self.max_s)
+    }
+}
+
+/// The last step a child's output says was done.
+fn last_progress(output: &str) -> Option<usize> {
+    output
+        .lines()
+        .filter_map(|l| l.strip_prefix(PROGRESS))
+        .filter_map(|s| s.trim().parse().ok())
+        .last()
+}
+
+/// Runs case `index` in a child process, killed after its time limit.
+pub fn run_in_child(
+    command: &ChildCommand,
+    limit: &TimeLimit,
+    seed: u64,
+    index: u64,
+    sample: Sample,
+) -> SweepRecord {
+    let case = match Case::generate(seed, index, sample) {
+        Ok(c) => c,
+        Err(e) => return SweepRecord::invalid(seed, index, sample, e.to_string()),
+    };
+    let limit_s = limit.for_case(&case);
+    let started = Instant::now();
+    let mut rec = SweepRecord::new(&case);
+    let spawned = Command::new(&command.program)
+        .args(&command.args)
+        .env(CHILD_ENV, format!("{}:{seed}:{index}", sample.name()))
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn();
+    let mut child = match spawned {
+        Ok(c) => c,
+        Err(e) => {
+            rec.outcome = Outcome::InvalidCase {
+                message: format!("could not start a child process: {e}"),
+            };
+            return rec;
+        }
+    };
+    let reader = |pipe: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut text = String::new();
+            if let Some(mut p) = pipe {
+                let _ = p.read_to_string(&mut text);
+            }
+            text
+        })
+    };
+    let out = reader(
+        child
+            .stdout
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let err = reader(
+        child
+            .stderr
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let killed = loop {
+        if !matches!(child.try_wait(), Ok(None)) {
+            break false;
+        }
+        if started.elapsed().as_secs_f64() > limit_s {
+            let _ = child.kill();
+            break true;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let status = child.wait();
+    let out = out.join().unwrap_or_default();
+    let err = err.join().unwrap_or_default();
+    if !killed && let Some(r) = SweepRecord::from_wire(&out) {
+        return r;
+    }
+    rec.wall_clock_s = started.elapsed().as_secs_f64();
+    rec.outcome = if killed {
+        Outcome::TimedOut {
+            limit_s,
+            last_step: last_progress(&out),
+        }
+    } else {
+        let tail: Vec<&str> = err.lines().rev().take(6).collect();
+        let tail: Vec<&str> = tail.into_iter().rev().collect();
+        Outcome::SolverFailure {
+            step: last_progress(&out).map(|s| s + 1),
+            message: format!(
+                "the child process ended ({}) without a record; its stderr ends: {}",
+                status.map_or_else(|e| e.to_string(), |s| s.to_string()),
+                tail.join(" / ")
+            ),
+        }
+    };
+    rec
+}
+
+/// How [`run_cases`] runs.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Worker threads.
+    pub threads: usize,
+    /// A line to stderr every that many sweeps (0: none).
+    pub progress_every: usize,
+    /// How to start the child process that runs a case.
+    pub command: ChildCommand,
+    /// Its time limit.
+    pub limit: TimeLimit,
 }
 
 /// The number of worker threads: `ANTENNA_STRESS_THREADS` or the machine's parallelism.
@@ -49,14 +238,13 @@ pub fn default_threads() -> usize {
         .max(1)
 }
 
-/// Runs cases `indices` of `sample` under `seed` on `threads` threads, each within the
-/// iteration budget; the records in index order. With `progress_every > 0` a line goes to stderr every that many sweeps.
+/// Runs cases `indices` of `sample` under `seed`, each in a child process within its time
+/// limit; the records in index order.
 pub fn run_cases(
     seed: u64,
     indices: Range<u64>,
     sample: Sample,
-    threads: usize,
-    progress_every: usize,
+    options: &RunOptions,
 ) -> Vec<SweepRecord> {
     let next = AtomicU64::new(indices.start);
     let done = AtomicUsize::new(0);
@@ -64,7 +252,7 @@ pub fn run_cases(
     let started = Instant::now();
     let (tx, rx) = mpsc::channel();
     std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
+        for _ in 0..options.threads.max(1) {
             let tx = tx.clone();
             let (next, done, end) = (&next, &done, indices.end);
             scope.spawn(move || {
@@ -73,9 +261,10 @@ pub fn run_cases(
                     if index >= end {
                         break;
                     }
-                    let rec = run_index(seed, index, sample, true);
+                    let rec =
+                        run_in_child(&options.command, &options.limit, seed, index, sample);
                     let count = done.fetch_add(1, Ordering::Relaxed) + 1;
-                    if progress_every > 0 && count.is_multiple_of(progress_every) {
+                    if options.progress_every > 0 && count.is_multiple_of(options.progress_every) {
                         eprintln!(
                             "[stress] {count}/{total} sweeps, {:.0} s",
                             started.elapsed().as_secs_f64()

@@ -33,7 +33,7 @@ fn row(label: &str, records: &[&SweepRecord]) -> String {
         .map(|r| r.wall_clock_s)
         .fold(0.0_f64, f64::max);
     format!(
-        "| {label} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {:.1} s ({:.2} s) |",
+        "| {label} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | {:.1} s ({:.2} s) |",
         records.len(),
         count(|o| matches!(o, Outcome::Finished)),
         count(|o| matches!(o, Outcome::Jammed { .. })),
@@ -42,6 +42,7 @@ fn row(label: &str, records: &[&SweepRecord]) -> String {
             o,
             Outcome::SolverFailure { .. } | Outcome::InvalidCase { .. }
         )),
+        count(|o| matches!(o, Outcome::TimedOut { .. })),
         count(|o| matches!(o, Outcome::Uncertified { .. })),
         records.iter().map(|r| r.steps).sum::<usize>(),
         records.iter().map(|r| r.contact_steps).sum::<usize>(),
@@ -80,12 +81,12 @@ pub fn summary_markdown(records: &[SweepRecord]) -> String {
     let _ = writeln!(
         out,
         "| sweeps of | sweeps | finished | jammed | placement refused | solver failures | \
-         uncertified | steps | steps in contact | relaxed steps | Newton iterations per step \
+         timed out | uncertified | steps | steps in contact | relaxed steps | Newton iterations per step \
          median / p99 | wall clock (slowest sweep) |"
     );
     let _ = writeln!(
         out,
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     let all: Vec<&SweepRecord> = records.iter().collect();
     let _ = writeln!(out, "{}", row("all", &all));
