@@ -4,7 +4,9 @@
 //! walls, lines), mu in {0, 0.3, 0.6, 1.0}, the seven Table 4.1 profiles, no hairs or distal
 //! hairs, N in {4, 9, 18, 36, 72, 150}, every placement. Every sweep must finish with every
 //! step certified, or end with a typed outcome: jammed (the antenna physically cannot go on)
-//! or its placement refused with a reason. Solver failures and uncertified steps fail.
+//! (a `ContactError::Jammed` that names the contacts pinning it) or its placement refused
+//! with a reason. Solver failures (a placement the solver failed under included), uncertified
+//! steps, timeouts and panics fail the test, each printed with its replay line.
 //!
 //! - `cargo test -p antenna-tests --test stress_contact -- --nocapture`: the CI sample (a
 //!   fixed seed), with its table.

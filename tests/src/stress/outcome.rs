@@ -112,10 +112,7 @@ impl Outcome {
             }
             Outcome::SolverFailure { message, .. } => message.clone(),
             Outcome::Uncertified { step, failures } => {
-                format!(
-                    "step {step}: uncertified: {}",
-                    failures.join(", ")
-                )
+                format!("step {step}: uncertified: {}", failures.join(", "))
             }
             Outcome::TimedOut { limit_s, last_step } => format!(
                 "still running after {limit_s:.1} s, {}: killed",
@@ -271,7 +268,10 @@ impl SweepRecord {
             links: 0,
             wall_kind: None,
             placement_kind: None,
-            replay: format!("ANTENNA_STRESS_REPLAY={}:{seed}:{index} | (not built)", sample.name()),
+            replay: format!(
+                "ANTENNA_STRESS_REPLAY={}:{seed}:{index} | (not built)",
+                sample.name()
+            ),
             outcome: Outcome::InvalidCase { message },
             planned_steps: 0,
             steps: 0,
@@ -299,8 +299,16 @@ fn recheck(sim: &QuasiStatic) -> Option<Vec<String>> {
     }
 }
 
-/// A jam's outcome.
-fn jammed(step: usize, jam: &Jam) -> Outcome {
+/// A jam's outcome. A jam is the walls pinning the antenna: one that names no contact
+/// pinning it (sim-core's "pinned by no loaded contact") is the solver failing and calling
+/// it a jam, a solver failure.
+fn jammed(step: usize, jam: &Jam, message: String) -> Outcome {
+    if jam.contacts.is_empty() {
+        return Outcome::SolverFailure {
+            step: Some(step),
+            message: format!("a jam that no contact pins: {message}"),
+        };
+    }
     Outcome::Jammed {
         step,
         description: jam.description.clone(),
@@ -372,8 +380,8 @@ pub fn classify(e: &SweepError) -> Outcome {
             step,
             source: ContactError::Jammed(jam),
             ..
-        } => jammed(*step, jam),
-        SweepError::Contact(ContactError::Jammed(jam)) => jammed(0, jam),
+        } => jammed(*step, jam, message),
+        SweepError::Contact(ContactError::Jammed(jam)) => jammed(0, jam, message),
         // sim-core's own check refused the state the solver reached.
         SweepError::Step {
             step,

@@ -32,9 +32,7 @@ pub fn run_index(seed: u64, index: u64, sample: Sample, echo_progress: bool) -> 
         Ok(c) => c,
         Err(e) => return SweepRecord::invalid(seed, index, sample, e.to_string()),
     };
-    match catch_unwind(AssertUnwindSafe(|| {
-        run_case(&case, echo_progress)
-    })) {
+    match catch_unwind(AssertUnwindSafe(|| run_case(&case, echo_progress))) {
         Ok(rec) => rec,
         Err(panic) => {
             let what = panic_message(panic.as_ref());
@@ -123,7 +121,7 @@ fn last_progress(output: &str) -> Option<usize> {
         .lines()
         .filter_map(|l| l.strip_prefix(PROGRESS))
         .filter_map(|s| s.trim().parse().ok())
-        .last()
+        .next_back()
 }
 
 /// Runs case `index` in a child process, killed after its time limit.
@@ -261,8 +259,7 @@ pub fn run_cases(
                     if index >= end {
                         break;
                     }
-                    let rec =
-                        run_in_child(&options.command, &options.limit, seed, index, sample);
+                    let rec = run_in_child(&options.command, &options.limit, seed, index, sample);
                     let count = done.fetch_add(1, Ordering::Relaxed) + 1;
                     if options.progress_every > 0 && count.is_multiple_of(options.progress_every) {
                         eprintln!(

@@ -171,7 +171,8 @@ pub fn summary_markdown(records: &[SweepRecord]) -> String {
 /// exact message (failures first, then jams, then refusals).
 pub fn unfinished_report(records: &[SweepRecord]) -> String {
     let mut out = String::new();
-    let classes: [(&str, fn(&Outcome) -> bool); 3] = [
+    type Class = (&'static str, fn(&Outcome) -> bool);
+    let classes: [Class; 3] = [
         ("solver failures and uncertified steps", Outcome::is_failure),
         ("jams", |o| matches!(o, Outcome::Jammed { .. })),
         ("placement refusals", |o| {
