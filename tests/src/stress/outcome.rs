@@ -353,11 +353,13 @@ fn bad_start(e: &ContactError) -> bool {
     )
 }
 
-/// What sim-core says in a placement's message when the solver failed under it.
-const SOLVER_FAILED: [&str; 3] = [
+/// What sim-core says in a placement's message when the solver failed under it (the last:
+/// a jam that no contact pins, as in [`jammed`]).
+const SOLVER_FAILED: [&str; 4] = [
     "no equilibrium found",
     "fails the independent check",
     "did not converge",
+    "pinned by no loaded contact",
 ];
 
 /// How a sweep error ends the sweep.
