@@ -8,11 +8,10 @@
 //! time.
 
 use std::io::Read;
-use std::ops::Range;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
@@ -240,25 +239,21 @@ pub fn default_threads() -> usize {
 /// limit; the records in index order.
 pub fn run_cases(
     seed: u64,
-    indices: Range<u64>,
+    indices: &[u64],
     sample: Sample,
     options: &RunOptions,
 ) -> Vec<SweepRecord> {
-    let next = AtomicU64::new(indices.start);
+    let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
-    let total = indices.end.saturating_sub(indices.start);
+    let total = indices.len();
     let started = Instant::now();
     let (tx, rx) = mpsc::channel();
     std::thread::scope(|scope| {
         for _ in 0..options.threads.max(1) {
             let tx = tx.clone();
-            let (next, done, end) = (&next, &done, indices.end);
+            let (next, done) = (&next, &done);
             scope.spawn(move || {
-                loop {
-                    let index = next.fetch_add(1, Ordering::Relaxed);
-                    if index >= end {
-                        break;
-                    }
+                while let Some(&index) = indices.get(next.fetch_add(1, Ordering::Relaxed)) {
                     let rec = run_in_child(&options.command, &options.limit, seed, index, sample);
                     let count = done.fetch_add(1, Ordering::Relaxed) + 1;
                     if options.progress_every > 0 && count.is_multiple_of(options.progress_every) {
