@@ -27,10 +27,13 @@
 //! the configurations interleaved round by round (`std::time::Instant`, one thread). Run by
 //! `scripts/bench-sweep` (release build); `-- --rounds N` sets the rounds.
 
+mod bench_common;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use bench_common::{date, human, median, write_section};
 use nalgebra::Vector2;
 use plotters::prelude::*;
 use sim_core::contact::{ContactSettings, Feature};
@@ -301,16 +304,6 @@ fn sweep_once(chain: &Chain, def: &SceneDef, config: Config) -> BoxResult<Run> {
     Ok(run)
 }
 
-fn median(values: &[f64]) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
-}
-
 /// The symmetric Hausdorff distance between two non-empty point sets.
 fn hausdorff(a: &[Vector2<f64>], b: &[Vector2<f64>]) -> f64 {
     let one_way = |a: &[Vector2<f64>], b: &[Vector2<f64>]| {
@@ -490,16 +483,6 @@ fn measure(rounds: usize) -> BoxResult<Vec<SceneResult>> {
         });
     }
     Ok(results)
-}
-
-fn human(seconds: f64) -> String {
-    if seconds >= 1.0 {
-        format!("{seconds:.2} s")
-    } else if seconds >= 1e-3 {
-        format!("{:.1} ms", seconds * 1e3)
-    } else {
-        format!("{:.1} µs", seconds * 1e6)
-    }
 }
 
 fn sci(v: f64) -> String {
@@ -843,40 +826,6 @@ fn plot(results: &[SceneResult], path: &Path) -> BoxResult<()> {
     Ok(())
 }
 
-fn write_section(workspace: &Path, section: &str) -> BoxResult<()> {
-    let path = workspace.join("BENCHMARKS.md");
-    let old = std::fs::read_to_string(&path).unwrap_or_else(|_| "# Benchmarks\n".to_string());
-    let new = match (old.find(BEGIN), old.find(END)) {
-        (Some(b), Some(e)) if b < e => format!(
-            "{}{}{}",
-            &old[..b],
-            section.trim_end(),
-            &old[e + END.len()..]
-        ),
-        _ => format!("{}\n{}", old.trim_end_matches('\n'), section),
-    };
-    std::fs::write(&path, new)?;
-    Ok(())
-}
-
-/// Today's date (UTC), from the system clock.
-fn date() -> String {
-    let days = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs() / 86_400) as i64;
-    // Civil from days (H. Hinnant's algorithm).
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    format!("{year:04}-{month:02}-{day:02}")
-}
-
 fn main() -> BoxResult<()> {
     let mut rounds = ROUNDS;
     let mut args = std::env::args().skip(1);
@@ -943,7 +892,7 @@ fn main() -> BoxResult<()> {
         table(&mut md, result)?;
     }
     writeln!(md, "{END}")?;
-    write_section(&workspace, &md)?;
+    write_section(&workspace, BEGIN, END, &md)?;
     print!("{md}");
     Ok(())
 }

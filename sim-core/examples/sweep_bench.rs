@@ -15,10 +15,13 @@
 //! Times are medians of repeated runs (`std::time::Instant`, one thread); the placement is
 //! not timed. Run by `scripts/bench-sweep` (release build).
 
+mod bench_common;
+
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
+use bench_common::{human, write_section};
 use nalgebra::Vector2;
 use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
@@ -227,34 +230,6 @@ fn measure(s: &Scenario) -> BoxResult<Measured> {
     Ok(m)
 }
 
-fn human(seconds: f64) -> String {
-    if seconds >= 1.0 {
-        format!("{seconds:.2} s")
-    } else if seconds >= 1e-3 {
-        format!("{:.1} ms", seconds * 1e3)
-    } else if seconds >= 1e-6 {
-        format!("{:.2} µs", seconds * 1e6)
-    } else {
-        format!("{:.0} ns", seconds * 1e9)
-    }
-}
-
-fn write_section(workspace: &Path, section: &str) -> BoxResult<()> {
-    let path = workspace.join("BENCHMARKS.md");
-    let old = std::fs::read_to_string(&path).unwrap_or_else(|_| "# Benchmarks\n".to_string());
-    let new = match (old.find(BEGIN), old.find(END)) {
-        (Some(b), Some(e)) if b < e => format!(
-            "{}{}{}",
-            &old[..b],
-            section.trim_end(),
-            &old[e + END.len()..]
-        ),
-        _ => format!("{}\n{}", old.trim_end_matches('\n'), section),
-    };
-    std::fs::write(&path, new)?;
-    Ok(())
-}
-
 fn main() -> BoxResult<()> {
     let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let workspace = manifest.parent().ok_or("no workspace dir")?.to_path_buf();
@@ -360,7 +335,7 @@ fn main() -> BoxResult<()> {
         ratio(TRAPEZOID, FRICTION),
     )?;
     writeln!(md, "{END}")?;
-    write_section(&workspace, &md)?;
+    write_section(&workspace, BEGIN, END, &md)?;
     print!("{md}");
     Ok(())
 }

@@ -20,10 +20,13 @@
 //! each round and the median over the rounds reported. Run by `scripts/bench-sweep` (release
 //! build); `-- --rounds N` sets the rounds.
 
+mod bench_common;
+
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
+use bench_common::{date, human, median, write_section};
 use nalgebra::Vector2;
 use sim_core::contact::ContactSettings;
 use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
@@ -161,16 +164,6 @@ fn sweep_once(links: usize, scaled_jump: bool) -> BoxResult<Run> {
     Ok(run)
 }
 
-fn median(values: &[f64]) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
-}
-
 /// The `q`-quantile (nearest rank).
 fn percentile(values: &[usize], q: f64) -> usize {
     let mut v = values.to_vec();
@@ -180,34 +173,6 @@ fn percentile(values: &[usize], q: f64) -> usize {
     }
     let rank = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len());
     v[rank - 1]
-}
-
-fn human(seconds: f64) -> String {
-    if seconds >= 1.0 {
-        format!("{seconds:.2} s")
-    } else if seconds >= 1e-3 {
-        format!("{:.1} ms", seconds * 1e3)
-    } else if seconds >= 1e-6 {
-        format!("{:.2} µs", seconds * 1e6)
-    } else {
-        format!("{:.0} ns", seconds * 1e9)
-    }
-}
-
-fn write_section(workspace: &Path, section: &str) -> BoxResult<()> {
-    let path = workspace.join("BENCHMARKS.md");
-    let old = std::fs::read_to_string(&path).unwrap_or_else(|_| "# Benchmarks\n".to_string());
-    let new = match (old.find(BEGIN), old.find(END)) {
-        (Some(b), Some(e)) if b < e => format!(
-            "{}{}{}",
-            &old[..b],
-            section.trim_end(),
-            &old[e + END.len()..]
-        ),
-        _ => format!("{}\n{}", old.trim_end_matches('\n'), section),
-    };
-    std::fs::write(&path, new)?;
-    Ok(())
 }
 
 /// The note on the jump test (the default-settings table).
@@ -270,24 +235,6 @@ fn row(md: &mut String, runs: &[Vec<Run>], i: usize, links: usize) -> BoxResult<
         r0.tip_end.y * 1e3,
     )?;
     Ok(median(&ratios))
-}
-
-/// Today's date (UTC), from the system clock.
-fn date() -> String {
-    let days = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs() / 86_400) as i64;
-    // Civil from days (H. Hinnant's algorithm).
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    format!("{year:04}-{month:02}-{day:02}")
 }
 
 fn main() -> BoxResult<()> {
@@ -466,7 +413,7 @@ fn main() -> BoxResult<()> {
         check_ratio,
     )?;
     writeln!(md, "{END}")?;
-    write_section(&workspace, &md)?;
+    write_section(&workspace, BEGIN, END, &md)?;
     print!("{md}");
     Ok(())
 }

@@ -1,0 +1,70 @@
+//! What the sweep benchmark examples share: writing their generated section of
+//! `BENCHMARKS.md`, medians, human-readable times and today's date.
+// Each example uses a part of it.
+#![allow(dead_code)]
+
+use std::path::Path;
+
+/// Replaces the text between `begin` and `end` in the workspace's `BENCHMARKS.md` with
+/// `section` (which carries both markers), or appends it where the markers are missing.
+pub fn write_section(
+    workspace: &Path,
+    begin: &str,
+    end: &str,
+    section: &str,
+) -> std::io::Result<()> {
+    let path = workspace.join("BENCHMARKS.md");
+    let old = std::fs::read_to_string(&path).unwrap_or_else(|_| "# Benchmarks\n".to_string());
+    let new = match (old.find(begin), old.find(end)) {
+        (Some(b), Some(e)) if b < e => format!(
+            "{}{}{}",
+            &old[..b],
+            section.trim_end(),
+            &old[e + end.len()..]
+        ),
+        _ => format!("{}\n{}", old.trim_end_matches('\n'), section),
+    };
+    std::fs::write(&path, new)
+}
+
+/// The median (NaN for no values).
+pub fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// A duration in seconds with the unit that reads best.
+pub fn human(seconds: f64) -> String {
+    if seconds >= 1.0 {
+        format!("{seconds:.2} s")
+    } else if seconds >= 1e-3 {
+        format!("{:.1} ms", seconds * 1e3)
+    } else if seconds >= 1e-6 {
+        format!("{:.2} µs", seconds * 1e6)
+    } else {
+        format!("{:.0} ns", seconds * 1e9)
+    }
+}
+
+/// Today's date (UTC), from the system clock.
+pub fn date() -> String {
+    let days = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs() / 86_400) as i64;
+    // Civil from days (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!("{year:04}-{month:02}-{day:02}")
+}
