@@ -173,6 +173,6 @@ pub use velocity::{
     FrameVelocities, Twist2, frame_velocities, frame_velocities_into, frame_velocity,
 };
 pub use wall::{
-    ConvexFeature, FeatureContact, Line, Polyline, SMOOTH_MU_DEFAULT, SegmentContact, Sinusoid,
-    SolidSide, Surface, SurfaceMap, Wall, WallError, WallPoint, WallShape, ZoneAxis,
+    ConcavePiece, ConvexFeature, FeatureContact, Line, Polyline, SMOOTH_MU_DEFAULT, SegmentContact,
+    Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError, WallPoint, WallShape, ZoneAxis,
 };

@@ -16,6 +16,7 @@
 //! - `ANTENNA_STRESS_REPLAY=ci:SEED:INDEX[,INDEX...]` (or `soak:...`): reruns those cases
 //!   alone, in this process and without a time limit, and prints what happened (the replay
 //!   lines printed for unfinished sweeps say which).
+//! - `ANTENNA_STRESS_ALL=1`: the CI sample with its known failures too.
 //! - `ANTENNA_STRESS_THREADS`: worker threads (default: every core).
 //! - Each sweep runs in a child process (this binary, running only the main test with
 //!   `ANTENNA_STRESS_CHILD` set) that is killed past its time limit (a hung sweep must not
@@ -48,36 +49,25 @@ const CI_SWEEPS: u64 = 80;
 /// fails it. Remove an entry when its sweep finishes (`ANTENNA_STRESS_REPLAY=ci:SEED:INDEX`).
 const KNOWN_CI_FAILURES: &[(u64, &str)] = &[
     (
-        2,
-        "tip-on-wall S on a digitized line: the held antenna is not brought onto the wall in time",
-    ),
-    (
         4,
-        "angles 0 mm from a digitized line: settling does not come to rest",
+        "angles 0 mm from a digitized line, N = 9: finishes, but in about 4.4 s of its 4.9 s \
+         limit in the test profile (127,000 Newton iterations: most steps are split in eight \
+         where a joint rests beside a corner whose link pair has just left the link)",
     ),
     (
         16,
         "tip-on-wall S, N = 4: the pinned equilibrium converges from no start",
     ),
     (
-        17,
-        "tip-on-wall S on a digitized trapezoid: the held antenna is not brought onto the wall in time",
-    ),
-    (
         30,
-        "angles on a digitized trapezoid, N = 36: settling does not come to rest",
-    ),
-    (
-        36,
-        "tip-on-wall S on a digitized line: the held antenna is not brought onto the wall in time",
-    ),
-    (
-        37,
-        "tip-on-wall S on a digitized trapezoid: slow placement (times out under load)",
+        "angles on a digitized trapezoid, N = 36: settling, the tip comes to rest on a convex \
+         corner that no link rests on (a point on a point, whose normal is undefined) and the \
+         downhill path does not come to rest",
     ),
     (
         38,
-        "tip-on-wall S on a digitized line: the held antenna is not brought onto the wall in time",
+        "tip-on-wall S on a digitized line: times out at step 156 of 167 (friction locks the \
+         antenna; without friction the step fails too)",
     ),
     (
         41,
@@ -184,7 +174,8 @@ fn contact_sweeps_finish_with_every_step_certified() {
     // The CI sample leaves out its known failures (issue #13 is open on them; the soak and
     // `ANTENNA_STRESS_REPLAY` still run them): every other sweep must finish or end in a
     // typed outcome, so a new failure fails the check.
-    let skipped: &[(u64, &str)] = if soak { &[] } else { KNOWN_CI_FAILURES };
+    let all = std::env::var("ANTENNA_STRESS_ALL").is_ok_and(|v| v.trim() == "1");
+    let skipped: &[(u64, &str)] = if soak || all { &[] } else { KNOWN_CI_FAILURES };
     let indices: Vec<u64> = (0..count)
         .filter(|i| !skipped.iter().any(|(k, _)| k == i))
         .collect();

@@ -15,7 +15,7 @@ use super::geometry::{FOOT_TOLERANCE, chain_point, evaluate};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
 use super::posture::Posture;
 use super::quasistatic::{QuasiStatic, theta_of};
-use crate::FeatureContact;
+use crate::{FeatureContact, WallPoint};
 
 /// How many pieces per chain point, and corners or crests per link, the broad phase keeps
 /// (the nearest).
@@ -68,6 +68,9 @@ impl QuasiStatic {
                 next.normal_active = old.normal_active;
             }
         }
+        // A contact of the last step at a joint that now sits on a corner hands its load to
+        // the links resting on the corner.
+        self.hand_joint_pairs_to_links(&self.probe, &mut out);
         Ok(out)
     }
 
@@ -81,6 +84,7 @@ impl QuasiStatic {
         // it can touch next, and anything the solve pushes into a wall joins after it).
         let keep = if within_m > 0.0 { NEAREST } else { usize::MAX };
         let mut near: Vec<(f64, PairKey)> = Vec::new();
+        let mut real_gaps: Vec<f64> = Vec::with_capacity(self.walls.len());
         let take = |near: &mut Vec<(f64, PairKey)>, keys: &mut Vec<PairKey>| {
             near.sort_by(|a, b| a.0.total_cmp(&b.0));
             keys.extend(near.drain(..).take(keep).map(|(_, k)| k));
@@ -92,10 +96,28 @@ impl QuasiStatic {
             }
             for point in points {
                 let (_, _, x) = chain_point(&self.chain, posture, beta, point);
+                real_gaps.clear();
+                real_gaps.extend(self.walls.iter().map(|wall| wall.signed_distance(&x).gap_m));
                 for (w, piece) in self.pieces.walls.iter().enumerate() {
-                    let gap_m = piece.signed_distance(&x).gap_m;
+                    let real_gap_m = real_gaps[self.pieces.piece_of[w]];
+                    if !self.pieces.may_touch(
+                        w,
+                        &x,
+                        real_gap_m,
+                        within_m,
+                        self.settings.penetration_tolerance_m,
+                    ) {
+                        continue;
+                    }
+                    let wall_point = piece.signed_distance(&x);
+                    let gap_m = wall_point.gap_m;
                     if gap_m < within_m && self.on_real_wall(w, &x, gap_m) {
-                        near.push((gap_m, PairKey::point(point, w)));
+                        let stand_ins = self.joint_corner_pairs(posture, point, w, &wall_point);
+                        if stand_ins.iter().any(Option::is_some) {
+                            keys.extend(stand_ins.into_iter().flatten());
+                        } else {
+                            near.push((gap_m, PairKey::point(point, w)));
+                        }
                     }
                 }
                 take(&mut near, &mut keys);
@@ -117,7 +139,123 @@ impl QuasiStatic {
             take(&mut near, &mut keys);
         }
         keys.sort();
+        keys.dedup();
         keys
+    }
+
+    /// For a joint at a convex corner of piece `piece` (its nearest point of the piece,
+    /// `wall_point`, is the corner, or lies on an edge ending at it): the pairs of the
+    /// joint's two links with that corner where a link rests on it at the joint (the
+    /// corner's foot at the link's joint end within [`FOOT_TOLERANCE`], or anywhere on the
+    /// link where the joint is nearest to the corner itself; the link's normal in the
+    /// corner's cone). They stand for the joint's own pair: at the same material point, the
+    /// joint's pair (against the edge, or the corner with a normal undefined when the joint
+    /// sits on it) would be a second normal and a second stick condition on the point that
+    /// the links' pairs already hold, and Newton's system on both is singular. The links'
+    /// pairs have smooth gaps and normals, and their forces span the cone between the
+    /// links' normals. `[None, None]` for a hair tip, a joint away from the corners, or a
+    /// corner no link rests on at the joint (a joint bent into a point against it): the
+    /// point pair stands.
+    pub(super) fn joint_corner_pairs(
+        &self,
+        posture: &Posture,
+        point: ChainPoint,
+        piece: usize,
+        wall_point: &WallPoint,
+    ) -> [Option<PairKey>; 2] {
+        let ChainPoint::Vertex(joint) = point else {
+            return [None, None];
+        };
+        let shape = &self.pieces.walls[piece].shape;
+        let at_corner = wall_point.curvature_per_m == f64::INFINITY;
+        let mut out = [None, None];
+        for feature in shape.convex_features_by(wall_point).into_iter().flatten() {
+            let rests_on = |link: usize, joint_end: f64| {
+                (link >= 1 && link <= self.chain.n())
+                    .then(|| {
+                        shape.feature_contact(
+                            feature,
+                            &posture.start_of(link),
+                            &posture.end_m[link],
+                        )
+                    })
+                    .flatten()
+                    .filter(|fc| {
+                        let on_link = if at_corner {
+                            fc.s >= -FOOT_TOLERANCE && fc.s <= 1.0 + FOOT_TOLERANCE
+                        } else {
+                            (fc.s - joint_end).abs() <= FOOT_TOLERANCE
+                        };
+                        fc.supported && on_link
+                    })
+                    .map(|_| PairKey::link(link, feature, piece))
+            };
+            let found = [rests_on(joint, 1.0), rests_on(joint + 1, 0.0)];
+            if found.iter().any(Option::is_some) {
+                out = found;
+                break;
+            }
+        }
+        out
+    }
+
+    /// Replaces each joint pair of `pairs` whose joint, in `posture`, sits nearest to a
+    /// convex corner that one of its links rests on by those links' pairs
+    /// ([`Self::joint_corner_pairs`]); a link pair that is not yet one starts from the
+    /// joint pair's forces and friction state. Whether a pair carrying force was replaced
+    /// (the step must then be solved again).
+    pub(super) fn hand_joint_pairs_to_links(
+        &self,
+        posture: &Posture,
+        pairs: &mut Vec<Pair>,
+    ) -> bool {
+        let mut changed = false;
+        let mut i = 0;
+        while i < pairs.len() {
+            let key = pairs[i].key;
+            let stand_ins = match key.kind {
+                PairKind::Point(point @ ChainPoint::Vertex(joint)) => {
+                    let wall_point =
+                        self.pieces.walls[key.piece].signed_distance(&posture.end_m[joint]);
+                    self.joint_corner_pairs(posture, point, key.piece, &wall_point)
+                }
+                _ => [None, None],
+            };
+            if stand_ins.iter().all(Option::is_none) {
+                i += 1;
+                continue;
+            }
+            let old = pairs.remove(i);
+            changed |= old.normal_active || old.normal_force_n != 0.0;
+            let mut handed = false;
+            for key in stand_ins.into_iter().flatten() {
+                if pairs.iter().any(|c| c.key == key) {
+                    continue;
+                }
+                let mut c = self.fresh_pair(key);
+                if !handed {
+                    carry(&mut c, &old);
+                    handed = true;
+                }
+                pairs.push(c);
+            }
+        }
+        changed
+    }
+
+    /// [`Self::hand_joint_pairs_to_links`] at the solution `x` of a step to `goal`.
+    pub(super) fn hand_joint_pairs_to_links_at(
+        &mut self,
+        x: &[f64],
+        pairs: &mut Vec<Pair>,
+        goal: Vector2<f64>,
+    ) -> bool {
+        let theta = theta_of(&self.theta, x);
+        let mut probe = std::mem::take(&mut self.probe);
+        probe.update(&self.chain, goal, &theta);
+        let changed = self.hand_joint_pairs_to_links(&probe, pairs);
+        self.probe = probe;
+        changed
     }
 
     /// A fresh pair `key`: its material point where it touches (or comes nearest) at the
@@ -197,18 +335,33 @@ impl QuasiStatic {
     /// cut from there.
     ///
     /// A piece of a polyline cut at a concave corner goes on straight past the cut (so that
-    /// its signed distance stays smooth there). Near the cut that extension lies inside the
-    /// neighbouring piece, where the wall's own signed distance is at most the piece's; but
-    /// farther on it can pass through the free space in front of another part of the wall
-    /// (a short edge's line reaching back over a bump), where the wall is farther than the
-    /// piece says: that is no wall at all, and a point touching only it is not a contact.
-    /// (On a piece's own edges the wall's distance is never more than the piece's.)
+    /// its signed distance stays smooth there). Past the cut by more than
+    /// [`CUT_REACH_M`](super::pieces::CUT_REACH_M) the run-on is redundant with the
+    /// neighbouring piece (see there), and a point whose foot lies there is not this
+    /// piece's contact. Near the cut the run-on lies inside the neighbouring piece, where
+    /// the wall's own signed distance is at most the piece's; farther on it can pass
+    /// through the free space in front of another part of the wall (a short edge's line
+    /// reaching back over a bump), where the wall is farther than the piece says: that is
+    /// no wall at all. (On a piece's own edges the wall's distance is never more than the
+    /// piece's.)
     pub(super) fn on_real_wall(&self, piece: usize, x_m: &Vector2<f64>, gap_m: f64) -> bool {
-        !self.pieces.cut[piece]
-            || self.walls[self.pieces.piece_of[piece]]
-                .signed_distance(x_m)
-                .gap_m
-                <= gap_m + self.settings.penetration_tolerance_m
+        if !self.pieces.cut[piece] {
+            return true;
+        }
+        let tol = self.settings.penetration_tolerance_m;
+        let real = self.walls[self.pieces.piece_of[piece]].signed_distance(x_m);
+        if real.gap_m > gap_m + tol {
+            return false;
+        }
+        let (from_m, to_m) = self.pieces.reach_m[piece];
+        let foot_m = self.pieces.walls[piece].signed_distance(x_m).arclength_m;
+        // Inside the wall, the piece whose own edges hold the wall's nearest point pushes
+        // the point out, wherever its foot on the piece lies.
+        let owns_nearest = || {
+            let (first_m, last_m) = self.pieces.own_arclengths_m[piece];
+            (first_m..=last_m).contains(&real.arclength_m)
+        };
+        (from_m..=to_m).contains(&foot_m) || (gap_m < -tol && owns_nearest())
     }
 
     /// [`Self::on_real_wall`] for a point pair (feature pairs are corners and crests of the

@@ -22,7 +22,28 @@ pub(crate) struct Pieces {
     /// `cut[i]`: piece `i` is one of several cut from its wall (its ends at the cuts go on
     /// straight past them).
     pub cut: Vec<bool>,
+    /// `reach_m[i]`: the arclengths along its wall between which a chain point's foot on
+    /// piece `i` may lie: past a cut end by at most [`CUT_REACH_M`], unbounded at the
+    /// wall's own ends.
+    pub reach_m: Vec<(f64, f64)>,
+    /// `own_arclengths_m[i]`: the arclengths of piece `i`'s first and last vertices.
+    pub own_arclengths_m: Vec<(f64, f64)>,
+    /// `bounds_m[i]`: the bounding box of piece `i`'s vertices where both its ends are cuts
+    /// (its contacts then lie near it, see [`Pieces::may_touch`]), else `None`.
+    pub bounds_m: Vec<Option<(Vector2<f64>, Vector2<f64>)>>,
 }
+
+/// How far past a cut a piece's straight run-on still counts, metres.
+///
+/// At a concave corner the run-on of each piece lies inside the other: a point outside the
+/// other piece whose foot is past the cut is at least as far from this piece's run-on as
+/// from the other piece, so the other piece's pair holds it and this one is redundant. The
+/// run-on matters only about the corner itself, where a point pressed into it touches
+/// both; farther on, on a wall with many small concave corners (a digitized one, whose
+/// pieces all lie nearly on one line), the run-on of a distant piece passes within rounding
+/// of a corner it has nothing to do with, and three pieces pressing on one point make the
+/// contact equations degenerate. The allowance is a Newton iterate's wander about a corner.
+pub(crate) const CUT_REACH_M: f64 = 1e-4;
 
 impl Pieces {
     /// Cuts `walls` into pieces.
@@ -31,10 +52,33 @@ impl Pieces {
         for (w, wall) in walls.iter().enumerate() {
             match &wall.shape {
                 WallShape::Polyline(polyline) => {
-                    let split = polyline.split_at_concave_corners();
+                    let split = polyline.split_at_concave_corners_with_cuts();
                     let cut = split.len() > 1;
                     for piece in split {
-                        pieces.walls.push(Wall::new(piece, wall.surfaces.clone()));
+                        let (first_m, last_m) = piece.polyline.arclength_range_m();
+                        pieces
+                            .bounds_m
+                            .push((piece.cut_at_start && piece.cut_at_end).then(|| {
+                                let v = piece.polyline.vertices_m();
+                                v.iter()
+                                    .fold((v[0], v[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)))
+                            }));
+                        pieces.own_arclengths_m.push((first_m, last_m));
+                        pieces.reach_m.push((
+                            if piece.cut_at_start {
+                                first_m - CUT_REACH_M
+                            } else {
+                                f64::NEG_INFINITY
+                            },
+                            if piece.cut_at_end {
+                                last_m + CUT_REACH_M
+                            } else {
+                                f64::INFINITY
+                            },
+                        ));
+                        pieces
+                            .walls
+                            .push(Wall::new(piece.polyline, wall.surfaces.clone()));
                         pieces.piece_of.push(w);
                         pieces.cut.push(cut);
                     }
@@ -43,10 +87,39 @@ impl Pieces {
                     pieces.walls.push(wall.clone());
                     pieces.piece_of.push(w);
                     pieces.cut.push(false);
+                    pieces.reach_m.push((f64::NEG_INFINITY, f64::INFINITY));
+                    pieces.bounds_m.push(None);
+                    pieces
+                        .own_arclengths_m
+                        .push((f64::NEG_INFINITY, f64::INFINITY));
                 }
             }
         }
         pieces
+    }
+
+    /// Whether chain point `x_m`, `real_gap_m` from the whole wall, can be a contact of
+    /// piece `piece` with a gap under `within_m` (a broad phase: `false` only where it
+    /// cannot). A pair of a piece cut at both ends has its foot on the piece's own edges or
+    /// within [`CUT_REACH_M`] past a cut (or, inside the wall, the wall's nearest point on
+    /// them), and the piece's gap is at least the wall's less the penetration tolerance
+    /// `tol_m`: the point lies within `max(within_m, |real_gap_m|) + CUT_REACH_M + tol_m` of
+    /// the piece's vertices' bounding box.
+    pub fn may_touch(
+        &self,
+        piece: usize,
+        x_m: &Vector2<f64>,
+        real_gap_m: f64,
+        within_m: f64,
+        tol_m: f64,
+    ) -> bool {
+        let Some((lo, hi)) = self.bounds_m[piece] else {
+            return true;
+        };
+        let reach = within_m.max(real_gap_m.abs()) + CUT_REACH_M + tol_m;
+        let dx = (lo.x - x_m.x).max(x_m.x - hi.x).max(0.0);
+        let dy = (lo.y - x_m.y).max(x_m.y - hi.y).max(0.0);
+        dx * dx + dy * dy <= reach * reach
     }
 
     /// The surface of the wall that piece `piece` belongs to at its point nearest to

@@ -52,7 +52,7 @@ use nalgebra::Vector2;
 
 pub use error::WallError;
 pub use line::Line;
-pub use polyline::Polyline;
+pub use polyline::{ConcavePiece, Polyline};
 pub use sinusoid::Sinusoid;
 pub use surface::{SMOOTH_MU_DEFAULT, Surface, SurfaceMap, ZoneAxis};
 
@@ -287,6 +287,19 @@ impl WallShape {
         }
         let contact = self.segment_contact(a_m, b_m);
         (contact.wall.gap_m <= max_gap_m).then_some(contact)
+    }
+
+    /// The convex features nearest to `wall_point` (an answer of this shape's signed
+    /// distance): a polyline's convex corners at the ends of the edge it lies on, or the
+    /// corner it is (a sinusoid's crests are smooth, and a point nearest to one is on the
+    /// surface like any other).
+    pub fn convex_features_by(&self, wall_point: &WallPoint) -> [Option<ConvexFeature>; 2] {
+        match self {
+            WallShape::Polyline(w) => w
+                .convex_corners_by(wall_point)
+                .map(|corner| corner.map(|vertex| ConvexFeature::Corner { vertex })),
+            WallShape::Line(_) | WallShape::Sinusoid(_) => [None, None],
+        }
     }
 
     /// The convex features of the wall that could press on the inside of the segment

@@ -14,6 +14,18 @@ use nalgebra::Vector2;
 use super::error::{WallError, finite};
 use super::{ConvexFeature, FeatureContact, SegmentContact, SolidSide, WallPoint, better, lerp};
 
+/// A piece of a polyline cut at its concave corners
+/// ([`Polyline::split_at_concave_corners_with_cuts`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConcavePiece {
+    /// The piece, running on along its end edges.
+    pub polyline: Polyline,
+    /// Its first vertex is a concave corner of the polyline it was cut from (not its end).
+    pub cut_at_start: bool,
+    /// Its last vertex is one.
+    pub cut_at_end: bool,
+}
+
 /// An open polyline wall. Tangent from the first vertex toward the last; arclength from the
 /// first vertex (negative along the first ray).
 #[derive(Clone, Debug, PartialEq)]
@@ -28,6 +40,59 @@ pub struct Polyline {
     /// Arclength of vertex `i` from vertex 0, metres.
     arclengths_m: Vec<f64>,
     solid: SolidSide,
+    /// The finite edges in runs with their bounding boxes, for nearest-point queries that
+    /// skip the runs farther than the best edge found (empty for short polylines).
+    chunks: Vec<EdgeChunk>,
+}
+
+/// A run of consecutive finite edges and their bounding box.
+#[derive(Clone, Debug, PartialEq)]
+struct EdgeChunk {
+    first_edge: usize,
+    end_edge: usize,
+    min_m: Vector2<f64>,
+    max_m: Vector2<f64>,
+}
+
+impl EdgeChunk {
+    /// A lower bound of the squared distance from `p_m` to any edge of the run.
+    fn distance2_lower_bound(&self, p_m: &Vector2<f64>) -> f64 {
+        let dx = (self.min_m.x - p_m.x).max(p_m.x - self.max_m.x).max(0.0);
+        let dy = (self.min_m.y - p_m.y).max(p_m.y - self.max_m.y).max(0.0);
+        dx * dx + dy * dy
+    }
+}
+
+/// Polylines with fewer finite edges than this are searched edge by edge.
+const CHUNKED_FROM_EDGES: usize = 32;
+
+/// The runs of finite edges (`1..edges - 1`; the first and last edges are rays) of the
+/// polyline through `vertices_m`, about `sqrt(edges)` edges each.
+fn edge_chunks(vertices_m: &[Vector2<f64>]) -> Vec<EdgeChunk> {
+    let edges = vertices_m.len().saturating_sub(1);
+    if edges < CHUNKED_FROM_EDGES {
+        return Vec::new();
+    }
+    let size = (edges as f64).sqrt().ceil() as usize;
+    let mut chunks = Vec::with_capacity(edges / size + 1);
+    let mut first_edge = 1;
+    while first_edge < edges - 1 {
+        let end_edge = (first_edge + size).min(edges - 1);
+        let mut min_m = vertices_m[first_edge];
+        let mut max_m = min_m;
+        for v in &vertices_m[first_edge..=end_edge] {
+            min_m = min_m.inf(v);
+            max_m = max_m.sup(v);
+        }
+        chunks.push(EdgeChunk {
+            first_edge,
+            end_edge,
+            min_m,
+            max_m,
+        });
+        first_edge = end_edge;
+    }
+    chunks
 }
 
 /// Which feature of the polyline is nearest.
@@ -82,6 +147,7 @@ impl Polyline {
                 return Err(WallError::EdgeDoublesBack { vertex });
             }
         }
+        let chunks = edge_chunks(&vertices_m);
         let polyline = Polyline {
             vertices_m,
             tangents,
@@ -89,6 +155,7 @@ impl Polyline {
             lengths_m,
             arclengths_m,
             solid,
+            chunks,
         };
         for first in 0..edges {
             for second in first + 2..edges {
@@ -98,6 +165,14 @@ impl Polyline {
             }
         }
         Ok(polyline)
+    }
+
+    /// The arclengths of the first and last vertices, metres.
+    pub fn arclength_range_m(&self) -> (f64, f64) {
+        (
+            self.arclengths_m[0],
+            self.arclengths_m[self.arclengths_m.len() - 1],
+        )
     }
 
     /// The vertices, metres.
@@ -116,8 +191,18 @@ impl Polyline {
     /// pieces, each with a smooth distance (the distance to the whole polyline has a kink
     /// along the corner's bisector). Without concave corners, the polyline itself.
     pub fn split_at_concave_corners(&self) -> Vec<Polyline> {
+        self.split_at_concave_corners_with_cuts()
+            .into_iter()
+            .map(|piece| piece.polyline)
+            .collect()
+    }
+
+    /// [`Self::split_at_concave_corners`], with which ends of each piece are cuts (a piece
+    /// standing for several straight pieces on one line has none: its line is theirs).
+    pub fn split_at_concave_corners_with_cuts(&self) -> Vec<ConcavePiece> {
         let mut pieces = Vec::new();
         let mut first = 0;
+        let last = self.vertices_m.len() - 1;
         for k in 1..self.tangents.len() {
             let turn = cross(&self.tangents[k - 1], &self.tangents[k]);
             let concave = match self.solid {
@@ -125,24 +210,37 @@ impl Polyline {
                 SolidSide::Right => turn > 0.0,
             };
             if concave {
-                pieces.push(self.piece(first, k));
+                pieces.push(ConcavePiece {
+                    polyline: self.piece(first, k),
+                    cut_at_start: first > 0,
+                    cut_at_end: true,
+                });
                 first = k;
             }
         }
-        pieces.push(self.piece(first, self.vertices_m.len() - 1));
+        pieces.push(ConcavePiece {
+            polyline: self.piece(first, last),
+            cut_at_start: first > 0,
+            cut_at_end: false,
+        });
         // A straight piece is an infinite line; two of them on one line (the trapezoid's
         // top before and after its dip) are one wall, not two copies of every contact.
-        let mut unique: Vec<Polyline> = Vec::with_capacity(pieces.len());
+        let mut unique: Vec<ConcavePiece> = Vec::with_capacity(pieces.len());
         for piece in pieces {
-            let duplicate = piece.straight_line().is_some_and(|line| {
-                unique.iter().any(|u| {
-                    u.straight_line().is_some_and(|other| {
+            let line = piece.polyline.straight_line();
+            let duplicate = line.and_then(|line| {
+                unique.iter().position(|u| {
+                    u.polyline.straight_line().is_some_and(|other| {
                         (line.0 - other.0).norm() < 1e-12 && (line.1 - other.1).abs() < 1e-12
                     })
                 })
             });
-            if !duplicate {
-                unique.push(piece);
+            match duplicate {
+                Some(kept) => {
+                    unique[kept].cut_at_start = false;
+                    unique[kept].cut_at_end = false;
+                }
+                None => unique.push(piece),
             }
         }
         unique
@@ -167,6 +265,7 @@ impl Polyline {
         let normals = self.normals[first..last].to_vec();
         let lengths_m = self.lengths_m[first..last].to_vec();
         let arclengths_m = self.arclengths_m[first..=last].to_vec();
+        let chunks = edge_chunks(&vertices_m);
         Polyline {
             vertices_m,
             tangents,
@@ -174,6 +273,7 @@ impl Polyline {
             lengths_m,
             arclengths_m,
             solid: self.solid,
+            chunks,
         }
     }
 
@@ -213,17 +313,20 @@ impl Polyline {
         u >= lo_i && u <= hi_i && w >= lo_j && w <= hi_j
     }
 
-    /// The nearest feature to `p_m` and the squared distance to it.
+    /// The nearest feature to `p_m` and the squared distance to it: the first edge (by
+    /// index) at the least distance. With chunks, the runs of edges whose bounding box is
+    /// farther than the best edge so far are skipped (the answer is the same).
     fn nearest(&self, p_m: &Vector2<f64>) -> (Nearest, f64) {
         let last = self.tangents.len() - 1;
         let mut best = (Nearest::Edge { edge: 0, u_m: 0.0 }, f64::INFINITY);
-        for edge in 0..=last {
+        let mut best_edge = usize::MAX;
+        let consider = |edge: usize, best: &mut (Nearest, f64), best_edge: &mut usize| {
             let (lo, hi) = self.range_m(edge);
             let u = self.tangents[edge].dot(&(p_m - self.vertices_m[edge]));
             let u_m = u.clamp(lo, hi);
             let q = self.vertices_m[edge] + self.tangents[edge] * u_m;
             let d2 = (p_m - q).norm_squared();
-            if d2 < best.1 {
+            if d2 < best.1 || (d2 == best.1 && edge < *best_edge) {
                 let feature = if u_m == 0.0 && edge > 0 {
                     Nearest::Vertex(edge)
                 } else if u_m == hi && edge < last {
@@ -231,7 +334,39 @@ impl Polyline {
                 } else {
                     Nearest::Edge { edge, u_m }
                 };
-                best = (feature, d2);
+                *best = (feature, d2);
+                *best_edge = edge;
+            }
+        };
+        if self.chunks.is_empty() {
+            for edge in 0..=last {
+                consider(edge, &mut best, &mut best_edge);
+            }
+            return best;
+        }
+        consider(0, &mut best, &mut best_edge);
+        consider(last, &mut best, &mut best_edge);
+        // The nearest run first (a tight bound early), then every run that can still hold
+        // an edge as near.
+        let nearest_chunk = self
+            .chunks
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.distance2_lower_bound(p_m), i))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, i)| i);
+        if let Some(i) = nearest_chunk {
+            let c = &self.chunks[i];
+            for edge in c.first_edge..c.end_edge {
+                consider(edge, &mut best, &mut best_edge);
+            }
+        }
+        for (i, c) in self.chunks.iter().enumerate() {
+            if Some(i) == nearest_chunk || c.distance2_lower_bound(p_m) > best.1 {
+                continue;
+            }
+            for edge in c.first_edge..c.end_edge {
+                consider(edge, &mut best, &mut best_edge);
             }
         }
         best
@@ -454,6 +589,19 @@ impl Polyline {
         })
     }
 
+    /// The convex corners at the ends of the edge that `wall_point` (an answer of
+    /// [`Self::signed_distance`]) lies on, or the convex corner it is: `O(log vertices)`.
+    pub fn convex_corners_by(&self, wall_point: &WallPoint) -> [Option<usize>; 2] {
+        let a = wall_point.arclength_m;
+        let convex = |k: usize| self.is_convex(k).then_some(k);
+        match self.arclengths_m.binary_search_by(|v| v.total_cmp(&a)) {
+            Ok(vertex) => [convex(vertex), None],
+            // Between vertices `at - 1` and `at` (before the first or past the last: on an
+            // end ray, whose one vertex is not a corner).
+            Err(at) => [at.checked_sub(1).and_then(convex), convex(at)],
+        }
+    }
+
     /// Whether interior vertex `k` bulges into free space (its free-side angle is over 180
     /// degrees).
     fn is_convex(&self, k: usize) -> bool {
@@ -564,6 +712,10 @@ impl Polyline {
         for v in &mut self.vertices_m {
             *v += offset_m;
         }
+        for chunk in &mut self.chunks {
+            chunk.min_m += offset_m;
+            chunk.max_m += offset_m;
+        }
     }
 
     /// A copy moved by `offset_m`.
@@ -602,5 +754,53 @@ pub(crate) fn for_roots(qa: f64, qb: f64, qc: f64, f: &mut impl FnMut(f64)) {
         f(qc / q);
     } else {
         f(0.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A noisy line of `count` vertices along `+x` (a digitized wall).
+    fn noisy_line(count: usize, seed: u64) -> Polyline {
+        let mut state = seed | 1;
+        let mut noise = || {
+            // xorshift: a fixed, dependency-free sequence in [-1, 1).
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        };
+        let vertices = (0..count)
+            .map(|i| Vector2::new(i as f64 * 2e-3, 4e-4 * noise()))
+            .collect();
+        Polyline::new(vertices, SolidSide::Right).unwrap()
+    }
+
+    proptest! {
+        /// The chunked nearest-point search gives exactly what the edge-by-edge one does.
+        #[test]
+        fn chunked_search_is_exact(
+            count in 33usize..400,
+            seed in any::<u64>(),
+            x in -0.05f64..0.9,
+            y in -0.02f64..0.02,
+        ) {
+            let wall = noisy_line(count, seed);
+            prop_assert!(!wall.chunks.is_empty());
+            let mut plain = wall.clone();
+            plain.chunks.clear();
+            let p = Vector2::new(x, y);
+            prop_assert_eq!(wall.signed_distance(&p), plain.signed_distance(&p));
+            // On a vertex, and half-way along an edge (ties between edges).
+            let k = (seed as usize) % count;
+            let v = wall.vertices_m()[k];
+            prop_assert_eq!(wall.signed_distance(&v), plain.signed_distance(&v));
+            if k + 1 < count {
+                let mid = (v + wall.vertices_m()[k + 1]) * 0.5;
+                prop_assert_eq!(wall.signed_distance(&mid), plain.signed_distance(&mid));
+            }
+        }
     }
 }
