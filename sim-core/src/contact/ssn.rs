@@ -33,9 +33,6 @@ pub(crate) struct Ssn {
     dz: Vec<f64>,
     z_prev: Vec<f64>,
     trial: Vec<Pair>,
-    /// The best point of the solve so far (least `max |Phi|`), and its pairs.
-    z_best: Vec<f64>,
-    pairs_best: Vec<Pair>,
 }
 
 /// How many past merits the non-monotone line search compares against.
@@ -73,12 +70,6 @@ impl Ssn {
         };
         let mut damping = 0.0_f64;
         let mut recent = [merit; NONMONOTONE_MEMORY];
-        // The non-monotone search may climb away from a point it reached (at a degenerate
-        // point the modes trade places and Newton's steps wander): the best point is kept.
-        let mut best_residual_m = outcome.residual_m;
-        self.z_best.clone_from(&self.eq.z);
-        self.pairs_best.clear();
-        self.pairs_best.extend_from_slice(pairs);
         while (outcome.residual_m > p.tolerance_m || outcome.residual_m.is_nan())
             && outcome.iterations < p.max_iterations
         {
@@ -142,22 +133,9 @@ impl Ssn {
             };
             recent[outcome.iterations % NONMONOTONE_MEMORY] = merit;
             outcome.residual_m = self.eq.residual_m();
-            if outcome.residual_m < best_residual_m {
-                best_residual_m = outcome.residual_m;
-                self.z_best.clone_from(&self.eq.z);
-                self.pairs_best.clear();
-                self.pairs_best.extend_from_slice(pairs);
-            }
             if (0..n).any(|a| (self.eq.z[a] - x[a]).abs() > p.max_departure_rad) {
                 break;
             }
-        }
-        if outcome.residual_m.is_nan() || outcome.residual_m > best_residual_m {
-            // Back to the best point reached (the unknowns, the pairs' forces and modes).
-            self.eq.z.clone_from(&self.z_best);
-            pairs.copy_from_slice(&self.pairs_best);
-            self.eq.evaluate(p, pairs);
-            outcome.residual_m = self.eq.residual_m();
         }
         // A solve that stalls at a degenerate point (a contact touching with N = 0 and
         // gap = 0: the modes trade places and Newton's method stops improving) is accepted
