@@ -84,7 +84,9 @@ impl QuasiStatic {
         // it can touch next, and anything the solve pushes into a wall joins after it).
         let keep = if within_m > 0.0 { NEAREST } else { usize::MAX };
         let mut near: Vec<(f64, PairKey)> = Vec::new();
-        let mut real_gaps: Vec<f64> = Vec::with_capacity(self.walls.len());
+        // Per wall, its own nearest point to the chain point at hand (only where a piece of
+        // it is cut, and once).
+        let mut real: Vec<Option<WallPoint>> = Vec::with_capacity(self.walls.len());
         let take = |near: &mut Vec<(f64, PairKey)>, keys: &mut Vec<PairKey>| {
             near.sort_by(|a, b| a.0.total_cmp(&b.0));
             keys.extend(near.drain(..).take(keep).map(|(_, k)| k));
@@ -96,22 +98,31 @@ impl QuasiStatic {
             }
             for point in points {
                 let (_, _, x) = chain_point(&self.chain, posture, beta, point);
-                real_gaps.clear();
-                real_gaps.extend(self.walls.iter().map(|wall| wall.signed_distance(&x).gap_m));
+                real.clear();
+                real.resize(self.walls.len(), None);
                 for (w, piece) in self.pieces.walls.iter().enumerate() {
-                    let real_gap_m = real_gaps[self.pieces.piece_of[w]];
-                    if !self.pieces.may_touch(
-                        w,
-                        &x,
-                        real_gap_m,
-                        within_m,
-                        self.settings.penetration_tolerance_m,
-                    ) {
-                        continue;
-                    }
+                    let real_point = if self.pieces.cut[w] {
+                        let wall = self.pieces.piece_of[w];
+                        let at =
+                            *real[wall].get_or_insert_with(|| self.walls[wall].signed_distance(&x));
+                        if !self.pieces.may_touch(
+                            w,
+                            &x,
+                            at.gap_m,
+                            within_m,
+                            self.settings.penetration_tolerance_m,
+                        ) {
+                            continue;
+                        }
+                        Some(at)
+                    } else {
+                        None
+                    };
                     let wall_point = piece.signed_distance(&x);
                     let gap_m = wall_point.gap_m;
-                    if gap_m < within_m && self.on_real_wall(w, &x, gap_m) {
+                    if gap_m < within_m
+                        && real_point.is_none_or(|r| self.on_real_wall_at(w, &wall_point, &r))
+                    {
                         let stand_ins = self.joint_corner_pairs(posture, point, w, &wall_point);
                         if stand_ins.iter().any(Option::is_some) {
                             keys.extend(stand_ins.into_iter().flatten());
@@ -243,19 +254,16 @@ impl QuasiStatic {
         changed
     }
 
-    /// [`Self::hand_joint_pairs_to_links`] at the solution `x` of a step to `goal`.
-    pub(super) fn hand_joint_pairs_to_links_at(
-        &mut self,
-        x: &[f64],
-        pairs: &mut Vec<Pair>,
-        goal: Vector2<f64>,
-    ) -> bool {
+    /// Puts the probe posture at the solution `x` of a step to `goal` (hair angles are not
+    /// part of it; [`Self::missed_pairs`] takes them from `x`).
+    pub(super) fn probe_at(&mut self, x: &[f64], goal: Vector2<f64>) {
         let theta = theta_of(&self.theta, x);
-        let mut probe = std::mem::take(&mut self.probe);
-        probe.update(&self.chain, goal, &theta);
-        let changed = self.hand_joint_pairs_to_links(&probe, pairs);
-        self.probe = probe;
-        changed
+        self.probe.update(&self.chain, goal, &theta);
+    }
+
+    /// [`Self::hand_joint_pairs_to_links`] in the probe posture ([`Self::probe_at`]).
+    pub(super) fn hand_joint_pairs_to_links_at_probe(&self, pairs: &mut Vec<Pair>) -> bool {
+        self.hand_joint_pairs_to_links(&self.probe, pairs)
     }
 
     /// A fresh pair `key`: its material point where it touches (or comes nearest) at the
@@ -286,31 +294,25 @@ impl QuasiStatic {
         Pair::new(key, law, link, s, point)
     }
 
-    /// The pairs inside a wall after a solve to `x` (hair coordinates `hair_links`) at the
-    /// base `goal` that are not pairs yet.
+    /// The pairs inside a wall after a solve to `x` (hair coordinates `hair_links`), with
+    /// the probe posture at `x` ([`Self::probe_at`]), that are not pairs yet.
     pub(super) fn missed_pairs(
-        &mut self,
+        &self,
         x: &[f64],
         hair_links: &[usize],
         pairs: &[Pair],
-        goal: Vector2<f64>,
     ) -> Vec<Pair> {
         let n = self.chain.n();
         let tol = self.settings.penetration_tolerance_m;
-        let theta = theta_of(&self.theta, x);
-        let mut probe = std::mem::take(&mut self.probe);
-        probe.update(&self.chain, goal, &theta);
         let mut beta = self.beta.clone();
         for (h, &l) in hair_links.iter().enumerate() {
             beta[l] = x[n + h];
         }
-        let found: Vec<PairKey> = self
-            .touching(&probe, &beta, -tol)
+        self.touching(&self.probe, &beta, -tol)
             .into_iter()
             .filter(|key| !pairs.iter().any(|c| c.key == *key))
-            .collect();
-        self.probe = probe;
-        found.into_iter().map(|key| self.fresh_pair(key)).collect()
+            .map(|key| self.fresh_pair(key))
+            .collect()
     }
 
     /// Removes the feature pairs that are not what touches at the solution (a feature whose
@@ -348,20 +350,29 @@ impl QuasiStatic {
         if !self.pieces.cut[piece] {
             return true;
         }
-        let tol = self.settings.penetration_tolerance_m;
+        let mut at_piece = self.pieces.walls[piece].signed_distance(x_m);
+        // The gap the pair measured (its evaluation's), with the piece's foot.
+        at_piece.gap_m = gap_m;
         let real = self.walls[self.pieces.piece_of[piece]].signed_distance(x_m);
+        self.on_real_wall_at(piece, &at_piece, &real)
+    }
+
+    /// [`Self::on_real_wall`] of a point whose nearest points on the cut piece `piece` and
+    /// on the whole wall are `at_piece` and `real`.
+    fn on_real_wall_at(&self, piece: usize, at_piece: &WallPoint, real: &WallPoint) -> bool {
+        let tol = self.settings.penetration_tolerance_m;
+        let gap_m = at_piece.gap_m;
         if real.gap_m > gap_m + tol {
             return false;
         }
-        let (from_m, to_m) = self.pieces.reach_m[piece];
-        let foot_m = self.pieces.walls[piece].signed_distance(x_m).arclength_m;
+        let (from_m, to_m) = self.pieces.reach_m(piece);
         // Inside the wall, the piece whose own edges hold the wall's nearest point pushes
         // the point out, wherever its foot on the piece lies.
         let owns_nearest = || {
             let (first_m, last_m) = self.pieces.own_arclengths_m[piece];
             (first_m..=last_m).contains(&real.arclength_m)
         };
-        (from_m..=to_m).contains(&foot_m) || (gap_m < -tol && owns_nearest())
+        (from_m..=to_m).contains(&at_piece.arclength_m) || (gap_m < -tol && owns_nearest())
     }
 
     /// [`Self::on_real_wall`] for a point pair (feature pairs are corners and crests of the

@@ -22,10 +22,9 @@ pub(crate) struct Pieces {
     /// `cut[i]`: piece `i` is one of several cut from its wall (its ends at the cuts go on
     /// straight past them).
     pub cut: Vec<bool>,
-    /// `reach_m[i]`: the arclengths along its wall between which a chain point's foot on
-    /// piece `i` may lie: past a cut end by at most [`CUT_REACH_M`], unbounded at the
-    /// wall's own ends.
-    pub reach_m: Vec<(f64, f64)>,
+    /// `cut_ends[i]`: whether piece `i`'s first and last vertices are cuts (concave corners
+    /// of its wall, not the wall's own ends).
+    pub cut_ends: Vec<(bool, bool)>,
     /// `own_arclengths_m[i]`: the arclengths of piece `i`'s first and last vertices.
     pub own_arclengths_m: Vec<(f64, f64)>,
     /// `bounds_m[i]`: the bounding box of piece `i`'s vertices where both its ends are cuts
@@ -64,18 +63,7 @@ impl Pieces {
                                     .fold((v[0], v[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)))
                             }));
                         pieces.own_arclengths_m.push((first_m, last_m));
-                        pieces.reach_m.push((
-                            if piece.cut_at_start {
-                                first_m - CUT_REACH_M
-                            } else {
-                                f64::NEG_INFINITY
-                            },
-                            if piece.cut_at_end {
-                                last_m + CUT_REACH_M
-                            } else {
-                                f64::INFINITY
-                            },
-                        ));
+                        pieces.cut_ends.push((piece.cut_at_start, piece.cut_at_end));
                         pieces
                             .walls
                             .push(Wall::new(piece.polyline, wall.surfaces.clone()));
@@ -87,7 +75,7 @@ impl Pieces {
                     pieces.walls.push(wall.clone());
                     pieces.piece_of.push(w);
                     pieces.cut.push(false);
-                    pieces.reach_m.push((f64::NEG_INFINITY, f64::INFINITY));
+                    pieces.cut_ends.push((false, false));
                     pieces.bounds_m.push(None);
                     pieces
                         .own_arclengths_m
@@ -96,6 +84,25 @@ impl Pieces {
             }
         }
         pieces
+    }
+
+    /// The arclengths along its wall between which a chain point's foot on piece `piece`
+    /// may lie: past a cut end by at most [`CUT_REACH_M`], unbounded at the wall's own ends.
+    pub fn reach_m(&self, piece: usize) -> (f64, f64) {
+        let (first_m, last_m) = self.own_arclengths_m[piece];
+        let (cut_at_start, cut_at_end) = self.cut_ends[piece];
+        (
+            if cut_at_start {
+                first_m - CUT_REACH_M
+            } else {
+                f64::NEG_INFINITY
+            },
+            if cut_at_end {
+                last_m + CUT_REACH_M
+            } else {
+                f64::INFINITY
+            },
+        )
     }
 
     /// Whether chain point `x_m`, `real_gap_m` from the whole wall, can be a contact of

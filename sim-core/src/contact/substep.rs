@@ -140,8 +140,9 @@ impl QuasiStatic {
             // Pairs that are no longer what touches (a feature's foot past its link's end)
             // let go, and any point now inside a wall joins: the step is solved again.
             let mut changed = self.drop_stale_pairs(&mut pairs);
-            changed |= self.hand_joint_pairs_to_links_at(&x, &mut pairs, goal);
-            let mut missed = self.missed_pairs(&x, &hair_links, &pairs, goal);
+            self.probe_at(&x, goal);
+            changed |= self.hand_joint_pairs_to_links_at_probe(&mut pairs);
+            let mut missed = self.missed_pairs(&x, &hair_links, &pairs);
             for pair in &mut missed {
                 pair.frictionless = self.friction_off;
             }
