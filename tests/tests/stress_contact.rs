@@ -59,12 +59,6 @@ const KNOWN_CI_FAILURES: &[(u64, &str)] = &[
         "tip-on-wall S, N = 4: the pinned equilibrium converges from no start",
     ),
     (
-        30,
-        "angles on a digitized trapezoid, N = 36: settling, the tip comes to rest on a convex \
-         corner that no link rests on (a point on a point, whose normal is undefined) and the \
-         downhill path does not come to rest",
-    ),
-    (
         38,
         "tip-on-wall S on a digitized line: times out at step 156 of 167 (friction locks the \
          antenna; without friction the step fails too)",

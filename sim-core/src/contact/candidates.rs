@@ -68,9 +68,16 @@ impl QuasiStatic {
                 next.normal_active = old.normal_active;
             }
         }
+        // A point pair that a corner-edge pair of the last step stands for stays out.
+        let held: Vec<PairKey> = out
+            .iter()
+            .filter(|c| out.iter().any(|e| held_by_corner(e, &c.key)))
+            .map(|c| c.key)
+            .collect();
+        out.retain(|c| !held.contains(&c.key));
         // A contact of the last step at a joint that now sits on a corner hands its load to
-        // the links resting on the corner.
-        self.hand_joint_pairs_to_links(&self.probe, &mut out);
+        // the links resting on the corner (a point now on a convex corner, to its edges).
+        self.hand_point_pairs_to_stand_ins(&self.probe, &self.beta, &mut out);
         Ok(out)
     }
 
@@ -123,7 +130,7 @@ impl QuasiStatic {
                     if gap_m < within_m
                         && real_point.is_none_or(|r| self.on_real_wall_at(w, &wall_point, &r))
                     {
-                        let stand_ins = self.joint_corner_pairs(posture, point, w, &wall_point);
+                        let stand_ins = self.stand_ins(posture, point, w, &wall_point, &x);
                         if stand_ins.iter().any(Option::is_some) {
                             keys.extend(stand_ins.into_iter().flatten());
                         } else {
@@ -210,14 +217,75 @@ impl QuasiStatic {
         out
     }
 
-    /// Replaces each joint pair of `pairs` whose joint, in `posture`, sits nearest to a
-    /// convex corner that one of its links rests on by those links' pairs
-    /// ([`Self::joint_corner_pairs`]); a link pair that is not yet one starts from the
-    /// joint pair's forces and friction state. Whether a pair carrying force was replaced
-    /// (the step must then be solved again).
-    pub(super) fn hand_joint_pairs_to_links(
+    /// The pairs that stand for chain point `point` (at `x_m`, its nearest point of piece
+    /// `piece` `wall_point`) against the piece where a point pair would be singular: the
+    /// links resting on a corner at a joint ([`Self::joint_corner_pairs`]), else the point
+    /// on a convex corner against the corner's two edge lines
+    /// ([`Self::corner_point_pairs`]); `[None, None]` where the point pair stands.
+    pub(super) fn stand_ins(
         &self,
         posture: &Posture,
+        point: ChainPoint,
+        piece: usize,
+        wall_point: &WallPoint,
+        x_m: &Vector2<f64>,
+    ) -> [Option<PairKey>; 2] {
+        let links = self.joint_corner_pairs(posture, point, piece, wall_point);
+        if links.iter().any(Option::is_some) {
+            return links;
+        }
+        self.corner_point_pairs(point, piece, wall_point, x_m)
+    }
+
+    /// For chain point `point` at `x_m` within [`CORNER_CAPTURE_M`] of a convex corner of
+    /// piece `piece` (found by its nearest point `wall_point`): the point against the line
+    /// of the corner's edge it lies on ([`PairKind::CornerEdge`]; past the corner, the edge
+    /// whose line it is nearest). `[None, None]` elsewhere.
+    fn corner_point_pairs(
+        &self,
+        point: ChainPoint,
+        piece: usize,
+        wall_point: &WallPoint,
+        x_m: &Vector2<f64>,
+    ) -> [Option<PairKey>; 2] {
+        let shape = &self.pieces.walls[piece].shape;
+        let on_edge = wall_point.curvature_per_m.is_finite();
+        for (end, feature) in shape.convex_features_by(wall_point).into_iter().enumerate() {
+            let Some(feature) = feature else { continue };
+            if !shape
+                .corner_m(feature)
+                .is_some_and(|c| (x_m - c).norm() <= CORNER_CAPTURE_M)
+            {
+                continue;
+            }
+            // On an edge, the corner at its start (`end = 0`) is the one the edge leaves.
+            let after = if on_edge {
+                end == 0
+            } else {
+                let gap = |after| {
+                    shape
+                        .corner_edge_point(feature, after, x_m)
+                        .map_or(f64::INFINITY, |wp| wp.gap_m)
+                };
+                gap(true) < gap(false)
+            };
+            return [
+                Some(PairKey::corner_edge(point, feature, after, piece)),
+                None,
+            ];
+        }
+        [None, None]
+    }
+
+    /// Replaces each point pair of `pairs` that has stand-ins in `posture` (hair angles
+    /// `beta`) by them ([`Self::stand_ins`]: a joint on a corner a link rests on, a point on
+    /// a convex corner); a stand-in that is not yet a pair starts from the point pair's
+    /// forces and friction state. Whether a pair carrying force was replaced (the step must
+    /// then be solved again).
+    pub(super) fn hand_point_pairs_to_stand_ins(
+        &self,
+        posture: &Posture,
+        beta: &[f64],
         pairs: &mut Vec<Pair>,
     ) -> bool {
         let mut changed = false;
@@ -225,10 +293,10 @@ impl QuasiStatic {
         while i < pairs.len() {
             let key = pairs[i].key;
             let stand_ins = match key.kind {
-                PairKind::Point(point @ ChainPoint::Vertex(joint)) => {
-                    let wall_point =
-                        self.pieces.walls[key.piece].signed_distance(&posture.end_m[joint]);
-                    self.joint_corner_pairs(posture, point, key.piece, &wall_point)
+                PairKind::Point(point) => {
+                    let (_, _, x) = chain_point(&self.chain, posture, beta, point);
+                    let wall_point = self.pieces.walls[key.piece].signed_distance(&x);
+                    self.stand_ins(posture, point, key.piece, &wall_point, &x)
                 }
                 _ => [None, None],
             };
@@ -261,9 +329,27 @@ impl QuasiStatic {
         self.probe.update(&self.chain, goal, &theta);
     }
 
-    /// [`Self::hand_joint_pairs_to_links`] in the probe posture ([`Self::probe_at`]).
-    pub(super) fn hand_joint_pairs_to_links_at_probe(&self, pairs: &mut Vec<Pair>) -> bool {
-        self.hand_joint_pairs_to_links(&self.probe, pairs)
+    /// The hair angles of a solution `x` whose hair coordinates are those of `hair_links`
+    /// (the others as committed).
+    fn beta_of(&self, x: &[f64], hair_links: &[usize]) -> Vec<f64> {
+        let n = self.chain.n();
+        let mut beta = self.beta.clone();
+        for (h, &l) in hair_links.iter().enumerate() {
+            beta[l] = x[n + h];
+        }
+        beta
+    }
+
+    /// [`Self::hand_point_pairs_to_stand_ins`] at the solution `x` (hair coordinates
+    /// `hair_links`), with the probe posture there ([`Self::probe_at`]).
+    pub(super) fn hand_point_pairs_to_stand_ins_at_probe(
+        &self,
+        x: &[f64],
+        hair_links: &[usize],
+        pairs: &mut Vec<Pair>,
+    ) -> bool {
+        let beta = self.beta_of(x, hair_links);
+        self.hand_point_pairs_to_stand_ins(&self.probe, &beta, pairs)
     }
 
     /// A fresh pair `key`: its material point where it touches (or comes nearest) at the
@@ -271,7 +357,9 @@ impl QuasiStatic {
     pub(super) fn fresh_pair(&self, key: PairKey) -> Pair {
         let start = &self.start;
         let (link, s, point) = match key.kind {
-            PairKind::Point(point) => chain_point(&self.chain, start, &self.beta, point),
+            PairKind::Point(point) | PairKind::CornerEdge { point, .. } => {
+                chain_point(&self.chain, start, &self.beta, point)
+            }
             PairKind::Link { link, feature } => {
                 let piece = &self.pieces.walls[key.piece];
                 let at = |posture: &Posture| {
@@ -302,34 +390,109 @@ impl QuasiStatic {
         hair_links: &[usize],
         pairs: &[Pair],
     ) -> Vec<Pair> {
-        let n = self.chain.n();
         let tol = self.settings.penetration_tolerance_m;
-        let mut beta = self.beta.clone();
-        for (h, &l) in hair_links.iter().enumerate() {
-            beta[l] = x[n + h];
-        }
+        let beta = self.beta_of(x, hair_links);
         self.touching(&self.probe, &beta, -tol)
             .into_iter()
-            .filter(|key| !pairs.iter().any(|c| c.key == *key))
+            .filter(|key| {
+                !pairs
+                    .iter()
+                    .any(|c| c.key == *key || held_by_corner(c, key))
+            })
             .map(|key| self.fresh_pair(key))
             .collect()
     }
 
     /// Removes the feature pairs that are not what touches at the solution (a feature whose
-    /// foot has left its link, or whose cone no longer holds the link's normal); whether one
-    /// of them was active (the step must then be solved again).
+    /// foot has left its link, or whose cone no longer holds the link's normal) and the
+    /// corner-edge pairs that no longer stand for their point ([`CornerEdgeState`]); whether
+    /// one of them was active (the step must then be solved again).
     pub(super) fn drop_stale_pairs(&self, pairs: &mut Vec<Pair>) -> bool {
         let before = pairs.len();
         let mut active = false;
+        let mut handed: Vec<Pair> = Vec::new();
         pairs.retain(|c| {
-            let keep = c.geo.valid && self.pair_on_real_wall(&c.key, &c.geo.point_m, c.geo.gap_m);
-            if !keep && (c.normal_active || c.normal_force_n != 0.0) {
+            let state = self.corner_edge_state(c);
+            let keep = c.geo.valid
+                && self.pair_on_real_wall(&c.key, &c.geo.point_m, c.geo.gap_m)
+                && state == CornerEdgeState::OnCorner;
+            let loaded = c.normal_active || c.normal_force_n != 0.0;
+            if !keep && loaded {
                 active = true;
+                if state == CornerEdgeState::Left
+                    && let Some(point) = c.key.chain_point()
+                {
+                    let mut h = self.fresh_pair(PairKey::point(point, c.key.piece));
+                    carry(&mut h, c);
+                    handed.push(h);
+                }
             }
             keep
         });
-        active && pairs.len() < before
+        let changed = active && pairs.len() < before;
+        handed.retain(|h| !pairs.iter().any(|c| c.key == h.key));
+        pairs.extend(handed);
+        changed
     }
+
+    /// Where a corner-edge pair's point is at the solution (any other pair: on its
+    /// corner).
+    fn corner_edge_state(&self, c: &Pair) -> CornerEdgeState {
+        let PairKind::CornerEdge { feature, .. } = c.key.kind else {
+            return CornerEdgeState::OnCorner;
+        };
+        let piece = &self.pieces.walls[c.key.piece];
+        let near = piece
+            .shape
+            .corner_m(feature)
+            .is_some_and(|corner| (c.geo.point_m - corner).norm() <= CORNER_CAPTURE_M);
+        if !near {
+            return CornerEdgeState::Left;
+        }
+        let loaded = c.normal_active || c.normal_force_n != 0.0;
+        let tol = self
+            .settings
+            .penetration_tolerance_m
+            .max(self.settings.acceptable_m);
+        if loaded && piece.signed_distance(&c.geo.point_m).gap_m > tol {
+            CornerEdgeState::PastCorner
+        } else {
+            CornerEdgeState::OnCorner
+        }
+    }
+}
+
+/// Where a corner-edge pair's point is after a solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum CornerEdgeState {
+    /// Within [`CORNER_CAPTURE_M`] of the corner and on the wall (or not loaded): the pair
+    /// stands.
+    OnCorner,
+    /// Farther from the corner (along its edge, or lifted off): the point's own pair
+    /// takes over, with the force.
+    Left,
+    /// Loaded while off the wall beside the corner: pressed onto the edge's line where it
+    /// runs on past the corner through free space, where no wall holds it. A point cannot
+    /// rest loaded on a convex corner without friction to hold it (any load in the
+    /// corner's normal cone slides it onto one edge or the other); it slips off the corner
+    /// and the pair lets go, without handing its force on, so that the point comes down
+    /// wherever it lands (a pair then joins as any point inside a wall does).
+    PastCorner,
+}
+
+/// How near a convex corner (metres) a chain point counts as on it: its point pair is then
+/// replaced by a corner-edge pair ([`PairKind::CornerEdge`]), which hands back when the
+/// point is farther. The radius only has to catch a solve that stopped short of the
+/// corner (a point sliding onto it).
+pub(crate) const CORNER_CAPTURE_M: f64 = 1e-6;
+
+/// Whether pair `c` is a corner-edge pair of the same chain point and piece as the point
+/// pair `key` (which it stands for).
+fn held_by_corner(c: &Pair, key: &PairKey) -> bool {
+    matches!(c.key.kind, PairKind::CornerEdge { .. })
+        && matches!(key.kind, PairKind::Point(_))
+        && c.key.piece == key.piece
+        && c.key.chain_point() == key.chain_point()
 }
 
 impl QuasiStatic {
@@ -375,12 +538,12 @@ impl QuasiStatic {
         (from_m..=to_m).contains(&at_piece.arclength_m) || (gap_m < -tol && owns_nearest())
     }
 
-    /// [`Self::on_real_wall`] for a point pair (feature pairs are corners and crests of the
-    /// wall itself).
+    /// [`Self::on_real_wall`] for a point pair (feature and corner-edge pairs are at corners
+    /// and crests of the wall itself).
     fn pair_on_real_wall(&self, key: &PairKey, x_m: &Vector2<f64>, gap_m: f64) -> bool {
         match key.kind {
             PairKind::Point(_) => self.on_real_wall(key.piece, x_m, gap_m),
-            PairKind::Link { .. } => true,
+            PairKind::Link { .. } | PairKind::CornerEdge { .. } => true,
         }
     }
 }

@@ -23,7 +23,7 @@ use nalgebra::Vector2;
 
 use super::pair::{ChainPoint, PairKey, PairKind};
 use super::posture::{Posture, perp};
-use crate::{Chain, Hair, Wall};
+use crate::{Chain, Hair, Wall, WallPoint};
 
 /// How a pair's normal, tangent and contact point move to first order (see the module
 /// docs).
@@ -141,25 +141,22 @@ pub(crate) fn evaluate(
         PairKind::Point(point) => {
             let (link, s, x) = chain_point(chain, posture, beta, point);
             let wp = piece.signed_distance(&x);
-            *geo = PairGeometry {
-                link,
-                s,
-                point_m: x,
-                wall_m: wp.closest_m,
-                gap_m: wp.gap_m,
-                normal: wp.normal,
-                tangent: wp.tangent,
-                turn: Turn::Field {
-                    rate_per_m: wp.normal_turn_rate_per_m(),
-                },
-                hair_rate: match point {
-                    ChainPoint::HairTip(link) => {
-                        Some(posture.hair_tip_rate(hair_of(chain, link), link, beta[link]))
-                    }
-                    ChainPoint::Vertex(_) => None,
-                },
-                valid: true,
-            };
+            *geo = point_geometry(chain, posture, beta, point, link, s, x, &wp);
+        }
+        PairKind::CornerEdge {
+            point,
+            feature,
+            after,
+        } => {
+            let (link, s, x) = chain_point(chain, posture, beta, point);
+            match piece.shape.corner_edge_point(feature, after, &x) {
+                Some(wp) => *geo = point_geometry(chain, posture, beta, point, link, s, x, &wp),
+                None => {
+                    geo.link = link;
+                    geo.gap_m = f64::INFINITY;
+                    geo.valid = false;
+                }
+            }
         }
         PairKind::Link { link, feature } => {
             let (a, b) = (posture.start_of(link), posture.end_m[link]);
@@ -195,6 +192,40 @@ pub(crate) fn evaluate(
                 }
             }
         }
+    }
+}
+
+/// The geometry of chain point `point` (on `link` at fraction `s`, at `x`) against the
+/// surface point `wp`.
+#[allow(clippy::too_many_arguments)]
+fn point_geometry(
+    chain: &Chain,
+    posture: &Posture,
+    beta: &[f64],
+    point: ChainPoint,
+    link: usize,
+    s: f64,
+    x: Vector2<f64>,
+    wp: &WallPoint,
+) -> PairGeometry {
+    PairGeometry {
+        link,
+        s,
+        point_m: x,
+        wall_m: wp.closest_m,
+        gap_m: wp.gap_m,
+        normal: wp.normal,
+        tangent: wp.tangent,
+        turn: Turn::Field {
+            rate_per_m: wp.normal_turn_rate_per_m(),
+        },
+        hair_rate: match point {
+            ChainPoint::HairTip(link) => {
+                Some(posture.hair_tip_rate(hair_of(chain, link), link, beta[link]))
+            }
+            ChainPoint::Vertex(_) => None,
+        },
+        valid: true,
     }
 }
 

@@ -40,7 +40,7 @@ pub struct JammedContact {
 
 use super::ContactError;
 use super::geometry::{PairGeometry, evaluate, generalized};
-use super::pair::{ChainPoint, PairKind};
+use super::pair::{PairKey, PairKind};
 use super::posture::Posture;
 use super::quasistatic::{QuasiStatic, theta_of};
 use nalgebra::{DMatrix, DVector};
@@ -88,8 +88,8 @@ impl QuasiStatic {
             posture.update(&sim.chain, goal, &theta_of(&sim.theta, x));
             let mut sum = 0.0;
             let (mut deepest, mut link) = (0.0_f64, 0);
-            for key in sim.touching(posture, &beta, 0.0) {
-                if matches!(key.kind, PairKind::Point(ChainPoint::HairTip(_))) {
+            for key in point_keys(sim.touching(posture, &beta, 0.0)) {
+                if key.hair_link().is_some() {
                     continue;
                 }
                 let mut geo = PairGeometry::at(key.link, 1.0, Vector2::zeros());
@@ -122,8 +122,8 @@ impl QuasiStatic {
             posture.update(&self.chain, goal, &theta_of(&self.theta, &x));
             let mut ata = DMatrix::<f64>::zeros(n, n);
             let mut atr = DVector::<f64>::zeros(n);
-            for key in self.touching(&posture, &beta, 0.0) {
-                if matches!(key.kind, PairKind::Point(ChainPoint::HairTip(_))) {
+            for key in point_keys(self.touching(&posture, &beta, 0.0)) {
+                if key.hair_link().is_some() {
                     continue;
                 }
                 let mut geo = PairGeometry::at(key.link, 1.0, Vector2::zeros());
@@ -250,4 +250,20 @@ fn describe(feature: Feature, n: usize) -> String {
         Feature::Link { link } => format!("link {link} between its joints"),
         Feature::HairTip { link } => format!("the hair tip of link {link}"),
     }
+}
+
+/// `keys` with each point's corner-edge pairs taken back to its point pair: a point on a
+/// corner is inside the wall only where it is behind both edge lines, which its distance to
+/// the piece measures and either line alone overstates.
+fn point_keys(keys: Vec<PairKey>) -> Vec<PairKey> {
+    let mut out: Vec<PairKey> = keys
+        .into_iter()
+        .map(|key| match key.kind {
+            PairKind::CornerEdge { point, .. } => PairKey::point(point, key.piece),
+            _ => key,
+        })
+        .collect();
+    out.sort();
+    out.dedup();
+    out
 }

@@ -6,7 +6,11 @@
 //! 2-17 mm/s). Each step finds the posture where the spring torques balance the contact
 //! forces, with
 //! - **non-penetration** of every link (its ends and, against a wall corner or crest, its
-//!   interior) and of every hair tip: normal force `N >= 0` complementary to the gap;
+//!   interior) and of every hair tip: normal force `N >= 0` complementary to the gap, one
+//!   per feature pair (`pair.rs`: a chain point against a wall's surface, a convex corner
+//!   or crest against a link, and a point on a convex corner against the line of the edge
+//!   it lies on, where its own distance would turn its normal without bound; without
+//!   friction a loaded point slips off a convex corner, as it does in the world);
 //! - **Coulomb friction per step**: a contact's material point does not move along the wall
 //!   while `|T| < mu N` (stuck: exactly, no creep) and slides with `T = -mu N sign(slip)`
 //!   otherwise; the slip is measured from where the point was at the start of the step, so

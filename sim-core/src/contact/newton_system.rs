@@ -606,7 +606,9 @@ mod tests {
     use crate::contact::feature::FrictionLaw;
     use crate::contact::pair::{ChainPoint, PairKey};
     use crate::contact::posture::Posture;
-    use crate::{Chain, Hair, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall};
+    use crate::{
+        Chain, ConvexFeature, Hair, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall,
+    };
 
     fn lcg(state: &mut u64) -> f64 {
         *state = state
@@ -710,6 +712,17 @@ mod tests {
                 let s0 = fc.s.clamp(0.0, 1.0);
                 let start = posture.link_point(link, s0) + Vector2::new(1e-4, -2e-4);
                 pairs.push(Pair::new(key, law, link, s0, start));
+            }
+            // The link's end against the edge lines of the first corner near it.
+            if let Some(fc) = found
+                .iter()
+                .find(|fc| matches!(fc.feature, ConvexFeature::Corner { .. }))
+            {
+                for after in [false, true] {
+                    let key = PairKey::corner_edge(ChainPoint::Vertex(link), fc.feature, after, 0);
+                    let start = posture.end_m[link] + Vector2::new(-2e-4, 1e-4);
+                    pairs.push(Pair::new(key, law, link, 1.0, start));
+                }
             }
         }
         for &l in &hair_links {

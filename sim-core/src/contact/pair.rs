@@ -6,6 +6,13 @@
 //!   corner and along a curve).
 //! - [`PairKind::Link`]: a convex feature of a wall piece (a polyline corner, a sinusoid
 //!   crest) against the inside of a link, measured along the link's normal.
+//! - [`PairKind::CornerEdge`]: a chain point on a convex polyline corner, against the line
+//!   of the corner's edge it lies on. The point's distance to the piece turns its normal at
+//!   `1 / gap` about the corner, without bound as the point reaches it, and Newton's method
+//!   cannot follow a point sliding over the corner's end of an edge; the line is smooth
+//!   there. A point loaded on the line where it runs on past the corner is on no wall: the
+//!   pair lets go and the point slips off the corner (see
+//!   [`super::candidates`]).
 //!
 //! A wall corner at a joint is then up to four pairs (the joint against the piece, the corner
 //! against each of the joint's two links), so the force the wall exerts there can point
@@ -41,6 +48,25 @@ pub(crate) enum PairKind {
         /// The feature.
         feature: ConvexFeature,
     },
+    /// A chain point on a convex corner (`feature`) against the line of the corner's edge
+    /// leaving it (`after`) or arriving at it (the one it lies on).
+    CornerEdge {
+        /// The chain point.
+        point: ChainPoint,
+        /// The corner.
+        feature: ConvexFeature,
+        /// Which of its edges.
+        after: bool,
+    },
+}
+
+impl ChainPoint {
+    /// The link the point belongs to.
+    pub fn link(self) -> usize {
+        match self {
+            ChainPoint::Vertex(i) | ChainPoint::HairTip(i) => i,
+        }
+    }
 }
 
 /// A pair's identity, from step to step.
@@ -57,13 +83,37 @@ pub(crate) struct PairKey {
 impl PairKey {
     /// A chain point against piece `piece`.
     pub fn point(point: ChainPoint, piece: usize) -> PairKey {
-        let link = match point {
-            ChainPoint::Vertex(i) | ChainPoint::HairTip(i) => i,
-        };
         PairKey {
-            link,
+            link: point.link(),
             kind: PairKind::Point(point),
             piece,
+        }
+    }
+
+    /// Chain point `point` on convex corner `feature` of piece `piece`, against the line of
+    /// the corner's edge leaving it (`after`) or arriving at it.
+    pub fn corner_edge(
+        point: ChainPoint,
+        feature: ConvexFeature,
+        after: bool,
+        piece: usize,
+    ) -> PairKey {
+        PairKey {
+            link: point.link(),
+            kind: PairKind::CornerEdge {
+                point,
+                feature,
+                after,
+            },
+            piece,
+        }
+    }
+
+    /// The chain point of a point or corner-edge pair (`None` for a link pair).
+    pub fn chain_point(&self) -> Option<ChainPoint> {
+        match self.kind {
+            PairKind::Point(point) | PairKind::CornerEdge { point, .. } => Some(point),
+            PairKind::Link { .. } => None,
         }
     }
 
@@ -79,16 +129,18 @@ impl PairKey {
     /// The reported feature of the chain.
     pub fn feature(&self) -> Feature {
         match self.kind {
-            PairKind::Point(ChainPoint::Vertex(link)) => Feature::Vertex { link },
-            PairKind::Point(ChainPoint::HairTip(link)) => Feature::HairTip { link },
+            PairKind::Point(point) | PairKind::CornerEdge { point, .. } => match point {
+                ChainPoint::Vertex(link) => Feature::Vertex { link },
+                ChainPoint::HairTip(link) => Feature::HairTip { link },
+            },
             PairKind::Link { link, .. } => Feature::Link { link },
         }
     }
 
     /// The hair whose tip this is, if any.
     pub fn hair_link(&self) -> Option<usize> {
-        match self.kind {
-            PairKind::Point(ChainPoint::HairTip(link)) => Some(link),
+        match self.chain_point() {
+            Some(ChainPoint::HairTip(link)) => Some(link),
             _ => None,
         }
     }

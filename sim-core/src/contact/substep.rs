@@ -141,7 +141,7 @@ impl QuasiStatic {
             // let go, and any point now inside a wall joins: the step is solved again.
             let mut changed = self.drop_stale_pairs(&mut pairs);
             self.probe_at(&x, goal);
-            changed |= self.hand_joint_pairs_to_links_at_probe(&mut pairs);
+            changed |= self.hand_point_pairs_to_stand_ins_at_probe(&x, &hair_links, &mut pairs);
             let mut missed = self.missed_pairs(&x, &hair_links, &pairs);
             for pair in &mut missed {
                 pair.frictionless = self.friction_off;

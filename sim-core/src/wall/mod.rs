@@ -302,6 +302,33 @@ impl WallShape {
         }
     }
 
+    /// Where convex `feature` is, if it is a corner (a crest has no single point).
+    pub fn corner_m(&self, feature: ConvexFeature) -> Option<Vector2<f64>> {
+        match (self, feature) {
+            (WallShape::Polyline(w), ConvexFeature::Corner { vertex }) => {
+                w.vertices_m().get(vertex).copied()
+            }
+            _ => None,
+        }
+    }
+
+    /// A point against one edge of a convex corner, the edge taken as its line
+    /// ([`Polyline::corner_edge_point`]); `None` for a feature that is not a convex corner
+    /// of this shape.
+    pub fn corner_edge_point(
+        &self,
+        feature: ConvexFeature,
+        after: bool,
+        p_m: &Vector2<f64>,
+    ) -> Option<WallPoint> {
+        match (self, feature) {
+            (WallShape::Polyline(w), ConvexFeature::Corner { vertex }) => {
+                w.corner_edge_point(vertex, after, p_m)
+            }
+            _ => None,
+        }
+    }
+
     /// The convex features of the wall that could press on the inside of the segment
     /// `a -> b` with a gap below `within_m` (every one is evaluated: the caller filters by
     /// `s`), appended to `out`. A line has none.

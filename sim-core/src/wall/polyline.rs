@@ -602,6 +602,37 @@ impl Polyline {
         }
     }
 
+    /// A point `p_m` against one edge of convex corner `vertex`, the edge taken as its whole
+    /// line: the signed distance to the line of the edge arriving at the corner
+    /// (`after = false`) or leaving it (`after = true`), with that edge's normal and tangent
+    /// (they do not turn: curvature `0`) and the foot on the line. Unlike the distance to the
+    /// polyline, it stays smooth as the point passes the corner (past it, the line runs on
+    /// through free space: near the corner the solid is where both lines' distances are
+    /// negative). `None` if `vertex` is not a convex corner.
+    pub fn corner_edge_point(
+        &self,
+        vertex: usize,
+        after: bool,
+        p_m: &Vector2<f64>,
+    ) -> Option<WallPoint> {
+        if !self.is_convex(vertex) {
+            return None;
+        }
+        let edge = if after { vertex } else { vertex - 1 };
+        let corner_m = self.vertices_m[vertex];
+        let normal = self.normals[edge];
+        let tangent = self.tangents[edge];
+        let along_m = tangent.dot(&(p_m - corner_m));
+        Some(WallPoint {
+            gap_m: normal.dot(&(p_m - corner_m)),
+            closest_m: corner_m + tangent * along_m,
+            normal,
+            tangent,
+            arclength_m: self.arclengths_m[vertex] + along_m,
+            curvature_per_m: 0.0,
+        })
+    }
+
     /// Whether interior vertex `k` bulges into free space (its free-side angle is over 180
     /// degrees).
     fn is_convex(&self, k: usize) -> bool {
