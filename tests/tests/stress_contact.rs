@@ -49,12 +49,6 @@ const CI_SWEEPS: u64 = 80;
 /// fails it. Remove an entry when its sweep finishes (`ANTENNA_STRESS_REPLAY=ci:SEED:INDEX`).
 const KNOWN_CI_FAILURES: &[(u64, &str)] = &[
     (
-        4,
-        "angles 0 mm from a digitized line, N = 9: most steps are split in eight (a joint \
-         rests beside a corner whose link pair has just left the link, and the full step's \
-         equations are degenerate) and the sweep runs out of time",
-    ),
-    (
         16,
         "tip-on-wall S, N = 4: the pinned equilibrium converges from no start",
     ),

@@ -76,6 +76,27 @@ fn polyline_strategy() -> impl Strategy<Value = (Vec<Vector2<f64>>, bool)> {
         })
 }
 
+/// A digitized wall over increasing x: 40 to 150 vertices 1 to 4 mm apart with up to 1 mm of
+/// noise (many edges beyond any one segment's reach, which `segment_contact` leaves out).
+fn dense_polyline_strategy() -> impl Strategy<Value = (Vec<Vector2<f64>>, bool)> {
+    (
+        prop::collection::vec((0.001..0.004f64, -0.001..0.001f64), 40..150),
+        -0.3..0.3f64,
+        any::<bool>(),
+    )
+        .prop_map(|(steps, slope, left)| {
+            let mut x = -0.1;
+            let vertices = steps
+                .into_iter()
+                .map(|(dx, y)| {
+                    x += dx;
+                    v(x, 0.1 + slope * (x - 0.1) + y)
+                })
+                .collect();
+            (vertices, left)
+        })
+}
+
 /// A segment near the wall band: start within `reach` of y = 0.1, random direction.
 fn segment_strategy(reach: f64) -> impl Strategy<Value = (Vector2<f64>, Vector2<f64>)> {
     (
@@ -208,6 +229,15 @@ proptest! {
     fn polyline_segment_contact_beats_sampling(
         (vertices, left) in polyline_strategy(),
         (a, b) in segment_strategy(0.08),
+    ) {
+        let wall = WallShape::Polyline(Polyline::new(vertices, side(left)).unwrap());
+        check_segment(&wall, a, b, 2000);
+    }
+
+    #[test]
+    fn digitized_polyline_segment_contact_beats_sampling(
+        (vertices, left) in dense_polyline_strategy(),
+        (a, b) in segment_strategy(0.02),
     ) {
         let wall = WallShape::Polyline(Polyline::new(vertices, side(left)).unwrap());
         check_segment(&wall, a, b, 2000);

@@ -4,9 +4,11 @@
 //! wall piece and every convex feature of a piece within the margin of a link (its foot on
 //! the link, its cone holding the link's normal), with the posture carried to the step's
 //! goal; and the contacts of the last step, with their forces and friction state as the
-//! start. After a solve, a point or feature inside a wall that was not a pair joins, and a
-//! feature pair whose foot has left its link (a corner crossing a joint) lets go; the step
-//! is then solved again.
+//! start. Where a point pair would hold the same material point as another pair or would be
+//! singular (a joint on a corner a link rests on, a point on a convex corner), stand-ins
+//! take its place, decided where the last step left the chain. After a solve, a point or
+//! feature inside a wall that was not a pair joins, and a feature pair whose foot has left
+//! its link (a corner crossing a joint) lets go; the step is then solved again.
 
 use nalgebra::Vector2;
 
@@ -75,9 +77,13 @@ impl QuasiStatic {
             .map(|c| c.key)
             .collect();
         out.retain(|c| !held.contains(&c.key));
-        // A contact of the last step at a joint that now sits on a corner hands its load to
-        // the links resting on the corner (a point now on a convex corner, to its edges).
-        self.hand_point_pairs_to_stand_ins(&self.probe, &self.beta, &mut out);
+        // A contact of the last step at a joint that sits on a corner hands its load to the
+        // links resting on the corner (a point on a convex corner, to the edge it lies on),
+        // decided where the last step left the chain: the probe posture is only a guess,
+        // and a guess that puts a link on the corner at a loaded joint that the solution
+        // then leaves beside it makes a step whose equations miss what touches.
+        self.hand_point_pairs_to_stand_ins(&self.start, &self.beta, &mut out);
+        self.drop_links_doubling_loaded_joints(&mut out);
         Ok(out)
     }
 
@@ -320,6 +326,39 @@ impl QuasiStatic {
             }
         }
         changed
+    }
+
+    /// Removes the fresh pairs of a link with a corner at a joint whose own pair stands and
+    /// is loaded (the last step's solution has the joint on the wall beside the corner,
+    /// with no link resting on it): both would hold the same material point, and Newton's
+    /// system on both is singular. If the step brings the link onto the corner, the link
+    /// joins as any feature inside a link does, after the solve.
+    fn drop_links_doubling_loaded_joints(&self, pairs: &mut Vec<Pair>) {
+        let mut doubled: Vec<PairKey> = Vec::new();
+        for c in pairs.iter() {
+            let PairKind::Point(ChainPoint::Vertex(joint)) = c.key.kind else {
+                continue;
+            };
+            if !(c.normal_active || c.normal_force_n != 0.0) {
+                continue;
+            }
+            let piece = &self.pieces.walls[c.key.piece];
+            let wall_point = piece.signed_distance(&self.start.end_m[joint]);
+            for feature in piece
+                .shape
+                .convex_features_by(&wall_point)
+                .into_iter()
+                .flatten()
+            {
+                for link in [joint, joint + 1] {
+                    doubled.push(PairKey::link(link, feature, c.key.piece));
+                }
+            }
+        }
+        pairs.retain(|c| {
+            let fresh = !c.normal_active && c.normal_force_n == 0.0;
+            !(fresh && doubled.contains(&c.key))
+        });
     }
 
     /// Puts the probe posture at the solution `x` of a step to `goal` (hair angles are not

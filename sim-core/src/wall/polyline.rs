@@ -414,11 +414,14 @@ impl Polyline {
         }
     }
 
-    /// The deepest (or closest) point of `a -> b` (see the module docs); `O(edges^3)` (the
-    /// pairs of features, each checked in `O(edges)`), no allocation.
+    /// The deepest (or closest) point of `a -> b` (see the module docs), no allocation.
+    /// `O(edges)` where the segment stays in free space; where part of it may be in the
+    /// solid, the pairs of the `F` features within reach of the segment (half its length
+    /// plus its ends' depths), each checked by a nearest-point query: `O(F^2 sqrt(edges))`.
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
-        let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
-        self.interior_candidates(a_m, b_m, ends.wall.gap_m, false)
+        let (start, end) = (self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
+        let ends = better(start, end);
+        self.interior_candidates(a_m, b_m, [start.wall.gap_m, end.wall.gap_m], false)
             .map_or(ends, |inner| better(ends, inner))
     }
 
@@ -432,8 +435,8 @@ impl Polyline {
         a_m: &Vector2<f64>,
         b_m: &Vector2<f64>,
     ) -> Option<SegmentContact> {
-        let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
-        self.interior_candidates(a_m, b_m, ends.wall.gap_m, true)
+        let (start, end) = (self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
+        self.interior_candidates(a_m, b_m, [start.wall.gap_m, end.wall.gap_m], true)
     }
 
     /// The point of `a -> b` at `s` with its wall point.
@@ -446,18 +449,20 @@ impl Polyline {
         }
     }
 
-    /// The deepest interior candidate of `a -> b`; `ends_gap_m` is the smaller gap of its
-    /// ends (the solid-side candidates matter only if part of the segment is in the solid).
+    /// The deepest interior candidate of `a -> b`; `ends_gap_m` are the gaps of its ends
+    /// (the solid-side candidates matter only if part of the segment is in the solid).
     /// With `corner_geometry`, a convex corner's contact is measured along the segment's
     /// normal ([`Self::corner_contact`]), else by the signed distance of its foot.
     fn interior_candidates(
         &self,
         a_m: &Vector2<f64>,
         b_m: &Vector2<f64>,
-        ends_gap_m: f64,
+        ends_gap_m: [f64; 2],
         corner_geometry: bool,
     ) -> Option<SegmentContact> {
         let d = b_m - a_m;
+        let [start_gap_m, end_gap_m] = ends_gap_m;
+        let ends_gap_m = start_gap_m.min(end_gap_m);
         // The solid-side candidates matter only if part of the segment is in the solid: an
         // end is, or the segment crosses the wall.
         let needs_solid_side = ends_gap_m <= 0.0 || self.crosses(a_m, b_m);
@@ -492,14 +497,35 @@ impl Polyline {
             if !needs_solid_side {
                 return best_cell.get();
             }
+            // Only features within reach of the segment count: the signed distance changes by
+            // at most the distance moved, so no point of the segment is deeper than
+            // `(|g(a)| + |g(b)| + |b - a|) / 2`, and a feature nearest to a point of the
+            // segment lies within that depth of it (on a digitized wall of hundreds of edges
+            // the pairs of all edges made this the cost of a sweep's certificate).
+            let reach_m = 0.5 * (start_gap_m.abs() + end_gap_m.abs() + d2.sqrt());
+            let lo_m = a_m.inf(b_m).add_scalar(-reach_m);
+            let hi_m = a_m.sup(b_m).add_scalar(reach_m);
+            let inside =
+                |v: &Vector2<f64>| v.x >= lo_m.x && v.x <= hi_m.x && v.y >= lo_m.y && v.y <= hi_m.y;
+            // An end ray reaches everywhere; an inner edge, where its box meets the segment's.
+            let near_edge = |i: &usize| {
+                let (lo, hi) = self.range_m(*i);
+                if lo.is_infinite() || hi.is_infinite() {
+                    return true;
+                }
+                let (v, w) = (self.vertices_m[*i], self.vertices_m[*i + 1]);
+                let (e_lo, e_hi) = (v.inf(&w), v.sup(&w));
+                e_lo.x <= hi_m.x && e_hi.x >= lo_m.x && e_lo.y <= hi_m.y && e_hi.y >= lo_m.y
+            };
+            let near_corner = |k: &usize| inside(&self.vertices_m[*k]);
             // Equidistant from two edge lines: (alpha_i + beta_i s) = +-(alpha_j + beta_j s).
             let line = |i: usize| {
                 let n = self.normals[i];
                 (n.dot(&(a_m - self.vertices_m[i])), n.dot(&d))
             };
-            for i in 0..edges {
+            for i in (0..edges).filter(near_edge) {
                 let (ai, bi) = line(i);
-                for j in i + 1..edges {
+                for j in (i + 1..edges).filter(near_edge) {
                     let (aj, bj) = line(j);
                     for sign in [1.0, -1.0] {
                         let denom = bi - sign * bj;
@@ -509,7 +535,7 @@ impl Polyline {
                     }
                 }
                 // Equidistant from edge line i and corner k: (alpha + beta s)^2 = |a - v + s d|^2.
-                for k in interior.clone() {
+                for k in interior.clone().filter(near_corner) {
                     let r = a_m - self.vertices_m[k];
                     let qa = bi * bi - d2;
                     let qb = 2.0 * (ai * bi - r.dot(&d));
@@ -518,8 +544,8 @@ impl Polyline {
                 }
             }
             // Equidistant from two corners: the perpendicular bisector.
-            for k in interior.clone() {
-                for m in k + 1..edges {
+            for k in interior.clone().filter(near_corner) {
+                for m in (k + 1..edges).filter(near_corner) {
                     let (v, w) = (self.vertices_m[k], self.vertices_m[m]);
                     let denom = 2.0 * d.dot(&(w - v));
                     if denom != 0.0 {
