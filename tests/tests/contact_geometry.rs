@@ -178,51 +178,60 @@ fn a_sweep_across_the_trapezoid_keeps_every_link_out_of_it() {
     assert!(mid_link > 100, "a corner inside a link in {mid_link} steps");
 }
 
+/// A 0.16 m antenna (3 joints of 0.02 N m/rad) at `base_deg`, at rest with its base at the
+/// origin, beside a polyline wall through `vertices_m` with friction `mu`.
+fn antenna_beside(
+    base_deg: f64,
+    vertices_m: Vec<Vector2<f64>>,
+    solid: SolidSide,
+    mu: f64,
+) -> QuasiStatic {
+    let chain = chain(3, base_deg, 0.02);
+    let wall = Wall::new(
+        Polyline::new(vertices_m, solid).unwrap(),
+        sim_core::SurfaceMap::uniform(sim_core::Surface::Smooth { mu }).unwrap(),
+    );
+    let theta = chain.rest_theta();
+    QuasiStatic::new(
+        chain,
+        vec![wall],
+        Vector2::zeros(),
+        &theta,
+        ContactSettings::default(),
+    )
+    .unwrap()
+}
+
+/// Moves the base to `base_m` and checks the step's certificate; `what` names the case.
+fn step_checked(sim: &mut QuasiStatic, base_m: Vector2<f64>, what: &str) {
+    sim.step_to(base_m)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    let check = sim.check();
+    assert!(check.holds(1e-9, 1e-9, 1e-9), "{what}: {check:?}");
+}
+
 #[test]
 fn a_tip_pushed_onto_a_convex_corner_slips_off_it_unless_friction_holds_it() {
-    // A 0.16 m antenna (3 joints) along x, tilted up 4 deg, pushed tip first onto the apex of a blunt
+    // A 0.16 m antenna along x, tilted up 4 deg, pushed tip first onto the apex of a blunt
     // wedge (half-angle 70 deg, pointing back at the base): a point meeting a point, where
     // the distance's normal turns without bound. Without friction no load can hold a point
     // on a convex corner (any force in the apex's cone slides it onto one edge or the
-    // other): the tip slips off onto an edge. With mu = 0.5 (friction angle 26.6
-    // deg, more than the 20 deg between the push and an edge's normal) it sticks where it
-    // touched.
+    // other): the tip slips off onto an edge. With mu = 0.5 (friction angle 26.6 deg, more
+    // than the 20 deg between the push and an edge's normal) it sticks where it touched.
     let half = 70f64.to_radians();
     let tilt = 4f64.to_radians();
     for (mu, stays) in [(0.0, false), (0.5, true)] {
-        let chain = chain(3, tilt.to_degrees(), 0.02);
         // 2 mm straight ahead of the tip at rest.
         let apex = 0.16 * Vector2::new(tilt.cos(), tilt.sin()) + Vector2::new(0.002, 0.0);
-        let wedge = Polyline::new(
-            vec![
-                apex + Vector2::new(half.cos(), half.sin()) * 0.05,
-                apex,
-                apex + Vector2::new(half.cos(), -half.sin()) * 0.05,
-            ],
-            SolidSide::Left,
-        )
-        .unwrap();
-        let wall = Wall::new(
-            wedge,
-            sim_core::SurfaceMap::uniform(sim_core::Surface::Smooth { mu }).unwrap(),
-        );
-        let theta = chain.rest_theta();
-        let mut sim = QuasiStatic::new(
-            chain,
-            vec![wall],
-            Vector2::zeros(),
-            &theta,
-            ContactSettings::default(),
-        )
-        .unwrap();
+        let wedge = vec![
+            apex + Vector2::new(half.cos(), half.sin()) * 0.05,
+            apex,
+            apex + Vector2::new(half.cos(), -half.sin()) * 0.05,
+        ];
+        let mut sim = antenna_beside(tilt.to_degrees(), wedge, SolidSide::Left, mu);
         for k in 1..=40 {
-            sim.step_to(Vector2::new(0.006 * k as f64 / 40.0, 0.0))
-                .unwrap_or_else(|e| panic!("mu {mu}, step {k}: {e}"));
-            let check = sim.check();
-            assert!(
-                check.holds(1e-9, 1e-9, 1e-9),
-                "mu {mu}, step {k}: {check:?}"
-            );
+            let base = Vector2::new(0.006 * k as f64 / 40.0, 0.0);
+            step_checked(&mut sim, base, &format!("mu {mu}, step {k}"));
         }
         let contacts = sim.contacts();
         let tip = contacts
@@ -242,48 +251,29 @@ fn a_tip_pushed_onto_a_convex_corner_slips_off_it_unless_friction_holds_it() {
 
 #[test]
 fn a_tip_sliding_over_a_convex_corner_passes_it_certified() {
-    // A 0.16 m antenna (3 joints) angled 12 deg down onto a flat wall that bends down by
-    // `drop_deg` at x = 0.17 m; the base moves down and along x so that the tip, pressed on
-    // the wall and sliding, passes over the corner (where the distance to the wall turns its
-    // normal without bound) and goes on, on the far edge or with a link on the corner. Every
-    // step certified.
+    // A 0.16 m antenna angled 12 deg down onto a flat wall that bends down by `drop_deg` at
+    // x = 0.17 m; the base moves down and along x so that the tip, pressed on the wall and
+    // sliding, passes over the corner (where the distance to the wall turns its normal
+    // without bound) and goes on, on the far edge or with a link on the corner. Every step
+    // certified.
     for (mu, drop_deg) in [(0.0, 10.0), (0.0, 35.0), (0.3, 20.0)] {
         let mut over = false;
-        let chain = chain(3, -12.0, 0.02);
         // 1.7 mm below the tip at rest (at y = -0.0333 m).
         let corner = Vector2::new(0.17, -0.035);
         let down = -f64::to_radians(drop_deg);
-        let wall = Polyline::new(
-            vec![
-                Vector2::new(-0.2, corner.y),
-                corner,
-                corner + Vector2::new(down.cos(), down.sin()) * 0.2,
-            ],
-            SolidSide::Right,
-        )
-        .unwrap();
-        let wall = Wall::new(
-            wall,
-            sim_core::SurfaceMap::uniform(sim_core::Surface::Smooth { mu }).unwrap(),
-        );
-        let theta = chain.rest_theta();
-        let mut sim = QuasiStatic::new(
-            chain,
-            vec![wall],
-            Vector2::zeros(),
-            &theta,
-            ContactSettings::default(),
-        )
-        .unwrap();
+        let wall = vec![
+            Vector2::new(-0.2, corner.y),
+            corner,
+            corner + Vector2::new(down.cos(), down.sin()) * 0.2,
+        ];
+        let mut sim = antenna_beside(-12.0, wall, SolidSide::Right, mu);
         for k in 1..=120 {
             // Along x, and down 4 mm over the first 20 steps to press the tip on.
             let base = Vector2::new(0.04 * k as f64 / 120.0, -0.004 * (k.min(20) as f64) / 20.0);
-            sim.step_to(base)
-                .unwrap_or_else(|e| panic!("mu {mu}, drop {drop_deg}: step {k}: {e}"));
-            let check = sim.check();
-            assert!(
-                check.holds(1e-9, 1e-9, 1e-9),
-                "mu {mu}, drop {drop_deg}: step {k}: {check:?}"
+            step_checked(
+                &mut sim,
+                base,
+                &format!("mu {mu}, drop {drop_deg}: step {k}"),
             );
             // Bearing on the corner or beyond it.
             over |= sim

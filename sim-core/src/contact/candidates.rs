@@ -226,7 +226,7 @@ impl QuasiStatic {
     /// The pairs that stand for chain point `point` (at `x_m`, its nearest point of piece
     /// `piece` `wall_point`) against the piece where a point pair would be singular: the
     /// links resting on a corner at a joint ([`Self::joint_corner_pairs`]), else the point
-    /// on a convex corner against the corner's two edge lines
+    /// on a convex corner against the line of the edge it lies on
     /// ([`Self::corner_point_pairs`]); `[None, None]` where the point pair stands.
     pub(super) fn stand_ins(
         &self,
