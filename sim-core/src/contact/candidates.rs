@@ -311,7 +311,7 @@ impl QuasiStatic {
                 continue;
             }
             let old = pairs.remove(i);
-            changed |= old.normal_active || old.normal_force_n != 0.0;
+            changed |= old.is_loaded();
             let mut handed = false;
             for key in stand_ins.into_iter().flatten() {
                 if pairs.iter().any(|c| c.key == key) {
@@ -339,7 +339,7 @@ impl QuasiStatic {
             let PairKind::Point(ChainPoint::Vertex(joint)) = c.key.kind else {
                 continue;
             };
-            if !(c.normal_active || c.normal_force_n != 0.0) {
+            if !c.is_loaded() {
                 continue;
             }
             let piece = &self.pieces.walls[c.key.piece];
@@ -355,10 +355,7 @@ impl QuasiStatic {
                 }
             }
         }
-        pairs.retain(|c| {
-            let fresh = !c.normal_active && c.normal_force_n == 0.0;
-            !(fresh && doubled.contains(&c.key))
-        });
+        pairs.retain(|c| c.is_loaded() || !doubled.contains(&c.key));
     }
 
     /// Puts the probe posture at the solution `x` of a step to `goal` (hair angles are not
@@ -455,8 +452,7 @@ impl QuasiStatic {
             let keep = c.geo.valid
                 && self.pair_on_real_wall(&c.key, &c.geo.point_m, c.geo.gap_m)
                 && state == CornerEdgeState::OnCorner;
-            let loaded = c.normal_active || c.normal_force_n != 0.0;
-            if !keep && loaded {
+            if !keep && c.is_loaded() {
                 active = true;
                 if state == CornerEdgeState::Left
                     && let Some(point) = c.key.chain_point()
@@ -488,12 +484,11 @@ impl QuasiStatic {
         if !near {
             return CornerEdgeState::Left;
         }
-        let loaded = c.normal_active || c.normal_force_n != 0.0;
         let tol = self
             .settings
             .penetration_tolerance_m
             .max(self.settings.acceptable_m);
-        if loaded && piece.signed_distance(&c.geo.point_m).gap_m > tol {
+        if c.is_loaded() && piece.signed_distance(&c.geo.point_m).gap_m > tol {
             CornerEdgeState::PastCorner
         } else {
             CornerEdgeState::OnCorner

@@ -213,6 +213,12 @@ impl Pair {
         }
     }
 
+    /// Whether the pair touches or carries a force (as opposed to a fresh candidate): one
+    /// that lets go or hands over must have the step solved again.
+    pub fn is_loaded(&self) -> bool {
+        self.normal_active || self.normal_force_n != 0.0
+    }
+
     /// The force the wall exerts on the chain, ground frame, newtons.
     pub fn force_n(&self) -> Vector2<f64> {
         self.geo.normal * self.normal_force_n + self.geo.tangent * self.shear_force_n
