@@ -53,21 +53,12 @@ const KNOWN_CI_FAILURES: &[(u64, &str)] = &[
         "tip-on-wall S, N = 4: the pinned equilibrium converges from no start",
     ),
     (
-        38,
-        "tip-on-wall S on a digitized line: times out at step 156 of 167 (friction locks the \
-         antenna; without friction the step fails too)",
-    ),
-    (
         41,
         "tip-on-wall S on a polyline: friction locks the held antenna",
     ),
     (
         43,
         "tip-on-wall C on a digitized trapezoid: bringing the held antenna onto the wall fails",
-    ),
-    (
-        45,
-        "tip-on-wall S on a sinusoid: the held antenna's downhill path does not come to rest",
     ),
 ];
 

@@ -96,6 +96,12 @@ impl QuasiStatic {
         // dozens of pieces and corners within the margin of one link; the nearest are what
         // it can touch next, and anything the solve pushes into a wall joins after it).
         let keep = if within_m > 0.0 { NEAREST } else { usize::MAX };
+        // A feature whose foot is just past a link's end is a pair of the link while it is
+        // near (it hands over to the end's point pair without chatter), but it is not in
+        // the link: only a foot on the link itself makes a link inside a wall (a solve
+        // that ends with such a pair's foot past the end drops it, and the link swings
+        // past a corner its end does not reach).
+        let foot_tolerance = if within_m > 0.0 { FOOT_TOLERANCE } else { 0.0 };
         let mut near: Vec<(f64, PairKey)> = Vec::new();
         // Per wall, its own nearest point to the chain point at hand (only where a piece of
         // it is cut, and once).
@@ -155,7 +161,7 @@ impl QuasiStatic {
                     &mut features,
                 );
                 for fc in &features {
-                    if fc.supported && fc.s >= -FOOT_TOLERANCE && fc.s <= 1.0 + FOOT_TOLERANCE {
+                    if fc.supported && fc.s >= -foot_tolerance && fc.s <= 1.0 + foot_tolerance {
                         near.push((fc.gap_m, PairKey::link(link, fc.feature, w)));
                     }
                 }
@@ -205,10 +211,17 @@ impl QuasiStatic {
                     })
                     .flatten()
                     .filter(|fc| {
-                        let on_link = if at_corner {
-                            fc.s >= -FOOT_TOLERANCE && fc.s <= 1.0 + FOOT_TOLERANCE
+                        // Past the tip no link follows to take the corner over: the tip's
+                        // own pair stands for a corner beyond it.
+                        let past_end = if link == self.chain.n() {
+                            0.0
                         } else {
-                            (fc.s - joint_end).abs() <= FOOT_TOLERANCE
+                            FOOT_TOLERANCE
+                        };
+                        let on_link = if at_corner {
+                            fc.s >= -FOOT_TOLERANCE && fc.s <= 1.0 + past_end
+                        } else {
+                            (fc.s - joint_end).abs() <= FOOT_TOLERANCE && fc.s <= 1.0 + past_end
                         };
                         fc.supported && on_link
                     })

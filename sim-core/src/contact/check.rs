@@ -55,7 +55,7 @@ const ON_LIMIT_RAD: f64 = 1e-9;
 
 /// Forces below this are zero for the complementarity check (rounding of forces of order
 /// 0.01-1 N).
-const FORCE_ZERO_N: f64 = 1e-12;
+pub(super) const FORCE_ZERO_N: f64 = 1e-12;
 
 /// `max` that keeps a NaN (`f64::max` drops it).
 fn worst(a: f64, b: f64) -> f64 {

@@ -10,7 +10,9 @@
 //! `proj_[a,b]` the clamp and `c` a contact stiffness scale:
 //! - coordinates (box `lo <= x_a <= hi`): `x_a - proj_[lo,hi](x_a - r_a / s_a) = 0`, i.e.
 //!   `r_a = 0` inside the box, `r_a >= 0` at `lo`, `r_a <= 0` at `hi` (the KKT conditions of
-//!   the joint limits, with the stop's multiplier of the right sign);
+//!   the joint limits, with the stop's multiplier of the right sign); `x` stays in the box,
+//!   and a coordinate's row is `x_a - bound` only while it is on that bound (inside, `r_a`
+//!   itself: see [`Equations::evaluate`]);
 //! - normal: `N_k - proj_[N_min, inf)(N_k - c gap_k(x)) = 0`: `N >= N_min`, `gap >= 0`,
 //!   complementary (`N_min = 0`, or minus the tension hold of an anchored hair tip);
 //! - tangential: `T_k - proj_[-B_k, B_k](T_k - c u_k(x)) = 0` with `B_k = mu N_k` (Coulomb)
@@ -287,9 +289,16 @@ impl Equations {
                 };
                 continue;
             }
-            self.held[a] = if y <= self.lo[a] {
+            // Held only on the bound itself (the line search clamps onto it): the natural
+            // map would hold a coordinate anywhere its `r` is large enough, and then its
+            // row, `L (x - bound)`, no longer grows with the forces in `r`; Newton's method
+            // could lower the merit by driving a contact force towards infinity (every
+            // joint "held" far from its stop, 1e8 N on a link) and stall there. A
+            // coordinate inside its range is balanced (`L r / s`) until a step reaches
+            // the stop.
+            self.held[a] = if y <= self.lo[a] && self.z[a] <= self.lo[a] {
                 Some(self.lo[a])
-            } else if y >= self.hi[a] {
+            } else if y >= self.hi[a] && self.z[a] >= self.hi[a] {
                 Some(self.hi[a])
             } else {
                 None

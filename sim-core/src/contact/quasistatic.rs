@@ -5,6 +5,7 @@
 use nalgebra::Vector2;
 
 use super::ContactError;
+use super::check::FORCE_ZERO_N;
 use super::feature::{Contact, FrictionLaw};
 use super::pair::Pair;
 use super::pieces::Pieces;
@@ -520,7 +521,15 @@ impl QuasiStatic {
                 // Touching ones only: a contact that let go ends its solve with a normal
                 // force of rounding size (1e-25 N), not zero, and would be carried (and
                 // reported, with its touch bit) however far the chain moves from the wall.
-                .filter(|c| c.normal_active),
+                // One that still carries a force (a solve accepted where it stalled with a
+                // contact touching at N = 0 and gap = 0: its mode undecided, its force up
+                // to the acceptable residual times the contact scale) stays: the posture
+                // balances that force, and the check then holds it to the contact's gap.
+                .filter(|c| {
+                    c.normal_active
+                        || c.normal_force_n.abs() > FORCE_ZERO_N
+                        || c.shear_force_n.abs() > FORCE_ZERO_N
+                }),
         );
         self.pairs.sort_by_key(|a| a.key);
     }

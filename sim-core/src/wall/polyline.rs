@@ -66,6 +66,11 @@ impl EdgeChunk {
 /// Polylines with fewer finite edges than this are searched edge by edge.
 const CHUNKED_FROM_EDGES: usize = 32;
 
+/// How far outside a corner's normal cone (in the cone's own coordinates, the weights of the
+/// two edge normals) a segment's normal still counts as in it: rounding of a segment
+/// flush with an edge.
+const CONE_ROUNDING: f64 = 1e-9;
+
 /// The runs of finite edges (`1..edges - 1`; the first and last edges are rays) of the
 /// polyline through `vertices_m`, about `sqrt(edges)` edges each.
 fn edge_chunks(vertices_m: &[Vector2<f64>]) -> Vec<EdgeChunk> {
@@ -700,7 +705,9 @@ impl Polyline {
         }
         let det = cross(&n1, &n2);
         let (alpha, beta) = (cross(&normal, &n2) / det, cross(&n1, &normal) / det);
-        let supported = alpha >= 0.0 && beta >= 0.0;
+        // On the cone's boundary (the segment flush with an edge, resting on its corner and
+        // along the edge) to rounding: a solve that lays a link flat on an edge ends there.
+        let supported = alpha >= -CONE_ROUNDING && beta >= -CONE_ROUNDING;
         let v = self.vertices_m[vertex];
         let s = (v - a_m).dot(&d) / length2;
         let point_m = a_m + d * s;
@@ -858,6 +865,38 @@ mod tests {
                 let mid = (v + wall.vertices_m()[k + 1]) * 0.5;
                 prop_assert_eq!(wall.signed_distance(&mid), plain.signed_distance(&mid));
             }
+        }
+
+        /// A segment lying flush on an edge and running on past its convex corner rests on
+        /// the corner (its normal on the boundary of the corner's cone, to rounding), at
+        /// zero gap: a link laid flat on an edge keeps its corner pair.
+        #[test]
+        fn a_segment_flush_with_an_edge_rests_on_its_corner(
+            turn_deg in 5.0f64..85.0,
+            heading_rad in -3.2f64..3.2,
+            from in 0.05f64..0.95,
+            past in 0.01f64..0.9,
+        ) {
+            let (c, s) = (heading_rad.cos(), heading_rad.sin());
+            let rotate = |x: f64, y: f64| Vector2::new(c * x - s * y, s * x + c * y);
+            let turn = turn_deg.to_radians();
+            let corner = rotate(0.0, 0.0);
+            let wall = Polyline::new(
+                vec![
+                    rotate(-0.1, 0.0),
+                    corner,
+                    rotate(0.1 * turn.cos(), -0.1 * turn.sin()),
+                ],
+                SolidSide::Right,
+            )
+            .unwrap();
+            prop_assert!(wall.is_convex(1));
+            let a = rotate(-0.1 * from, 0.0);
+            let b = rotate(0.1 * past, 0.0);
+            let fc = wall.corner_feature_contact(1, &a, &b).unwrap();
+            prop_assert!(fc.supported, "flush segment not supported: {fc:?}");
+            prop_assert!(fc.gap_m.abs() < 1e-15, "gap {}", fc.gap_m);
+            prop_assert!((fc.point_m - corner).norm() < 1e-15);
         }
     }
 }
