@@ -266,3 +266,40 @@ fn unreachable_targets_are_errors() {
         matches!(err, EquilibriumError::Unreachable { min_reach_m, .. } if (min_reach_m - 0.08).abs() < 1e-12)
     );
 }
+
+/// A pin inside the smallest circle that three 90 mm links can fold to within +-90 deg
+/// limits (two right angles bring the tip back to one link length, 90 mm, from the first
+/// flexible joint; the target is 82 mm away) is refused as out of reach within the limits,
+/// not returned as an unconverged answer: the search stalls against the limits with the
+/// penalty at its cap (the stress suite's CI sample 16).
+#[test]
+fn a_pin_the_folded_chain_cannot_reach_within_its_limits_is_refused() {
+    let chain = Chain::builder(3)
+        .link_length_m(0.09)
+        .base_angle_rad(0.694_367_151_226_960_5)
+        .joint_limit(JointLimit::new(
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::FRAC_PI_2,
+        ))
+        .stiffnesses_nm_per_rad(vec![0.004; 3])
+        .build()
+        .unwrap();
+    let pin = Vector2::new(0.088_803_806_188_297, 0.136_970_991_155_216_63);
+    let distance = (pin - first_joint(&chain)).norm();
+    assert!(distance < 0.09 && distance > 0.0, "{distance}");
+    let problem = EquilibriumProblem::new(&chain).with_tip_pin_m(pin);
+    for start in [InitialGuess::S, InitialGuess::C, InitialGuess::Straight] {
+        match solve_equilibrium(&problem, &start, &SolveOptions::default()) {
+            Err(EquilibriumError::PinInfeasible { gap_m, .. }) => {
+                assert!(gap_m > 0.0 && gap_m.is_finite(), "{gap_m}");
+            }
+            Ok(eq) => {
+                // Whatever it returns must not claim the pin.
+                let tip = tip_pose(&chain, &eq.theta_rad).unwrap().position_m;
+                assert!(!eq.converged, "{start:?}: claims {tip:?} meets {pin:?}");
+                panic!("{start:?}: an unconverged answer instead of PinInfeasible: {eq:?}");
+            }
+            Err(e) => panic!("{start:?}: {e}"),
+        }
+    }
+}

@@ -16,8 +16,9 @@
 //!    tip (the least-squares `J^T mu = grad U - J^T F` at the start, to begin with).
 //!    `rho` starts at `1e3 T / L^2` (`T` the torque scale) and grows tenfold whenever the
 //!    gap `|c|` fails to shrink fourfold, up to `1e8` times its start; if the gap still
-//!    stagnates (three updates in a row) on the final target the pin is declared
-//!    infeasible within the limits ([`EquilibriumError::PinInfeasible`]).
+//!    stagnates (three updates in a row, or the descent stalls or runs out of budget with
+//!    the penalty at its cap and the gap not shrinking fourfold) on the final target the
+//!    pin is declared infeasible within the limits ([`EquilibriumError::PinInfeasible`]).
 //!    Within one Newton stage the merit `L_A` never increases; each multiplier update or
 //!    target move starts a new merit (a new [`TraceStep::segment`](super::TraceStep)).
 //! 3. **Near-singular Jacobian.** A target near full reach (0.9999 L, the chain almost
@@ -126,6 +127,15 @@ pub(crate) fn solve_pinned(
                 break;
             }
             if status == Status::Stalled || *iterations >= budget {
+                // On the final target with the penalty at its cap and the gap still open,
+                // the descent stopped against the limits: the same jam as a stagnant gap.
+                if last && rho >= rho_max && gap > 0.25 * prev_gap {
+                    return Err(EquilibriumError::PinInfeasible {
+                        gap_m: gap * length,
+                        starts: 1,
+                        iterations: *iterations,
+                    });
+                }
                 break;
             }
             if gap > 0.25 * prev_gap {
