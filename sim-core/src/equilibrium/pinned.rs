@@ -126,19 +126,9 @@ pub(crate) fn solve_pinned(
                 reached = true;
                 break;
             }
-            if status == Status::Stalled || *iterations >= budget {
-                // On the final target with the penalty at its cap and the gap still open,
-                // the descent stopped against the limits: the same jam as a stagnant gap.
-                if last && rho >= rho_max && gap > 0.25 * prev_gap {
-                    return Err(EquilibriumError::PinInfeasible {
-                        gap_m: gap * length,
-                        starts: 1,
-                        iterations: *iterations,
-                    });
-                }
-                break;
-            }
-            if gap > 0.25 * prev_gap {
+            let stopped = status == Status::Stalled || *iterations >= budget;
+            let shrinking = gap <= 0.25 * prev_gap;
+            if !stopped && !shrinking {
                 if rho < rho_max {
                     rho = (rho * 10.0).min(rho_max);
                     stagnant = 0;
@@ -146,14 +136,17 @@ pub(crate) fn solve_pinned(
                     stagnant += 1;
                 }
             }
-            if stagnant >= 3 {
-                if last {
-                    return Err(EquilibriumError::PinInfeasible {
-                        gap_m: gap * length,
-                        starts: 1,
-                        iterations: *iterations,
-                    });
-                }
+            // The gap stagnates with the penalty at its cap (three updates in a row, or the
+            // descent stopped there): the chain is jammed against its limits.
+            let jammed = !shrinking && rho >= rho_max && (stopped || stagnant >= 3);
+            if jammed && last {
+                return Err(EquilibriumError::PinInfeasible {
+                    gap_m: gap * length,
+                    starts: 1,
+                    iterations: *iterations,
+                });
+            }
+            if jammed || stopped {
                 break;
             }
             prev_gap = gap;
