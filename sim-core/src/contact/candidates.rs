@@ -402,7 +402,8 @@ impl QuasiStatic {
     }
 
     /// A fresh pair `key`: its material point where it touches (or comes nearest) at the
-    /// start of the step, the surface's Coulomb law, no force.
+    /// start of the step, the surface's Coulomb law (none on a frictionless step), no
+    /// force.
     pub(super) fn fresh_pair(&self, key: PairKey) -> Pair {
         let start = &self.start;
         let (link, s, point) = match key.kind {
@@ -428,7 +429,11 @@ impl QuasiStatic {
             }
         };
         let law = self.coulomb_at(key.piece, &point);
-        Pair::new(key, law, link, s, point)
+        let mut pair = Pair::new(key, law, link, s, point);
+        // On a step whose friction was let go every pair slides freely, however it joins
+        // (a candidate, a point missed, a stand-in a pair is handed over to).
+        pair.frictionless = self.friction_off;
+        pair
     }
 
     /// The pairs inside a wall after a solve to `x` (hair coordinates `hair_links`), with

@@ -113,6 +113,11 @@ pub(crate) struct Equations {
     pub link_force_n: Vec<Vector2<f64>>,
     pub link_moment_nm: Vec<f64>,
     pub link_work_nm: Vec<f64>,
+    /// Modes forced by a repair of a stalled solve ([`super::ssn`]): a coordinate that is
+    /// never held on its bounds (its row stays the balance), and a pair whose normal row is
+    /// never active (its forces go to zero). Empty: no mode is forced.
+    pub force_free: Vec<bool>,
+    pub force_inactive: Vec<bool>,
     /// Keep the modes (coordinates held, pairs' normal and tangent modes) as they are
     /// instead of updating them (tests of the Jacobian on a given piece).
     #[cfg(test)]
@@ -296,7 +301,9 @@ impl Equations {
             // joint "held" far from its stop, 1e8 N on a link) and stall there. A
             // coordinate inside its range is balanced (`L r / s`) until a step reaches
             // the stop.
-            self.held[a] = if y <= self.lo[a] && self.z[a] <= self.lo[a] {
+            self.held[a] = if self.force_free.get(a) == Some(&true) {
+                None
+            } else if y <= self.lo[a] && self.z[a] <= self.lo[a] {
                 Some(self.lo[a])
             } else if y >= self.hi[a] && self.z[a] >= self.hi[a] {
                 Some(self.hi[a])
@@ -322,7 +329,9 @@ impl Equations {
             let frozen = self.frozen_modes;
             #[cfg(not(test))]
             let frozen = false;
-            if !frozen {
+            if self.force_inactive.get(idx) == Some(&true) {
+                pair.normal_active = false;
+            } else if !frozen {
                 pair.normal_active = if pair.normal_active {
                     y_normal > -hyst
                 } else {

@@ -6,8 +6,10 @@
 //! iterations, so that the modes can settle where a constraint is degenerate), a cap on the
 //! change of any coordinate per iteration, and Levenberg-Marquardt damping of the Newton
 //! matrix, raised when no step is accepted and lowered again after successes (it changes
-//! the path, never the solution: `Phi` itself is never regularized). A solve that does not
-//! converge is reported; the caller refines the step.
+//! the path, never the solution: `Phi` itself is never regularized). A solve that stalls
+//! within a micrometre of an answer tries the other mode of each joint on a stop and each
+//! pressed contact in turn ([`Ssn::repair`]): a wrong mode there makes the Newton matrix
+//! singular. A solve that does not converge is reported; the caller refines the step.
 
 use super::equations::{Equations, StepProblem};
 use super::newton_system::NewtonSystem;
@@ -23,6 +25,9 @@ pub(crate) struct SsnOutcome {
     pub residual_m: f64,
     /// The hand's force on the tip, newtons (zero without a hand).
     pub hand_force_n: Vector2<f64>,
+    /// Whether the answer came from a repair of a stalled solve ([`Ssn::repair`]): the
+    /// same equations, solved on other modes.
+    pub repaired: bool,
 }
 
 /// The solver's scratch space, reused from step to step.
@@ -40,6 +45,22 @@ const NONMONOTONE_MEMORY: usize = 6;
 
 /// The largest change of a coordinate in one iteration, radians.
 const MAX_CHANGE_RAD: f64 = 0.25;
+
+/// A stalled solve whose residual is at most this, metres, tries the other modes of its
+/// degenerate parts ([`Ssn::repair`]).
+const REPAIR_BELOW_M: f64 = 1e-6;
+
+/// Newton iterations of each repair.
+const REPAIR_ITERATIONS: usize = 20;
+
+/// A part of the step's equations whose mode a repair flips.
+#[derive(Clone, Copy, Debug)]
+enum Part {
+    /// A coordinate held on a bound.
+    Coordinate(usize),
+    /// A pair whose normal row is active.
+    Pair(usize),
+}
 
 /// The first damping tried after a failure, and the limits of the damping.
 const MIN_DAMPING: f64 = 1e-8;
@@ -59,22 +80,128 @@ impl Ssn {
     pub fn solve(&mut self, p: &StepProblem<'_>, x: &mut [f64], pairs: &mut [Pair]) -> SsnOutcome {
         self.eq.prepare(p);
         self.eq.load(x, pairs);
-        let m = x.len();
-        let n = p.chain.n();
-        let mut merit = self.eq.evaluate(p, pairs);
+        self.eq.force_free.clear();
+        self.eq.force_inactive.clear();
         let mut outcome = SsnOutcome {
             converged: false,
             iterations: 0,
-            residual_m: self.eq.residual_m(),
+            residual_m: 0.0,
             hand_force_n: Vector2::zeros(),
+            repaired: false,
         };
+        self.descend(p, x, pairs, p.max_iterations, &mut outcome);
+        if outcome.residual_m > p.tolerance_m && outcome.residual_m <= REPAIR_BELOW_M {
+            self.repair(p, x, pairs, &mut outcome);
+        }
+        // A solve that stalls at a degenerate point (a contact touching with N = 0 and
+        // gap = 0: the modes trade places and Newton's method stops improving) is accepted
+        // within the acceptable residual.
+        outcome.converged = outcome.residual_m <= p.tolerance_m.max(p.acceptable_m);
+        let m = x.len();
+        x.copy_from_slice(&self.eq.z[..m]);
+        outcome.hand_force_n = self.eq.hand_force_n;
+        outcome
+    }
+
+    /// A stalled solve near an answer: the modes of its degenerate parts may be wrong. A
+    /// joint held on its stop that should leave it, or a contact pressed where it should
+    /// let go, makes the active piece's equations singular (more touching contacts than
+    /// free joints can satisfy: a link across two nearly collinear vertices of a digitized
+    /// wall, two joints on one edge with the joint between them on its stop) and Newton's
+    /// method stalls at their least-squares compromise, nanometres inside the wall. Each
+    /// such part in turn is given the other mode (the joint free, the contact let go) and
+    /// the piece solved; an answer is kept only where the modes it settles in are its own
+    /// (the plain equations hold there to the tolerance). Otherwise the stalled point
+    /// stands.
+    fn repair(
+        &mut self,
+        p: &StepProblem<'_>,
+        x_start: &[f64],
+        pairs: &mut [Pair],
+        outcome: &mut SsnOutcome,
+    ) {
+        let m = x_start.len();
+        let c = pairs.len();
+        let mut parts: Vec<Part> = (0..m)
+            .filter(|&a| self.eq.held[a].is_some())
+            .map(Part::Coordinate)
+            .collect();
+        // The pressed contacts, those with the least normal force first (the likeliest to
+        // let go).
+        let mut pressed: Vec<usize> = (0..c)
+            .filter(|&k| pairs[k].normal_active && pairs[k].law.min_normal_n() == 0.0)
+            .collect();
+        pressed.sort_by(|&a, &b| {
+            pairs[a]
+                .normal_force_n
+                .abs()
+                .total_cmp(&pairs[b].normal_force_n.abs())
+        });
+        parts.extend(pressed.into_iter().map(Part::Pair));
+        if parts.is_empty() {
+            return;
+        }
+        let z_stalled = self.eq.z.clone();
+        let pairs_stalled = pairs.to_vec();
+        let residual_stalled = outcome.residual_m;
+        for part in parts {
+            self.eq.z.clone_from(&z_stalled);
+            pairs.copy_from_slice(&pairs_stalled);
+            self.eq.force_free.clear();
+            self.eq.force_free.resize(m, false);
+            self.eq.force_inactive.clear();
+            self.eq.force_inactive.resize(c, false);
+            match part {
+                Part::Coordinate(a) => self.eq.force_free[a] = true,
+                Part::Pair(k) => {
+                    self.eq.force_inactive[k] = true;
+                    self.eq.z[m + k] = 0.0;
+                    self.eq.z[m + c + k] = 0.0;
+                }
+            }
+            self.descend(p, x_start, pairs, REPAIR_ITERATIONS, outcome);
+            self.eq.force_free.clear();
+            self.eq.force_inactive.clear();
+            if outcome.residual_m.is_nan() || outcome.residual_m > p.tolerance_m {
+                continue;
+            }
+            // The plain modes at the repaired answer: converged there, or a few more
+            // iterations from it.
+            self.descend(p, x_start, pairs, REPAIR_ITERATIONS, outcome);
+            if outcome.residual_m <= p.tolerance_m {
+                outcome.repaired = true;
+                return;
+            }
+        }
+        self.eq.z.clone_from(&z_stalled);
+        pairs.copy_from_slice(&pairs_stalled);
+        self.eq.evaluate(p, pairs);
+        outcome.residual_m = residual_stalled;
+    }
+
+    /// Newton iterations from the current `z` until the residual is within the tolerance,
+    /// `budget` iterations are spent, no step is accepted at the largest damping, or the
+    /// joint angles wander past the departure limit from `x_start`.
+    fn descend(
+        &mut self,
+        p: &StepProblem<'_>,
+        x_start: &[f64],
+        pairs: &mut [Pair],
+        budget: usize,
+        outcome: &mut SsnOutcome,
+    ) {
+        let m = x_start.len();
+        let n = p.chain.n();
+        let mut merit = self.eq.evaluate(p, pairs);
+        outcome.residual_m = self.eq.residual_m();
         let mut damping = 0.0_f64;
         let mut recent = [merit; NONMONOTONE_MEMORY];
-        while (outcome.residual_m > p.tolerance_m || outcome.residual_m.is_nan())
-            && outcome.iterations < p.max_iterations
+        let mut spent = 0;
+        while (outcome.residual_m > p.tolerance_m || outcome.residual_m.is_nan()) && spent < budget
         {
             let reference = recent.iter().copied().fold(merit, f64::max);
             outcome.iterations += 1;
+            spent += 1;
             let mut dz = std::mem::take(&mut self.dz);
             let direction = self.system.direction(&self.eq, p, pairs, damping, &mut dz);
             if direction.is_none() {
@@ -133,17 +260,10 @@ impl Ssn {
             };
             recent[outcome.iterations % NONMONOTONE_MEMORY] = merit;
             outcome.residual_m = self.eq.residual_m();
-            if (0..n).any(|a| (self.eq.z[a] - x[a]).abs() > p.max_departure_rad) {
+            if (0..n).any(|a| (self.eq.z[a] - x_start[a]).abs() > p.max_departure_rad) {
                 break;
             }
         }
-        // A solve that stalls at a degenerate point (a contact touching with N = 0 and
-        // gap = 0: the modes trade places and Newton's method stops improving) is accepted
-        // within the acceptable residual.
-        outcome.converged = outcome.residual_m <= p.tolerance_m.max(p.acceptable_m);
-        x.copy_from_slice(&self.eq.z[..m]);
-        outcome.hand_force_n = self.eq.hand_force_n;
-        outcome
     }
 
     /// The Hessian of the Lagrangian at `x` with the pairs' forces, reduced to the tangent
@@ -193,5 +313,99 @@ impl Ssn {
             }
         }
         basis.transpose() * h * basis
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The repair of a stalled solve, on a problem whose wrong modes make the Newton
+    //! system singular.
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::contact::feature::FrictionLaw;
+    use crate::contact::pair::{ChainPoint, PairKey};
+    use crate::{Chain, Line, SolidSide, Surface, SurfaceMap, Wall};
+
+    /// One flexible joint, its tip pressed by wall A to `theta*` and wall B `delta`
+    /// behind the tip there (tilted, not touching): started with both pressing, the two
+    /// gap rows depend on the one angle alone and cannot both vanish. Newton's method
+    /// stalls at their compromise, a fraction of `delta` inside B; the repair lets B go
+    /// and finds the equilibrium on A alone, which the plain equations accept.
+    #[test]
+    fn a_stall_between_two_walls_one_joint_cannot_both_touch_is_repaired() {
+        let length_m = 0.05;
+        let k = 0.01;
+        let chain = Chain::builder(1)
+            .link_length_m(length_m)
+            .stiffness_nm_per_rad(k)
+            .build()
+            .unwrap();
+        let theta_star = 0.5_f64;
+        let along = Vector2::new(theta_star.cos(), theta_star.sin());
+        let tip = Vector2::new(length_m, 0.0) + along * length_m;
+        // The tip's direction of motion as theta grows.
+        let ahead = Vector2::new(-along.y, along.x);
+        let surface = || SurfaceMap::uniform(Surface::Smooth { mu: 0.0 }).unwrap();
+        let delta_m = 1e-7;
+        let pieces = vec![
+            Wall::new(
+                Line::new(tip, theta_star, SolidSide::Right).unwrap(),
+                surface(),
+            ),
+            Wall::new(
+                Line::new(tip - ahead * delta_m, theta_star + 0.3, SolidSide::Right).unwrap(),
+                surface(),
+            ),
+        ];
+        let law = FrictionLaw::Coulomb { mu: 0.0 };
+        let force_n = k * theta_star / length_m;
+        let mut pairs: Vec<Pair> = (0..2)
+            .map(|piece| {
+                let key = PairKey::point(ChainPoint::Vertex(1), piece);
+                let mut pair = Pair::new(key, law, 1, 1.0, tip);
+                pair.normal_force_n = 0.5 * force_n;
+                pair.normal_active = true;
+                pair
+            })
+            .collect();
+        let problem = StepProblem {
+            chain: &chain,
+            pieces: &pieces,
+            tip_force_n: Vector2::zeros(),
+            base_m: Vector2::zeros(),
+            hair_links: &[],
+            hair_beta_rad: &[0.0, 0.0],
+            proximal: None,
+            hand_m: None,
+            tolerance_m: 1e-12,
+            acceptable_m: 1e-9,
+            max_departure_rad: 1.0,
+            max_iterations: 60,
+        };
+        let mut x = vec![theta_star];
+        let mut ssn = Ssn::default();
+        let outcome = ssn.solve(&problem, &mut x, &mut pairs);
+        assert!(outcome.converged, "{outcome:?}");
+        assert!(
+            outcome.repaired,
+            "the plain solve did not stall: {outcome:?}"
+        );
+        assert!(outcome.residual_m <= 1e-12, "{outcome:?}");
+        assert!(
+            (x[0] - theta_star).abs() < 1e-9,
+            "theta {} vs {theta_star}",
+            x[0]
+        );
+        // A carries the spring's torque; B is let go, clear of the tip.
+        assert!(pairs[0].normal_active);
+        assert!((pairs[0].normal_force_n - force_n).abs() < 1e-9 * force_n.max(1.0));
+        assert!(!pairs[1].normal_active);
+        assert_eq!(pairs[1].normal_force_n, 0.0);
+        assert!(
+            pairs[1].geo.gap_m > 0.5 * delta_m,
+            "gap {}",
+            pairs[1].geo.gap_m
+        );
     }
 }

@@ -47,11 +47,6 @@ impl QuasiStatic {
         self.start.update(&self.chain, self.base_m, &self.theta);
         self.probe.update(&self.chain, goal, &self.theta);
         let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
-        if self.friction_off {
-            for pair in &mut pairs {
-                pair.frictionless = true;
-            }
-        }
         let mut anchoring = super::anchoring::AnchorRounds::default();
         for _round in 0..ROUNDS {
             let mut hair_links: Vec<usize> =
@@ -142,10 +137,7 @@ impl QuasiStatic {
             let mut changed = self.drop_stale_pairs(&mut pairs);
             self.probe_at(&x, goal);
             changed |= self.hand_point_pairs_to_stand_ins_at_probe(&x, &hair_links, &mut pairs);
-            let mut missed = self.missed_pairs(&x, &hair_links, &pairs);
-            for pair in &mut missed {
-                pair.frictionless = self.friction_off;
-            }
+            let missed = self.missed_pairs(&x, &hair_links, &pairs);
             changed |= !missed.is_empty();
             pairs.extend(missed);
             // Hair anchoring on rough surfaces (model.md 7).

@@ -39,6 +39,7 @@ pub(crate) fn solve_by_fixed_point(
         iterations: 0,
         residual_m: f64::INFINITY,
         hand_force_n: Vector2::zeros(),
+        repaired: false,
     };
     for _ in 0..TRESCA_ITERATIONS {
         outcome = ssn.solve(problem, x, pairs);
