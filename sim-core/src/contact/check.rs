@@ -23,7 +23,9 @@ pub struct EquilibriumCheck {
     /// The deepest penetration of a link or a hair tip into a wall, metres.
     pub penetration_m: f64,
     /// The largest violation of `N >= N_min` or `|T| <= bound` (the friction cone, or an
-    /// anchored hair's holds), newtons.
+    /// anchored hair's holds), newtons: in the contact's own frame, and again with its
+    /// force split along the wall's own normal where it touches (so a contact whose normal
+    /// is not the wall's fails by the force the wall cannot exert).
     pub cone_violation_n: f64,
     /// The largest gap of a contact that carries a force (complementarity), metres.
     pub separation_m: f64,
@@ -56,6 +58,32 @@ const ON_LIMIT_RAD: f64 = 1e-9;
 /// Forces below this are zero for the complementarity check (rounding of forces of order
 /// 0.01-1 N).
 pub(super) const FORCE_ZERO_N: f64 = 1e-12;
+
+/// How far from a polyline corner a contact may press with any normal of the corner's cone,
+/// metres: a contact solved against a piece of a wall cut at a concave corner lies on the
+/// piece's straight run-on up to [`super::pieces::CUT_REACH_M`] past the corner.
+const CORNER_REACH_M: f64 = super::pieces::CUT_REACH_M;
+
+/// The distance, metres, by which a contact's point may stand off the wall point whose
+/// normal it carries (the solver's points agree to about `1e-12` m): on a curve the normal
+/// may turn by the curvature times it.
+const NORMAL_SLACK_M: f64 = 1e-8;
+
+/// `n` turned into the cone of unit normals from `cone[0]` to `cone[1]` (the shorter way
+/// round), widened by `slack_rad` on each side: `n` itself where it lies inside.
+fn into_cone(n: Vector2<f64>, cone: [Vector2<f64>; 2], slack_rad: f64) -> Vector2<f64> {
+    let angle = |u: &Vector2<f64>, v: &Vector2<f64>| (u.x * v.y - u.y * v.x).atan2(u.dot(v));
+    let [a, b] = cone;
+    let width = angle(&a, &b);
+    let (lo, hi) = if width >= 0.0 {
+        (-slack_rad, width + slack_rad)
+    } else {
+        (width - slack_rad, slack_rad)
+    };
+    let turn = angle(&a, &n).clamp(lo, hi);
+    let (sin, cos) = turn.sin_cos();
+    Vector2::new(a.x * cos - a.y * sin, a.x * sin + a.y * cos)
+}
 
 /// `max` that keeps a NaN (`f64::max` drops it).
 fn worst(a: f64, b: f64) -> f64 {
@@ -305,6 +333,51 @@ impl QuasiStatic {
                 worst(out.cone_violation_n, min_n - c.normal_force_n),
                 c.shear_force_n.abs() - bound,
             );
+            // The same cone in the wall's own frame: the normal the contact presses along
+            // (a link's own normal for a link resting on a corner or a crest, else the
+            // contact's) turned into the normals the wall can press with where the contact
+            // is (its normal on a smooth point, within what the point's gap allows on a
+            // curve; a corner's cone near a corner), and the force split along it. A
+            // contact whose normal is not the wall's fails here, by the force the wall
+            // cannot exert.
+            if let Some(x) = point_of(c)
+                && c.force_n().norm() > FORCE_ZERO_N
+            {
+                let wall = &self.walls()[c.wall];
+                let wp = wall.signed_distance(&x);
+                let slack_rad = if wp.curvature_per_m.is_finite() {
+                    wp.curvature_per_m.abs() * (wp.gap_m.abs() + NORMAL_SLACK_M)
+                } else {
+                    0.0
+                } + 1e-9;
+                let cone = wall.shape.normal_cone(&x, CORNER_REACH_M);
+                // A link resting on a corner or a crest is pressed along its own normal.
+                let pressed = match c.feature {
+                    Feature::Link { link } => {
+                        let d = ends[link] - start_of(link);
+                        let across = Vector2::new(-d.y, d.x) / d.norm();
+                        if across.dot(&c.normal) < 0.0 {
+                            -across
+                        } else {
+                            across
+                        }
+                    }
+                    Feature::Vertex { .. } | Feature::HairTip { .. } => c.normal,
+                };
+                let n = into_cone(pressed, cone, slack_rad);
+                let force = c.force_n();
+                let normal_n = force.dot(&n);
+                let shear_n = force.dot(&Vector2::new(-n.y, n.x));
+                let wall_bound = match c.law {
+                    FrictionLaw::Coulomb { mu } => mu * normal_n.max(0.0),
+                    FrictionLaw::Anchored { hold_shear_n, .. } => hold_shear_n,
+                };
+                let wall_bound = c.relaxed_shear_bound_n.unwrap_or(wall_bound);
+                out.cone_violation_n = worst(
+                    worst(out.cone_violation_n, min_n - normal_n),
+                    shear_n.abs() - wall_bound,
+                );
+            }
             match c.slip {
                 Slip::Stuck => out.stuck_slip_m = worst(out.stuck_slip_m, c.slip_m.abs()),
                 Slip::Forward | Slip::Backward => {
@@ -343,5 +416,74 @@ impl QuasiStatic {
         }
         out.penetration_m = worst(out.penetration_m, 0.0);
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::contact::ContactSettings;
+    use crate::{Chain, Polyline, SolidSide, Surface, SurfaceMap, Wall};
+
+    /// A frictionless wedge under a straight antenna, lowered onto its corner (link 2
+    /// rests on it) and the tip onto a line beside it: certified as solved. Each contact's
+    /// frame turned by `delta` (forces kept, so the contact's own cone still holds) fails
+    /// the cone in the wall's frame by the force the wall cannot exert, `N sin(delta)`.
+    #[test]
+    fn a_contact_pressing_off_the_walls_normal_fails_the_cone() {
+        let chain = Chain::builder(3)
+            .link_length_m(0.04)
+            .stiffness_nm_per_rad(0.02)
+            .build()
+            .unwrap();
+        let wedge = Polyline::new(
+            vec![
+                Vector2::new(0.055, -0.05),
+                Vector2::new(0.095, -0.01),
+                Vector2::new(0.135, -0.05),
+            ],
+            SolidSide::Right,
+        )
+        .unwrap();
+        let frictionless = SurfaceMap::uniform(Surface::Smooth { mu: 0.0 }).unwrap();
+        let theta = chain.rest_theta();
+        let mut sim = QuasiStatic::new(
+            chain,
+            vec![Wall::new(wedge, frictionless)],
+            Vector2::zeros(),
+            &theta,
+            ContactSettings::default(),
+        )
+        .unwrap();
+        for k in 1..=40 {
+            sim.step_to(Vector2::new(0.0, -0.02 * f64::from(k) / 40.0))
+                .unwrap();
+        }
+        let check = sim.check();
+        assert!(check.holds(1e-10, 1e-10, 1e-10), "{check:?}");
+        let loaded: Vec<usize> = (0..sim.pairs.len())
+            .filter(|&i| sim.pairs[i].normal_force_n > 1e-6)
+            .collect();
+        assert!(!loaded.is_empty(), "nothing touches");
+        let delta: f64 = 0.01;
+        for &i in &loaded {
+            let mut turned = sim.pairs.clone();
+            let geo = &mut turned[i].geo;
+            let (sin, cos) = delta.sin_cos();
+            let turn = |v: Vector2<f64>| Vector2::new(v.x * cos - v.y * sin, v.x * sin + v.y * cos);
+            geo.normal = turn(geo.normal);
+            geo.tangent = turn(geo.tangent);
+            let saved = std::mem::replace(&mut sim.pairs, turned);
+            let check = sim.check();
+            let expected = sim.pairs[i].normal_force_n * delta.sin();
+            assert!(
+                (check.cone_violation_n - expected).abs() < 1e-6 * expected,
+                "pair {i}: cone violation {} N, expected {expected} N",
+                check.cone_violation_n
+            );
+            sim.pairs = saved;
+        }
     }
 }

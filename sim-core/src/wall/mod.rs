@@ -245,6 +245,17 @@ impl WallShape {
         }
     }
 
+    /// The normals the wall can press with at its point nearest to `p_m`, as the two ends
+    /// of their cone (the same normal twice on a line, a sinusoid or an edge; a polyline
+    /// corner's two edge normals at the corner or within `within_m` of it).
+    pub fn normal_cone(&self, p_m: &Vector2<f64>, within_m: f64) -> [Vector2<f64>; 2] {
+        match self {
+            WallShape::Line(w) => [w.signed_distance(p_m).normal; 2],
+            WallShape::Polyline(w) => w.normal_cone(p_m, within_m),
+            WallShape::Sinusoid(w) => [w.signed_distance(p_m).normal; 2],
+        }
+    }
+
     /// The deepest (or closest) point of the segment `a -> b` (see [`SegmentContact`]).
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
         match self {
