@@ -373,9 +373,10 @@ fn non_finite_and_far_queries_answer_without_panicking() {
     }
 }
 
-/// The normals a wall presses with: one on an edge, a line or a sinusoid (the signed
-/// distance's), the two edges' at a polyline corner and within `within_m` of it along an
-/// edge, and the end edge's along the rays past the polyline's ends.
+/// The normals a wall presses with at a point's signed distance: one on an edge, a line or
+/// a sinusoid (the signed distance's), the two edges' at a polyline corner and within
+/// `within_m` of it along an edge, and the end edge's along the rays past the polyline's
+/// ends.
 #[test]
 fn normal_cones_are_an_edges_normal_or_a_corners_two() {
     // A V, solid below: edges (0,0)->(1,-1) and (1,-1)->(2,0); the corner at (1,-1).
@@ -392,35 +393,54 @@ fn normal_cones_are_an_edges_normal_or_a_corners_two() {
     assert!((first - v(s, s)).norm() < 1e-12 || (first - v(-s, -s)).norm() < 1e-12);
     assert!((first - second).norm() > 1.0, "two edges, two normals");
     let within_m = 1e-4;
-    assert_eq!(vee.shape.normal_cone(&v(0.5, 0.0), within_m), [first; 2]);
-    assert_eq!(vee.shape.normal_cone(&v(1.5, 0.0), within_m), [second; 2]);
+    assert_eq!(
+        vee.shape
+            .normal_cone(&vee.signed_distance(&v(0.5, 0.0)), within_m),
+        [first; 2]
+    );
+    assert_eq!(
+        vee.shape
+            .normal_cone(&vee.signed_distance(&v(1.5, 0.0)), within_m),
+        [second; 2]
+    );
     // On the corner, below it (nearest to the corner itself), and on the first edge 0.5e-4 m
     // (along it) from the corner.
     let near = v(1.0, -1.0) - v(s, -s) * 0.5e-4 + v(s, s) * 1e-9;
     for p in [v(1.0, -1.0), v(1.0, -1.5), near] {
         assert_eq!(
-            vee.shape.normal_cone(&p, within_m),
+            vee.shape.normal_cone(&vee.signed_distance(&p), within_m),
             [first, second],
             "at {p:?}"
         );
     }
     // 2e-4 m from the corner along the first edge: that edge's alone.
     let far = v(1.0, -1.0) - v(s, -s) * 2e-4 + v(s, s) * 1e-9;
-    assert_eq!(vee.shape.normal_cone(&far, within_m), [first; 2]);
+    assert_eq!(
+        vee.shape.normal_cone(&vee.signed_distance(&far), within_m),
+        [first; 2]
+    );
     // Past the ends, along the end rays.
-    assert_eq!(vee.shape.normal_cone(&v(-1.0, 1.5), within_m), [first; 2]);
-    assert_eq!(vee.shape.normal_cone(&v(3.0, 1.5), within_m), [second; 2]);
+    assert_eq!(
+        vee.shape
+            .normal_cone(&vee.signed_distance(&v(-1.0, 1.5)), within_m),
+        [first; 2]
+    );
+    assert_eq!(
+        vee.shape
+            .normal_cone(&vee.signed_distance(&v(3.0, 1.5)), within_m),
+        [second; 2]
+    );
     // A line and a sinusoid: the signed distance's normal.
     let line = Wall::smooth(Line::new(v(0.0, 0.1), 0.2, SolidSide::Left).unwrap());
     let p = v(0.3, -0.2);
     assert_eq!(
-        line.shape.normal_cone(&p, within_m),
+        line.shape.normal_cone(&line.signed_distance(&p), within_m),
         [line.signed_distance(&p).normal; 2]
     );
     let wave =
         Wall::smooth(Sinusoid::new(v(0.0, 0.1), 0.0, 0.01, 8.0, 0.3, SolidSide::Left).unwrap());
     assert_eq!(
-        wave.shape.normal_cone(&p, within_m),
+        wave.shape.normal_cone(&wave.signed_distance(&p), within_m),
         [wave.signed_distance(&p).normal; 2]
     );
 }

@@ -321,63 +321,22 @@ impl QuasiStatic {
         }
         // Cone, Coulomb's law and complementarity.
         for c in &contacts {
-            let (min_n, bound) = match c.law {
-                FrictionLaw::Coulomb { mu } => (0.0, mu * c.normal_force_n.max(0.0)),
-                FrictionLaw::Anchored {
-                    hold_shear_n,
-                    hold_tension_n,
-                } => (-hold_tension_n, hold_shear_n),
+            // `N >= N_min` and the shear bound at normal force `normal_n`.
+            let cone_at = |normal_n: f64| {
+                let (min_n, bound) = match c.law {
+                    FrictionLaw::Coulomb { mu } => (0.0, mu * normal_n.max(0.0)),
+                    FrictionLaw::Anchored {
+                        hold_shear_n,
+                        hold_tension_n,
+                    } => (-hold_tension_n, hold_shear_n),
+                };
+                (min_n, c.relaxed_shear_bound_n.unwrap_or(bound))
             };
-            let bound = c.relaxed_shear_bound_n.unwrap_or(bound);
+            let (min_n, bound) = cone_at(c.normal_force_n);
             out.cone_violation_n = worst(
                 worst(out.cone_violation_n, min_n - c.normal_force_n),
                 c.shear_force_n.abs() - bound,
             );
-            // The same cone in the wall's own frame: the normal the contact presses along
-            // (a link's own normal for a link resting on a corner or a crest, else the
-            // contact's) turned into the normals the wall can press with where the contact
-            // is (its normal on a smooth point, within what the point's gap allows on a
-            // curve; a corner's cone near a corner), and the force split along it. A
-            // contact whose normal is not the wall's fails here, by the force the wall
-            // cannot exert.
-            if let Some(x) = point_of(c)
-                && c.force_n().norm() > FORCE_ZERO_N
-            {
-                let wall = &self.walls()[c.wall];
-                let wp = wall.signed_distance(&x);
-                let slack_rad = if wp.curvature_per_m.is_finite() {
-                    wp.curvature_per_m.abs() * (wp.gap_m.abs() + NORMAL_SLACK_M)
-                } else {
-                    0.0
-                } + 1e-9;
-                let cone = wall.shape.normal_cone(&x, CORNER_REACH_M);
-                // A link resting on a corner or a crest is pressed along its own normal.
-                let pressed = match c.feature {
-                    Feature::Link { link } => {
-                        let d = ends[link] - start_of(link);
-                        let across = Vector2::new(-d.y, d.x) / d.norm();
-                        if across.dot(&c.normal) < 0.0 {
-                            -across
-                        } else {
-                            across
-                        }
-                    }
-                    Feature::Vertex { .. } | Feature::HairTip { .. } => c.normal,
-                };
-                let n = into_cone(pressed, cone, slack_rad);
-                let force = c.force_n();
-                let normal_n = force.dot(&n);
-                let shear_n = force.dot(&Vector2::new(-n.y, n.x));
-                let wall_bound = match c.law {
-                    FrictionLaw::Coulomb { mu } => mu * normal_n.max(0.0),
-                    FrictionLaw::Anchored { hold_shear_n, .. } => hold_shear_n,
-                };
-                let wall_bound = c.relaxed_shear_bound_n.unwrap_or(wall_bound);
-                out.cone_violation_n = worst(
-                    worst(out.cone_violation_n, min_n - normal_n),
-                    shear_n.abs() - wall_bound,
-                );
-            }
             match c.slip {
                 Slip::Stuck => out.stuck_slip_m = worst(out.stuck_slip_m, c.slip_m.abs()),
                 Slip::Forward | Slip::Backward => {
@@ -398,8 +357,43 @@ impl QuasiStatic {
             if let Some(x) = point_of(c)
                 && c.force_n().norm() > FORCE_ZERO_N
             {
-                let gap = self.walls()[c.wall].signed_distance(&x).gap_m;
-                out.separation_m = worst(out.separation_m, gap.abs());
+                let wall = &self.walls()[c.wall];
+                let wp = wall.signed_distance(&x);
+                out.separation_m = worst(out.separation_m, wp.gap_m.abs());
+                // The same cone in the wall's own frame: the normal the contact presses
+                // along (a link's own normal for a link resting on a corner or a crest,
+                // else the contact's) turned into the normals the wall can press with where
+                // the contact is (its normal on a smooth point, within what the point's gap
+                // allows on a curve; a corner's cone near a corner), and the force split
+                // along it. A contact whose normal is not the wall's fails here, by the
+                // force the wall cannot exert.
+                let slack_rad = if wp.curvature_per_m.is_finite() {
+                    wp.curvature_per_m.abs() * (wp.gap_m.abs() + NORMAL_SLACK_M)
+                } else {
+                    0.0
+                } + 1e-9;
+                let cone = wall.shape.normal_cone(&wp, CORNER_REACH_M);
+                let pressed = match c.feature {
+                    Feature::Link { link } => {
+                        let d = ends[link] - start_of(link);
+                        let across = Vector2::new(-d.y, d.x) / d.norm();
+                        if across.dot(&c.normal) < 0.0 {
+                            -across
+                        } else {
+                            across
+                        }
+                    }
+                    Feature::Vertex { .. } | Feature::HairTip { .. } => c.normal,
+                };
+                let n = into_cone(pressed, cone, slack_rad);
+                let force = c.force_n();
+                let normal_n = force.dot(&n);
+                let shear_n = force.dot(&Vector2::new(-n.y, n.x));
+                let (min_n, wall_bound) = cone_at(normal_n);
+                out.cone_violation_n = worst(
+                    worst(out.cone_violation_n, min_n - normal_n),
+                    shear_n.abs() - wall_bound,
+                );
             }
             for v in [c.normal_force_n, c.shear_force_n, c.slip_m] {
                 if !v.is_finite() {

@@ -245,14 +245,14 @@ impl WallShape {
         }
     }
 
-    /// The normals the wall can press with at its point nearest to `p_m`, as the two ends
-    /// of their cone (the same normal twice on a line, a sinusoid or an edge; a polyline
-    /// corner's two edge normals at the corner or within `within_m` of it).
-    pub fn normal_cone(&self, p_m: &Vector2<f64>, within_m: f64) -> [Vector2<f64>; 2] {
+    /// The normals the wall can press with at `wall_point` (this shape's
+    /// [`Self::signed_distance`] of some point), as the two ends of their cone: the
+    /// point's normal twice on a line, a sinusoid or an edge; a polyline corner's two edge
+    /// normals at the corner or within `within_m` of it.
+    pub fn normal_cone(&self, wall_point: &WallPoint, within_m: f64) -> [Vector2<f64>; 2] {
         match self {
-            WallShape::Line(w) => [w.signed_distance(p_m).normal; 2],
-            WallShape::Polyline(w) => w.normal_cone(p_m, within_m),
-            WallShape::Sinusoid(w) => [w.signed_distance(p_m).normal; 2],
+            WallShape::Line(_) | WallShape::Sinusoid(_) => [wall_point.normal; 2],
+            WallShape::Polyline(w) => w.normal_cone(wall_point, within_m),
         }
     }
 

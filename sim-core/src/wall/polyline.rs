@@ -377,23 +377,24 @@ impl Polyline {
         best
     }
 
-    /// The normals the wall can press with at the point of it nearest to `p_m`, as the two
-    /// ends of their cone: an edge's own normal twice, or, at an interior vertex or within
-    /// `within_m` of one along an edge, the normals of the vertex's two edges (before,
-    /// after). `O(edges)`, no allocation.
-    pub fn normal_cone(&self, p_m: &Vector2<f64>, within_m: f64) -> [Vector2<f64>; 2] {
+    /// The normals the wall can press with at `wall_point` (this polyline's
+    /// [`Self::signed_distance`] of some point), as the two ends of their cone: an edge's
+    /// own normal twice, or, at an interior vertex or within `within_m` of one along an
+    /// edge, the normals of the vertex's two edges (before, after). Found from the point's
+    /// arclength, `O(log edges)`, no allocation.
+    pub fn normal_cone(&self, wall_point: &WallPoint, within_m: f64) -> [Vector2<f64>; 2] {
         let last = self.tangents.len() - 1;
-        let vertex = match self.nearest(p_m).0 {
-            Nearest::Vertex(vertex) => vertex,
-            Nearest::Edge { edge, u_m } => {
-                if u_m <= within_m && edge > 0 {
-                    edge
-                } else if u_m >= self.lengths_m[edge] - within_m && edge < last {
-                    edge + 1
-                } else {
-                    return [self.normals[edge]; 2];
-                }
-            }
+        let s_m = wall_point.arclength_m;
+        // The edge whose stretch of arclength holds the point (the end rays beyond the
+        // first and last vertices belong to the end edges).
+        let edge = self.arclengths_m[1..=last].partition_point(|&a| a <= s_m);
+        let u_m = s_m - self.arclengths_m[edge];
+        let vertex = if u_m <= within_m && edge > 0 {
+            edge
+        } else if u_m >= self.lengths_m[edge] - within_m && edge < last {
+            edge + 1
+        } else {
+            return [self.normals[edge]; 2];
         };
         [self.normals[vertex - 1], self.normals[vertex]]
     }
