@@ -13,9 +13,11 @@ pub fn request_fifo(priority: u8) -> Result<(), String> {
     if !(1..=99).contains(&priority) {
         return Err(format!("priority {priority} is outside 1..=99"));
     }
-    let param = libc::sched_param {
-        sched_priority: i32::from(priority),
-    };
+    // musl's sched_param has more fields (the sporadic server's) than glibc's: start from
+    // zero and set the one that SCHED_FIFO reads.
+    // SAFETY: sched_param is plain integers (and timespecs of integers); all zero is valid.
+    let mut param: libc::sched_param = unsafe { std::mem::zeroed() };
+    param.sched_priority = i32::from(priority);
     // SAFETY: `param` is a valid sched_param that lives across the call; pid 0 is the
     // calling thread.
     let result = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) };
