@@ -6,23 +6,26 @@
 //!
 //! - **Acquisition and streaming run continuously**, from start to shutdown, on one clock
 //!   (`t_ns` in the stream is time since the daemon started): the polling thread reads every
-//!   segment on absolute deadlines; the motion thread samples the stage and the base at their
-//!   own rates and carries out motion commands; the hub thread publishes every poll to the
-//!   TCP clients, keeps per-segment health and sends a `status` line every second and on
-//!   every change.
+//!   segment on absolute deadlines; the motion thread (`motion.rs`, running the trial script
+//!   of `trial_script.rs`) homes the stage against its limit switch before any move, samples
+//!   the stage and the base at their own rates and carries out motion commands; the hub
+//!   thread publishes every poll to the TCP clients, keeps per-segment health and sends a
+//!   `status` line every second and on every change.
 //! - **A trial is a recorded window with its script**: `start_trial` (or the first trial, at
 //!   start) opens `<data_dir>/<name>.mcap`, runs the trial's base angle and stage moves, and
 //!   records every poll, stage and base sample until its duration has passed (duration 0:
-//!   until its moves are done), `stop_trial` or `stop_all`; then the file is finalized. Only
-//!   one trial runs at a time.
+//!   until its moves are done), `stop_trial` or `stop_all`, or until its stage loses its home
+//!   (a power cycle) or vanishes for 2 s with moves left; then the file is finalized. Only
+//!   one trial runs at a time; with hardware none starts by itself ([`first_trial_for`]).
 //!
 //! # Control rule
 //!
 //! `move_stage` and `set_base_angle` are carried out when no trial runs, and refused with the
 //! reason while one does: the trial's script owns the stage and the base, so a recording
 //! always shows the motion its metadata describes. `stop_trial` and `stop_all` always work;
-//! `stop_all` needs no token, kills the stage motion at once (the VXM's `K`) ahead of any
-//! command queued before it, and ends any trial. Whatever a trial or a client asks, the stage
+//! `stop_all` needs no token, kills the stage motion at once (the VXM's `K`, written from the
+//! client's thread through a second handle on the port, so never behind a query the motion
+//! thread waits on) ahead of any command queued before it, and ends any trial. Whatever a trial or a client asks, the stage
 //! never goes beyond the soft limits (the move is refused and nothing moves), nor faster than
 //! `stage.max_speed_mm_per_s`, and the base angle never leaves the servo's calibrated range.
 //!

@@ -1,7 +1,8 @@
 //! The simulated rig, used when no hardware is configured: a virtual I2C bus ([`SimBus`])
-//! whose segments run `firmware-segment`'s own logic, a [`FakeStage`] and a [`FakeServo`]
-//! that move in real time at their set speeds, and joint angles from sim-core's equilibrium
-//! solver as the stage carries the antenna along a configured wall.
+//! whose segments run `firmware-segment`'s own logic, a [`crate::FakeStage`] (homed against
+//! its limit switch like the VXM) and a [`crate::FakeServo`] that move in real time at their
+//! set speeds, and joint angles from sim-core's equilibrium solver as the stage carries the
+//! antenna along a configured wall.
 //!
 //! # Contact
 //! The physics is `antenna-sim-physics`' [`SimPhysics`] (shared with `antenna-monitor`'s

@@ -331,7 +331,8 @@ fn with_a_stage_configured_no_trial_starts_by_itself_and_it_waits_idle() {
     let vxm = VxmEmulator::spawn(master);
     let config = dir.join("robot.toml");
     std::fs::write(&config, format!("[stage]\nport = \"{port}\"\n")).unwrap();
-    let (mut child, _addr, mut lines) = spawn(&["--config", config.to_str().unwrap()], &dir);
+    let args = ["--config", config.to_str().unwrap()];
+    let (mut child, _addr, mut lines) = spawn(&args, &dir);
     assert!(
         lines
             .by_ref()

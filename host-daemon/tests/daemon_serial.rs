@@ -533,6 +533,7 @@ fn stop_all_reaches_the_vxm_within_20_ms_while_a_query_to_it_hangs() {
         std::thread::sleep(Duration::from_millis(50));
     }
     latencies.sort();
+    eprintln!("stop_all to K at the VXM, sorted: {latencies:?}");
     let median = latencies[latencies.len() / 2];
     // The bound is the median (a loaded machine with two shared cores may stall one stop);
     // the worst stays well below the 2 s a stop behind the query would take.
