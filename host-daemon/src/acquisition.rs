@@ -8,16 +8,15 @@
 //!   a counter that has not moved marks the segment stale ([`PollRecord::stale_mask`]). A
 //!   NACK, a PEC error or a stale counter is recorded in the segment's health and the poll
 //!   goes on.
-//! - **Motion** ([`spawn_motion`]): the trial's script (base angle, then the stage moves with
-//!   their pauses) on a [`Rig`], with the stage position and the base angle sampled at their
-//!   own rates under the same clock and sent into the same stream.
+//! - **Motion**: the motion thread (`crate::motion`, the daemon's one motion loop) samples
+//!   the stage position and the base angle at their own rates under the same clock and sends
+//!   them into the same stream.
 //! - **The stream** ([`EventSender`]): a bounded channel written with `try_send`. A full
 //!   consumer queue never delays polling: the event is dropped and counted
 //!   ([`EventSender::dropped`]); size the queue so that never happens (the main loop
 //!   forwards events to the recorder and the TCP server, which have their own queues).
 
 use crate::clock::{Schedule, TrialClock};
-use crate::config::TrialConfig;
 use crate::poll::{CounterCheck, Poller, SegmentHealth, SegmentReading};
 use embedded_hal::i2c::I2c;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -252,178 +251,6 @@ where
 
 fn nanos(d: Duration) -> u64 {
     u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
-}
-
-/// The moving parts of a rig as the motion thread drives them: the stage (through its soft
-/// limits) and the base servo. `now` is the time since the trial started (a simulated rig
-/// advances its models to it; hardware ignores it).
-pub trait Rig: Send {
-    /// Starts a relative stage move; refuses (without moving) one beyond the soft limits.
-    fn start_move_mm(
-        &mut self,
-        distance_mm: f64,
-        speed_mm_per_s: f64,
-        now: Duration,
-    ) -> anyhow::Result<()>;
-    /// Whether the stage is still moving.
-    fn stage_moving(&mut self, now: Duration) -> anyhow::Result<bool>;
-    /// The stage position, millimetres from home.
-    fn stage_mm(&mut self, now: Duration) -> anyhow::Result<f64>;
-    /// Sets the base angle, radians.
-    fn set_base_angle_rad(&mut self, angle_rad: f64, now: Duration) -> anyhow::Result<()>;
-    /// The base angle, radians.
-    fn base_angle_rad(&mut self, now: Duration) -> anyhow::Result<f64>;
-    /// Stops the stage at once.
-    fn stop(&mut self, now: Duration) -> anyhow::Result<()>;
-}
-
-/// Sampling rates of the motion thread.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct MotionSettings {
-    /// Stage position sampling period.
-    pub stage_period: Duration,
-    /// Base angle sampling period.
-    pub base_period: Duration,
-}
-
-/// What the motion thread hands back.
-#[derive(Debug)]
-pub struct MotionReport<R> {
-    /// The rig.
-    pub rig: R,
-    /// Moves started.
-    pub moves_started: usize,
-    /// Moves refused (beyond the soft limits, or the stage failed).
-    pub moves_refused: usize,
-    /// Whether every move had finished (or been refused) when the thread stopped.
-    pub script_done: bool,
-}
-
-enum Step {
-    Idle,
-    Moving,
-    Pausing(Duration),
-}
-
-/// Starts the motion thread: sets the trial's base angle, runs its moves one after another
-/// and samples the stage and the base at their own periods, until `stop` is set. When the
-/// script is done it sets `script_done` (the caller decides whether the trial ends then).
-pub fn spawn_motion<R: Rig + 'static>(
-    mut rig: R,
-    trial: TrialConfig,
-    clock: TrialClock,
-    settings: MotionSettings,
-    events: EventSender,
-    stop: Arc<AtomicBool>,
-    script_done: Arc<AtomicBool>,
-) -> std::io::Result<JoinHandle<MotionReport<R>>> {
-    std::thread::Builder::new()
-        .name("antennad-motion".to_owned())
-        .spawn(move || {
-            let note = |t: Duration, text: String| {
-                events.send(AcquisitionEvent::Note {
-                    t_ns: nanos(t),
-                    text,
-                });
-            };
-            let mut stage = Schedule::new(clock, settings.stage_period);
-            let mut base = Schedule::new(clock, settings.base_period);
-            let now = clock.elapsed();
-            if let Err(e) = rig.set_base_angle_rad(trial.base_angle_deg.to_radians(), now) {
-                note(now, format!("base angle refused: {e:#}"));
-            }
-            let mut moves = trial.moves.iter().copied().enumerate();
-            let mut step = Step::Idle;
-            let mut last_started = None;
-            let mut started = 0;
-            let mut refused = 0;
-            let mut done = false;
-            while !stop.load(Ordering::Relaxed) {
-                // Wake at whichever sampling deadline comes first.
-                let stage_next = stage.next_deadline() <= base.next_deadline();
-                let tick = if stage_next {
-                    stage.wait_next()
-                } else {
-                    base.wait_next()
-                };
-                let now = tick.woke;
-                if stage_next {
-                    match rig.stage_mm(now) {
-                        Ok(position_mm) => events.send(AcquisitionEvent::Stage {
-                            t_ns: nanos(now),
-                            position_mm,
-                        }),
-                        Err(e) => note(now, format!("stage position unavailable: {e:#}")),
-                    }
-                } else {
-                    match rig.base_angle_rad(now) {
-                        Ok(angle_rad) => events.send(AcquisitionEvent::Base {
-                            t_ns: nanos(now),
-                            angle_rad,
-                        }),
-                        Err(e) => note(now, format!("base angle unavailable: {e:#}")),
-                    }
-                }
-                step = match step {
-                    Step::Moving => match rig.stage_moving(now) {
-                        Ok(true) => Step::Moving,
-                        Ok(false) => {
-                            let pause = last_started
-                                .and_then(|j: usize| trial.moves.get(j))
-                                .map_or(0.0, |m| m.pause_s);
-                            Step::Pausing(now + Duration::from_secs_f64(pause))
-                        }
-                        Err(e) => {
-                            note(now, format!("stage failed: {e:#}"));
-                            Step::Moving
-                        }
-                    },
-                    Step::Pausing(until) if now < until => Step::Pausing(until),
-                    Step::Pausing(_) | Step::Idle => match moves.next() {
-                        Some((j, m)) => {
-                            match rig.start_move_mm(m.distance_mm, m.speed_mm_per_s, now) {
-                                Ok(()) => {
-                                    last_started = Some(j);
-                                    started += 1;
-                                    note(
-                                        now,
-                                        format!(
-                                            "move {}: {:+.1} mm at {} mm/s",
-                                            j + 1,
-                                            m.distance_mm,
-                                            m.speed_mm_per_s
-                                        ),
-                                    );
-                                    Step::Moving
-                                }
-                                Err(e) => {
-                                    refused += 1;
-                                    note(now, format!("move {} refused: {e:#}", j + 1));
-                                    Step::Idle
-                                }
-                            }
-                        }
-                        None => {
-                            if !done {
-                                done = true;
-                                script_done.store(true, Ordering::Relaxed);
-                            }
-                            Step::Idle
-                        }
-                    },
-                };
-            }
-            let now = clock.elapsed();
-            if let Err(e) = rig.stop(now) {
-                note(now, format!("stage stop failed: {e:#}"));
-            }
-            MotionReport {
-                rig,
-                moves_started: started,
-                moves_refused: refused,
-                script_done: done,
-            }
-        })
 }
 
 /// A value shared between a writer thread and the polling thread (the simulated rig's

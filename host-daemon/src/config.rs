@@ -136,6 +136,14 @@ impl Default for BusConfig {
     }
 }
 
+impl Config {
+    /// Whether any hardware is configured (the bus, the stage or the servo is not `sim`):
+    /// then no trial starts by itself.
+    pub fn has_hardware(&self) -> bool {
+        !self.bus.is_sim() || self.stage.port != "sim" || self.servo.port != "sim"
+    }
+}
+
 impl BusConfig {
     /// Whether the bus is the simulated one.
     pub fn is_sim(&self) -> bool {
@@ -209,7 +217,16 @@ pub struct StageConfig {
     pub max_speed_mm_per_s: f64,
     /// How often the position is sampled, hertz.
     pub sample_hz: f64,
+    /// Which limit switch the stage homes against (the near end, where `min_mm` is):
+    /// `"negative"` (the VXM's `I1M-0`) or `"positive"` (`I1M0`).
+    pub homing_direction: HomingDirection,
+    /// Homing speed, millimetres per second (at most `max_speed_mm_per_s`).
+    pub homing_speed_mm_per_s: f64,
+    /// How long homing may take before it counts as failed (the stage is killed), seconds.
+    pub homing_timeout_s: f64,
 }
+
+pub use crate::stage::HomingDirection;
 
 impl Default for StageConfig {
     fn default() -> Self {
@@ -222,6 +239,9 @@ impl Default for StageConfig {
             max_mm: 300.0,
             max_speed_mm_per_s: 50.0,
             sample_hz: 50.0,
+            homing_direction: HomingDirection::Negative,
+            homing_speed_mm_per_s: 10.0,
+            homing_timeout_s: 60.0,
         }
     }
 }
@@ -711,6 +731,20 @@ impl Config {
         }
         if !rate(self.stage.sample_hz) {
             return fail("stage.sample_hz", "must be in (0, 10000]".to_owned());
+        }
+        if !(positive(self.stage.homing_speed_mm_per_s)
+            && self.stage.homing_speed_mm_per_s <= self.stage.max_speed_mm_per_s)
+        {
+            return fail(
+                "stage.homing_speed_mm_per_s",
+                format!(
+                    "must be in (0, stage.max_speed_mm_per_s = {}]",
+                    self.stage.max_speed_mm_per_s
+                ),
+            );
+        }
+        if !(positive(self.stage.homing_timeout_s) && self.stage.homing_timeout_s <= 3600.0) {
+            return fail("stage.homing_timeout_s", "must be in (0, 3600]".to_owned());
         }
         if let Err(e) = self.pulse_calibration() {
             return fail("servo.pulse_b_us", e.to_string());

@@ -6,23 +6,26 @@
 //!
 //! - **Acquisition and streaming run continuously**, from start to shutdown, on one clock
 //!   (`t_ns` in the stream is time since the daemon started): the polling thread reads every
-//!   segment on absolute deadlines; the motion thread samples the stage and the base at their
-//!   own rates and carries out motion commands; the hub thread publishes every poll to the
-//!   TCP clients, keeps per-segment health and sends a `status` line every second and on
-//!   every change.
+//!   segment on absolute deadlines; the motion thread (`motion.rs`, running the trial script
+//!   of `trial_script.rs`) homes the stage against its limit switch before any move, samples
+//!   the stage and the base at their own rates and carries out motion commands; the hub
+//!   thread publishes every poll to the TCP clients, keeps per-segment health and sends a
+//!   `status` line every second and on every change.
 //! - **A trial is a recorded window with its script**: `start_trial` (or the first trial, at
 //!   start) opens `<data_dir>/<name>.mcap`, runs the trial's base angle and stage moves, and
 //!   records every poll, stage and base sample until its duration has passed (duration 0:
-//!   until its moves are done), `stop_trial` or `stop_all`; then the file is finalized. Only
-//!   one trial runs at a time.
+//!   until its moves are done), `stop_trial` or `stop_all`, or until its stage loses its home
+//!   (a power cycle) or vanishes for 2 s with moves left; then the file is finalized. Only
+//!   one trial runs at a time; with hardware none starts by itself ([`first_trial_for`]).
 //!
 //! # Control rule
 //!
 //! `move_stage` and `set_base_angle` are carried out when no trial runs, and refused with the
 //! reason while one does: the trial's script owns the stage and the base, so a recording
 //! always shows the motion its metadata describes. `stop_trial` and `stop_all` always work;
-//! `stop_all` needs no token, kills the stage motion at once (the VXM's `K`) ahead of any
-//! command queued before it, and ends any trial. Whatever a trial or a client asks, the stage
+//! `stop_all` needs no token, kills the stage motion at once (the VXM's `K`, written from the
+//! client's thread through a second handle on the port, so never behind a query the motion
+//! thread waits on) ahead of any command queued before it, and ends any trial. Whatever a trial or a client asks, the stage
 //! never goes beyond the soft limits (the move is refused and nothing moves), nor faster than
 //! `stage.max_speed_mm_per_s`, and the base angle never leaves the servo's calibrated range.
 //!
@@ -56,14 +59,17 @@ use crate::acquisition::{
     AcquisitionEvent, EventSender, HealthChange, PollRecord, PollSettings, Shared, event_channel,
     spawn_poller,
 };
-use crate::clock::{Schedule, TrialClock};
-use crate::config::{Config, SimFaultKind, TrialConfig};
+use crate::clock::TrialClock;
+use crate::config::{Config, SimFaultKind};
 use crate::free_space::{FreeSpace, StatvfsFreeSpace};
+use crate::motion::{MotionCommand, MotionShared, MoveTarget, Reply, RigStatus, spawn_motion};
 use crate::net::{ControlHandler, ControlToken, ServerLog, ServerOptions, StreamServer};
 use crate::poll::{PollError, Poller, SegmentHealth};
-use crate::rig::{DaemonRig, RigError};
+use crate::rig::DaemonRig;
 use crate::samples::{record_sample, stream_sample};
 use crate::sim_rig::{SimState, sense, sim_bus};
+use crate::trial_script::ScriptEnds;
+use crate::vxm::VxmKill;
 use crate::{SegmentFault, SimBus};
 use antenna_data::record::{
     LogMessage, RecordCounts, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
@@ -77,8 +83,8 @@ use anyhow::{Context, Result, anyhow, bail};
 use std::collections::{BTreeMap, VecDeque};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, SyncSender, channel, sync_channel};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, Sender, channel, sync_channel};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -92,7 +98,8 @@ const LOG_LINES_KEPT: usize = 4000;
 #[derive(Debug, Clone)]
 pub struct DaemonOptions {
     /// Start a trial at once: `Some(None)` the configuration's first trial, `Some(Some(name))`
-    /// the one called `name`, `None` none (wait for `start_trial`).
+    /// the one called `name`, `None` none (wait for `start_trial`); see [`first_trial_for`]
+    /// for antennad's rule. Its stage moves wait until the stage is homed.
     pub first_trial: Option<Option<String>>,
     /// Overrides the first trial's duration (zero: until its moves are done).
     pub first_trial_duration: Option<Duration>,
@@ -127,6 +134,25 @@ impl Default for DaemonOptions {
             queue: 16_384,
             free_space: Arc::new(StatvfsFreeSpace),
         }
+    }
+}
+
+/// The trial antennad starts by itself ([`DaemonOptions::first_trial`]): none if `idle`;
+/// the one called `named` if given (after homing, with hardware); otherwise the
+/// configuration's first trial on the simulated rig only. With any hardware configured
+/// ([`Config::has_hardware`]) nothing starts by itself: a restart (systemd's `Restart=`, a
+/// crash, a power blip) must not drive the stage from wherever it is; antennad waits idle for
+/// a client's `start_trial`.
+pub fn first_trial_for(
+    config: &Config,
+    named: Option<String>,
+    idle: bool,
+) -> Option<Option<String>> {
+    match (idle, named) {
+        (true, _) => None,
+        (false, Some(name)) => Some(Some(name)),
+        (false, None) if config.has_hardware() => None,
+        (false, None) => Some(None),
     }
 }
 
@@ -270,42 +296,6 @@ impl Log {
     }
 }
 
-/// Whether the stage and the servo answer, as the motion thread last found them.
-#[derive(Debug)]
-struct RigStatus {
-    stage: AtomicBool,
-    servo: AtomicBool,
-}
-
-/// Where a commanded stage move goes, millimetres.
-#[derive(Debug, Clone, Copy)]
-enum MoveTarget {
-    To(f64),
-    By(f64),
-}
-
-type Reply = SyncSender<Result<String, String>>;
-
-enum MotionCommand {
-    RunScript {
-        id: u64,
-        trial: Box<TrialConfig>,
-    },
-    EndScript,
-    Move {
-        target: MoveTarget,
-        speed_mm_per_s: f64,
-        reply: Reply,
-    },
-    SetBase {
-        angle_deg: f64,
-        reply: Reply,
-    },
-    StopAll {
-        reply: Reply,
-    },
-}
-
 enum HubRequest {
     Start {
         name: String,
@@ -337,6 +327,9 @@ struct DaemonControl {
     /// Set by `stop_all` before its command is queued: the motion thread stops before it
     /// carries out anything else, and cancels the moves queued ahead of the stop.
     stop_pending: Arc<AtomicBool>,
+    /// The VXM's kill line: `stop_all` sends `K` through it from the client's thread first,
+    /// so the kill never waits behind a query the motion thread is waiting on.
+    stage_kill: Option<VxmKill>,
 }
 
 impl DaemonControl {
@@ -411,6 +404,10 @@ impl ControlHandler for DaemonControl {
                 })
             }
             ControlCommand::StopAll => {
+                if let Some(kill) = &self.stage_kill {
+                    // Best effort: the motion thread kills again through the driver.
+                    let _ = kill.kill();
+                }
                 self.stop_pending.store(true, Ordering::SeqCst);
                 let stopped = ask(&self.motion()?, |reply| MotionCommand::StopAll { reply });
                 let ended = ask(&self.hub()?, |reply| HubRequest::Stop {
@@ -531,45 +528,31 @@ impl Daemon {
             }
         };
         let rig_description = format!("{}, {}", rig.stage_description(), rig.servo_description());
-        let rig_status = Arc::new(RigStatus {
-            stage: AtomicBool::new(true),
-            servo: AtomicBool::new(true),
-        });
+        let rig_status = Arc::new(RigStatus::default());
+        let stage_kill = rig.stage_kill();
 
         let (motion_tx, motion_rx) = channel();
         let (hub_tx, hub_rx) = channel();
         let trial_state = Arc::new(Mutex::new(None));
-        let script_done = Arc::new(AtomicU64::new(0));
+        let script_ends = Arc::new(ScriptEnds::default());
         let stop_pending = Arc::new(AtomicBool::new(false));
-        let motion = {
-            let stop_pending = Arc::clone(&stop_pending);
-            let events = events.clone();
-            let stop = Arc::clone(&stop_threads);
-            let status = Arc::clone(&rig_status);
-            let done = Arc::clone(&script_done);
-            let periods = (
+        let motion = spawn_motion(
+            rig,
+            clock,
+            (
                 Duration::from_secs_f64(1.0 / config.stage.sample_hz),
                 Duration::from_secs_f64(1.0 / config.servo.sample_hz),
-            );
-            std::thread::Builder::new()
-                .name("antennad-motion".to_owned())
-                .spawn(move || {
-                    motion_loop(
-                        rig,
-                        clock,
-                        periods,
-                        &events,
-                        MotionInputs {
-                            commands: &motion_rx,
-                            stop_pending: &stop_pending,
-                        },
-                        &stop,
-                        &status,
-                        &done,
-                    )
-                })
-                .context("starting the motion thread")?
-        };
+            ),
+            events.clone(),
+            MotionShared {
+                commands: motion_rx,
+                stop_pending: Arc::clone(&stop_pending),
+                stop: Arc::clone(&stop_threads),
+                status: Arc::clone(&rig_status),
+                script_ends: Arc::clone(&script_ends),
+            },
+        )
+        .context("starting the motion thread")?;
 
         let server = if options.serve {
             let handler = Arc::new(DaemonControl {
@@ -578,6 +561,7 @@ impl Daemon {
                 trial: Arc::clone(&trial_state),
                 max_speed_mm_per_s: config.stage.max_speed_mm_per_s,
                 stop_pending: Arc::clone(&stop_pending),
+                stage_kill,
             });
             let server_log = log.clone();
             let server_options = ServerOptions {
@@ -651,7 +635,7 @@ impl Daemon {
             trial_state: Arc::clone(&trial_state),
             next_trial_id: 1,
             motion: motion_tx,
-            script_done,
+            script_ends,
             rig_status,
             stage_mm: None,
             base_rad: None,
@@ -887,7 +871,7 @@ struct Hub {
     trial_state: Arc<Mutex<Option<String>>>,
     next_trial_id: u64,
     motion: Sender<MotionCommand>,
-    script_done: Arc<AtomicU64>,
+    script_ends: Arc<ScriptEnds>,
     rig_status: Arc<RigStatus>,
     stage_mm: Option<f64>,
     base_rad: Option<f64>,
@@ -1153,9 +1137,15 @@ impl Hub {
             }
         }
         let Some(trial) = &self.trial else { return };
+        if let Some(why) = self.script_ends.failure(trial.id) {
+            self.end_trial(&why);
+            return;
+        }
         let elapsed_ns = self.clock.elapsed_ns().saturating_sub(trial.start_ns);
         let why = if trial.duration.is_zero() {
-            (self.script_done.load(Ordering::Relaxed) == trial.id).then_some("its moves are done")
+            self.script_ends
+                .is_done(trial.id)
+                .then_some("its moves are done")
         } else {
             (u128::from(elapsed_ns) >= trial.duration.as_nanos()).then_some("its duration passed")
         };
@@ -1378,360 +1368,4 @@ fn sample_line(
     }
     let stage = stage_mm.map_or("     ---".to_owned(), |mm| format!("{mm:8.1}"));
     format!("{t_s:7.2} {stage} {angles}   {touches}")
-}
-
-/// A trial's script on the motion thread.
-struct Script {
-    id: u64,
-    trial: Box<TrialConfig>,
-    next_move: usize,
-    step: Step,
-}
-
-enum Step {
-    Idle,
-    Moving(usize),
-    Pausing(Duration),
-    Done,
-}
-
-/// Notes from the motion thread: a repeated failure is sent once a second, not every sample.
-struct Notes<'a> {
-    events: &'a EventSender,
-    last: Option<(String, Duration)>,
-}
-
-impl Notes<'_> {
-    fn send(&mut self, now: Duration, text: String) {
-        if let Some((last, at)) = &self.last
-            && *last == text
-            && now < *at + Duration::from_secs(1)
-        {
-            return;
-        }
-        self.last = Some((text.clone(), now));
-        self.events.send(AcquisitionEvent::Note {
-            t_ns: u64::try_from(now.as_nanos()).unwrap_or(u64::MAX),
-            text,
-        });
-    }
-}
-
-fn nanos(d: Duration) -> u64 {
-    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
-}
-
-/// What the motion thread is told: its commands, and the flag `stop_all` raises ahead of
-/// its own command.
-struct MotionInputs<'a> {
-    commands: &'a Receiver<MotionCommand>,
-    stop_pending: &'a AtomicBool,
-}
-
-/// The motion thread: samples the stage and the base at their own rates, carries out motion
-/// commands at once (a `stop_all` ahead of anything queued before it), runs a trial's script,
-/// and reports the stage and the servo vanishing and coming back.
-#[allow(clippy::too_many_arguments)]
-fn motion_loop(
-    mut rig: DaemonRig,
-    clock: TrialClock,
-    (stage_period, base_period): (Duration, Duration),
-    events: &EventSender,
-    MotionInputs {
-        commands,
-        stop_pending,
-    }: MotionInputs<'_>,
-    stop: &AtomicBool,
-    status: &RigStatus,
-    script_done: &AtomicU64,
-) {
-    let mut stage_schedule = Schedule::new(clock, stage_period);
-    let mut base_schedule = Schedule::new(clock, base_period);
-    let mut notes = Notes { events, last: None };
-    let mut script: Option<Script> = None;
-    let mut stage_ok = true;
-    let mut servo_ok = true;
-    while !stop.load(Ordering::Relaxed) {
-        if stop_pending.swap(false, Ordering::SeqCst) {
-            let _ = stop_first(&mut rig, commands, clock.elapsed(), &mut script, &mut notes);
-        }
-        let stage_next = stage_schedule.next_deadline() <= base_schedule.next_deadline();
-        let due = stage_schedule
-            .next_deadline()
-            .min(base_schedule.next_deadline());
-        let now = clock.elapsed();
-        if due > now {
-            match commands.recv_timeout((due - now).min(Duration::from_millis(50))) {
-                Ok(command) => {
-                    let now = clock.elapsed();
-                    if stop_pending.swap(false, Ordering::SeqCst) {
-                        // The stop was queued behind this command: it goes first.
-                        let kept = on_stop_pending(command);
-                        let stopped = stop_first(&mut rig, commands, now, &mut script, &mut notes);
-                        if let Some(MotionCommand::StopAll { reply }) = kept {
-                            let _ = reply.send(stopped);
-                        }
-                    } else {
-                        on_motion_command(&mut rig, command, now, &mut script, &mut notes);
-                    }
-                    check_availability(&rig, &mut stage_ok, &mut servo_ok, status, &mut notes, now);
-                    continue;
-                }
-                Err(RecvTimeoutError::Timeout) => {
-                    if clock.elapsed() < due {
-                        continue;
-                    }
-                }
-                Err(RecvTimeoutError::Disconnected) => {
-                    std::thread::sleep(due - now);
-                }
-            }
-        }
-        let tick = if stage_next {
-            stage_schedule.wait_next()
-        } else {
-            base_schedule.wait_next()
-        };
-        let now = tick.woke;
-        if stage_next {
-            match rig.stage_mm(now) {
-                Ok(position_mm) => events.send(AcquisitionEvent::Stage {
-                    t_ns: nanos(now),
-                    position_mm,
-                }),
-                Err(RigError::Unavailable { .. }) => {}
-                Err(e) => notes.send(now, format!("stage position unavailable: {e}")),
-            }
-        } else {
-            match rig.base_angle_rad(now) {
-                Ok(angle_rad) => events.send(AcquisitionEvent::Base {
-                    t_ns: nanos(now),
-                    angle_rad,
-                }),
-                Err(RigError::Unavailable { .. }) => {}
-                Err(e) => notes.send(now, format!("base angle unavailable: {e}")),
-            }
-        }
-        if let Some(s) = &mut script {
-            step_script(&mut rig, s, now, &mut notes);
-            if matches!(s.step, Step::Done) {
-                script_done.store(s.id, Ordering::Relaxed);
-            }
-        }
-        check_availability(&rig, &mut stage_ok, &mut servo_ok, status, &mut notes, now);
-    }
-    if let Err(e) = rig.stop(clock.elapsed()) {
-        notes.send(clock.elapsed(), format!("stopping the stage failed: {e}"));
-    }
-}
-
-/// A command that was queued ahead of a `stop_all`: a move or a base angle is cancelled
-/// (answered so), a script is dropped; a stop is kept to be answered.
-fn on_stop_pending(command: MotionCommand) -> Option<MotionCommand> {
-    match command {
-        MotionCommand::Move { reply, .. } | MotionCommand::SetBase { reply, .. } => {
-            let _ = reply.send(Err(
-                "cancelled: a stop_all came before it was carried out".to_owned()
-            ));
-            None
-        }
-        MotionCommand::RunScript { .. } | MotionCommand::EndScript => None,
-        stop @ MotionCommand::StopAll { .. } => Some(stop),
-    }
-}
-
-/// Carries out a `stop_all` before anything else: stops the stage and the script, and
-/// answers every command queued before the stop (moves cancelled, stops done).
-fn stop_first(
-    rig: &mut DaemonRig,
-    commands: &Receiver<MotionCommand>,
-    now: Duration,
-    script: &mut Option<Script>,
-    notes: &mut Notes<'_>,
-) -> Result<String, String> {
-    *script = None;
-    let stopped = match rig.stop(now) {
-        Ok(()) => Ok("stage stopped".to_owned()),
-        Err(e) => Err(format!("stopping the stage failed: {e}")),
-    };
-    let (Ok(text) | Err(text)) = &stopped;
-    notes.send(now, format!("stop_all: {text}"));
-    while let Ok(command) = commands.try_recv() {
-        if let Some(MotionCommand::StopAll { reply }) = on_stop_pending(command) {
-            let _ = reply.send(stopped.clone());
-        }
-    }
-    stopped
-}
-
-fn check_availability(
-    rig: &DaemonRig,
-    stage_ok: &mut bool,
-    servo_ok: &mut bool,
-    status: &RigStatus,
-    notes: &mut Notes<'_>,
-    now: Duration,
-) {
-    let stage = rig.stage_available();
-    if stage != *stage_ok {
-        *stage_ok = stage;
-        status.stage.store(stage, Ordering::Relaxed);
-        notes.send(
-            now,
-            if stage {
-                format!(
-                    "stage back: {} reopened and on line; stage samples resume",
-                    rig.stage_description()
-                )
-            } else {
-                format!(
-                    "stage unavailable: {} vanished; polling and recording go on without stage \
-                     samples, reopening it every {} ms",
-                    rig.stage_description(),
-                    crate::rig::REOPEN_INTERVAL.as_millis()
-                )
-            },
-        );
-    }
-    let servo = rig.servo_available();
-    if servo != *servo_ok {
-        *servo_ok = servo;
-        status.servo.store(servo, Ordering::Relaxed);
-        notes.send(
-            now,
-            if servo {
-                format!("servo back: {} reopened", rig.servo_description())
-            } else {
-                format!(
-                    "servo unavailable: {} vanished; polling and recording go on without base \
-                     samples, reopening it every {} ms",
-                    rig.servo_description(),
-                    crate::rig::REOPEN_INTERVAL.as_millis()
-                )
-            },
-        );
-    }
-}
-
-fn on_motion_command(
-    rig: &mut DaemonRig,
-    command: MotionCommand,
-    now: Duration,
-    script: &mut Option<Script>,
-    notes: &mut Notes<'_>,
-) {
-    match command {
-        MotionCommand::RunScript { id, trial } => {
-            if let Err(e) = rig.set_base_angle_rad(trial.base_angle_deg.to_radians(), now) {
-                notes.send(now, format!("base angle refused: {e}"));
-            }
-            *script = Some(Script {
-                id,
-                trial,
-                next_move: 0,
-                step: Step::Idle,
-            });
-        }
-        MotionCommand::EndScript => {
-            if script.take().is_some()
-                && let Err(e) = rig.stop(now)
-            {
-                notes.send(now, format!("stopping the stage failed: {e}"));
-            }
-        }
-        MotionCommand::Move {
-            target,
-            speed_mm_per_s,
-            reply,
-        } => {
-            let result = match target {
-                MoveTarget::To(mm) => rig.start_move_to_mm(mm, speed_mm_per_s, now),
-                MoveTarget::By(mm) => rig.start_move_mm(mm, speed_mm_per_s, now),
-            };
-            let answer = match result {
-                Ok(()) => {
-                    let text = match target {
-                        MoveTarget::To(mm) => {
-                            format!("stage moving to {mm:.1} mm at {speed_mm_per_s} mm/s")
-                        }
-                        MoveTarget::By(mm) => {
-                            format!("stage moving {mm:+.1} mm at {speed_mm_per_s} mm/s")
-                        }
-                    };
-                    notes.send(now, text.clone());
-                    Ok(text)
-                }
-                Err(e) => {
-                    let text = format!("move_stage refused: {e}");
-                    notes.send(now, text.clone());
-                    Err(text)
-                }
-            };
-            let _ = reply.send(answer);
-        }
-        MotionCommand::SetBase { angle_deg, reply } => {
-            let answer = match rig.set_base_angle_rad(angle_deg.to_radians(), now) {
-                Ok(()) => Ok(format!("base angle set to {angle_deg} deg")),
-                Err(e) => Err(format!("set_base_angle refused: {e}")),
-            };
-            let (Ok(text) | Err(text)) = &answer;
-            notes.send(now, text.clone());
-            let _ = reply.send(answer);
-        }
-        MotionCommand::StopAll { reply } => {
-            *script = None;
-            let answer = match rig.stop(now) {
-                Ok(()) => Ok("stage stopped".to_owned()),
-                Err(e) => Err(format!("stopping the stage failed: {e}")),
-            };
-            let (Ok(text) | Err(text)) = &answer;
-            notes.send(now, format!("stop_all: {text}"));
-            let _ = reply.send(answer);
-        }
-    }
-}
-
-fn step_script(rig: &mut DaemonRig, script: &mut Script, now: Duration, notes: &mut Notes<'_>) {
-    script.step = match std::mem::replace(&mut script.step, Step::Idle) {
-        Step::Moving(j) => match rig.stage_moving(now) {
-            Ok(true) => Step::Moving(j),
-            Ok(false) => {
-                let pause = script.trial.moves.get(j).map_or(0.0, |m| m.pause_s);
-                Step::Pausing(now + Duration::from_secs_f64(pause))
-            }
-            Err(e) => {
-                notes.send(now, format!("stage failed: {e}"));
-                Step::Moving(j)
-            }
-        },
-        Step::Pausing(until) if now < until => Step::Pausing(until),
-        Step::Done => Step::Done,
-        Step::Pausing(_) | Step::Idle => match script.trial.moves.get(script.next_move).copied() {
-            Some(m) => {
-                let j = script.next_move;
-                match rig.start_move_mm(m.distance_mm, m.speed_mm_per_s, now) {
-                    Ok(()) => {
-                        script.next_move += 1;
-                        notes.send(
-                            now,
-                            format!(
-                                "move {}: {:+.1} mm at {} mm/s",
-                                j + 1,
-                                m.distance_mm,
-                                m.speed_mm_per_s
-                            ),
-                        );
-                        Step::Moving(j)
-                    }
-                    Err(RigError::Unavailable { .. }) => Step::Idle,
-                    Err(e) => {
-                        script.next_move += 1;
-                        notes.send(now, format!("move {} refused: {e}", j + 1));
-                        Step::Idle
-                    }
-                }
-            }
-            None => Step::Done,
-        },
-    };
 }

@@ -1,7 +1,7 @@
 //! An in-memory stage that moves at its set speed in simulated time: the stage of the
 //! simulated rig and of tests that need no serial port.
 
-use crate::stage::Stage;
+use crate::stage::{HomingDirection, Stage};
 use std::time::Duration;
 
 /// What the fake stage refuses, mirroring the real one's failures.
@@ -27,6 +27,8 @@ struct Motion {
     from_steps: f64,
     to_steps: f64,
     elapsed_s: f64,
+    /// A homing run: reaching `to_steps` (the limit switch) makes it step zero.
+    homing: bool,
 }
 
 /// A stage in memory. Its clock only moves when told ([`FakeStage::advance`]) or while
@@ -39,6 +41,8 @@ pub struct FakeStage {
     speed_steps_per_s: u32,
     motion: Option<Motion>,
     now_s: f64,
+    /// Where the limit switches are, steps in the current frame (negative, positive).
+    limits_steps: (f64, f64),
 }
 
 impl Default for FakeStage {
@@ -48,7 +52,8 @@ impl Default for FakeStage {
 }
 
 impl FakeStage {
-    /// Off line at step zero, 2000 steps/s, clock at zero.
+    /// Off line at step zero, on its negative limit switch (the positive one a million
+    /// steps away), 2000 steps/s, clock at zero.
     pub fn new() -> Self {
         Self {
             online: false,
@@ -57,7 +62,27 @@ impl FakeStage {
             speed_steps_per_s: 2000,
             motion: None,
             now_s: 0.0,
+            limits_steps: (0.0, 1e6),
         }
+    }
+
+    /// The same stage `steps` away from its negative limit switch (e.g. where a restart left
+    /// it), its position register reading zero there, as a controller's does after power-up.
+    pub fn away_from_limit(steps: u32) -> Self {
+        let mut stage = Self::new();
+        stage.limits_steps = (-f64::from(steps), 1e6 - f64::from(steps));
+        stage
+    }
+
+    /// Its power is cycled: off line, the motion and the position register lost (zero
+    /// where it stands); the stage itself stays where it is.
+    pub fn power_cycle(&mut self) {
+        self.position_steps = self.position_steps.round();
+        self.motion = None;
+        let here = self.position_steps;
+        self.limits_steps = (self.limits_steps.0 - here, self.limits_steps.1 - here);
+        self.position_steps = 0.0;
+        self.online = false;
     }
 
     /// Simulated time since creation, seconds.
@@ -90,8 +115,12 @@ impl FakeStage {
             let distance = motion.to_steps - motion.from_steps;
             let travelled = f64::from(self.speed_steps_per_s) * motion.elapsed_s;
             if travelled >= distance.abs() {
+                let homing = motion.homing;
                 self.position_steps = motion.to_steps;
                 self.motion = None;
+                if homing {
+                    self.zero_here();
+                }
             } else {
                 self.position_steps = motion.from_steps + travelled.copysign(distance);
             }
@@ -117,11 +146,21 @@ impl FakeStage {
     }
 
     fn start(&mut self, to_steps: f64) {
+        // A move stops at a limit switch, as the real stage does.
+        let to_steps = to_steps.clamp(self.limits_steps.0, self.limits_steps.1);
         self.motion = (to_steps != self.position_steps).then_some(Motion {
             from_steps: self.position_steps,
             to_steps,
             elapsed_s: 0.0,
+            homing: false,
         });
+    }
+
+    /// Makes the current position step zero (the limit switches keep their places).
+    fn zero_here(&mut self) {
+        let here = self.position_steps;
+        self.limits_steps = (self.limits_steps.0 - here, self.limits_steps.1 - here);
+        self.position_steps = 0.0;
     }
 }
 
@@ -136,11 +175,29 @@ impl Stage for FakeStage {
         Ok(())
     }
 
-    fn zero(&mut self) -> Result<(), FakeStageError> {
+    fn start_homing(&mut self, toward: HomingDirection) -> Result<(), FakeStageError> {
         self.ready()?;
-        self.motion = None;
-        self.position_steps = 0.0;
+        let to_steps = match toward {
+            HomingDirection::Negative => self.limits_steps.0,
+            HomingDirection::Positive => self.limits_steps.1,
+        };
+        self.motion = Some(Motion {
+            from_steps: self.position_steps,
+            to_steps,
+            elapsed_s: 0.0,
+            homing: true,
+        });
+        if to_steps == self.position_steps {
+            // Already on the switch.
+            self.motion = None;
+            self.zero_here();
+        }
         Ok(())
+    }
+
+    fn is_moving(&mut self) -> Result<bool, FakeStageError> {
+        self.ready()?;
+        Ok(self.motion.is_some())
     }
 
     fn set_speed_steps_per_s(&mut self, speed_steps_per_s: u32) -> Result<(), FakeStageError> {
@@ -177,6 +234,9 @@ impl Stage for FakeStage {
             // Rounding in the conversion to Duration may leave a sliver.
             if let Some(motion) = self.motion.take() {
                 self.position_steps = motion.to_steps;
+                if motion.homing {
+                    self.zero_here();
+                }
             }
             Ok(())
         } else {
@@ -203,6 +263,48 @@ impl Stage for FakeStage {
 mod tests {
     use super::*;
     use crate::stage::{LimitedStage, StageError, StageGeometry};
+
+    #[test]
+    fn homing_runs_to_the_limit_switch_and_zeroes_there_unless_killed_first() {
+        let geometry = StageGeometry::new(100.0, 0.0, 300.0).unwrap();
+        let stage = LimitedStage::new(FakeStage::away_from_limit(5_000), geometry);
+        let mut stage = stage.online().unwrap();
+        stage.stage_mut().set_speed_steps_per_s(1000).unwrap();
+        stage.start_homing(HomingDirection::Negative).unwrap();
+        stage.stage_mut().advance(Duration::from_secs(1));
+        assert!(stage.is_moving().unwrap());
+        stage.kill().unwrap();
+        // Killed 4000 steps short of the switch: not home.
+        let stage = match stage.finish_homing() {
+            Err(e) => {
+                assert!(matches!(
+                    e.error,
+                    StageError::NotAtHome {
+                        position_steps: -1000
+                    }
+                ));
+                e.stage
+            }
+            Ok(_) => panic!("a killed homing must not count"),
+        };
+        let mut stage = stage
+            .home(HomingDirection::Negative, Duration::from_secs(10))
+            .unwrap();
+        assert_eq!(stage.position_steps().unwrap(), 0);
+        // The switch is the origin: 50 mm out, a power cycle zeroes the register there and
+        // homing again finds the switch 5000 steps back.
+        stage
+            .move_absolute_mm(50.0, Duration::from_secs(10))
+            .unwrap();
+        stage.stage_mut().power_cycle();
+        let mut stage = stage.lose_home();
+        Stage::online(stage.stage_mut()).unwrap();
+        let mut stage = stage
+            .home(HomingDirection::Negative, Duration::from_secs(10))
+            .unwrap();
+        assert_eq!(stage.stage_mut().exact_position_steps(), 0.0);
+        assert!((stage.stage_mut().limits_steps.0).abs() < 1e-9);
+    }
 
     #[test]
     fn moves_take_distance_over_speed_in_simulated_time() {
@@ -232,7 +334,11 @@ mod tests {
     fn limited_fake_stage_refuses_moves_beyond_soft_limits() {
         let geometry = StageGeometry::new(100.0, -10.0, 300.0).unwrap();
         let stage = LimitedStage::new(FakeStage::new(), geometry);
-        let mut stage = stage.online().unwrap().home().unwrap();
+        let mut stage = stage
+            .online()
+            .unwrap()
+            .home(HomingDirection::Negative, Duration::from_secs(1))
+            .unwrap();
         stage.set_speed_mm_per_s(16.0).unwrap();
         stage
             .move_absolute_mm(250.0, Duration::from_secs(20))
@@ -246,7 +352,7 @@ mod tests {
                 ..
             })
         ));
-        assert!(!stage.stage_mut().is_moving());
+        assert!(!FakeStage::is_moving(stage.stage_mut()));
         stage.stage_mut().set_vanished(true);
         assert!(matches!(
             stage.position_mm(),

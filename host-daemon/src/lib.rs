@@ -29,9 +29,11 @@ pub mod emulator;
 mod fake_servo;
 mod fake_stage;
 pub mod free_space;
+pub mod homing;
 #[cfg(target_os = "linux")]
 pub mod i2c_bus;
 pub mod maestro;
+mod motion;
 pub mod net;
 mod poll;
 pub mod realtime;
@@ -41,6 +43,7 @@ pub mod servo;
 mod sim_bus;
 pub mod sim_rig;
 pub mod stage;
+mod trial_script;
 pub mod vxm;
 
 pub use fake_servo::{FakeServo, FakeServoError};

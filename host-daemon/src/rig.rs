@@ -8,14 +8,20 @@
 //! reopened at most every [`REOPEN_INTERVAL`], and when it opens again the controller is put
 //! back on line (the VXM keeps its position register across a lost USB link) and the part is
 //! available again.
+//!
+//! The stage is homed against its limit switch before its first move ([`HomingStage`]), on
+//! the simulated rig too, and again after the controller shows signs of a power cycle (the
+//! VXM echoing a command, see [`crate::vxm`]); until then every move is refused with
+//! [`RigError::NotHomed`] and no stage position is sampled.
 
 use crate::acquisition::Shared;
 use crate::config::Config;
+use crate::homing::{HomingEvent, HomingSettings, HomingStage, HomingState};
 use crate::maestro::{Maestro, MaestroConfig, MaestroError};
 use crate::servo::Servo;
 use crate::sim_rig::{SimPhysics, SimState};
-use crate::stage::{Homed, LimitedStage, StageError};
-use crate::vxm::{Vxm, VxmError, VxmStatus};
+use crate::stage::{LimitedStage, StageError};
+use crate::vxm::{Vxm, VxmError, VxmKill};
 use crate::{FakeServo, FakeStage};
 use serialport::SerialPort;
 use std::time::{Duration, Instant};
@@ -38,6 +44,12 @@ pub enum RigError {
         /// Why.
         reason: String,
     },
+    /// The stage is not homed yet (homing starts or is under way); nothing moved.
+    #[error("the stage is not homed yet ({0})")]
+    NotHomed(String),
+    /// Homing failed; nothing moves until it is tried again (when a trial starts).
+    #[error("the stage is not homed: homing failed ({0})")]
+    HomingFailed(String),
     /// A move beyond the soft limits, a speed or angle out of range, a device error.
     #[error("{0}")]
     Refused(String),
@@ -108,11 +120,44 @@ impl Link {
     }
 }
 
-type VxmStage = LimitedStage<Vxm<Box<dyn SerialPort>>, Homed>;
+type VxmStage = HomingStage<Vxm<Box<dyn SerialPort>>>;
 
 enum StageDevice {
-    Sim(LimitedStage<FakeStage, Homed>),
-    Vxm { stage: Box<VxmStage>, link: Link },
+    Sim(HomingStage<FakeStage>),
+    Vxm {
+        stage: Box<VxmStage>,
+        link: Link,
+        kill: VxmKill,
+    },
+}
+
+/// What went wrong inside a stage call: the stage's own error or the rig's verdict.
+enum Fail<E> {
+    Stage(StageError<E>),
+    Rig(RigError),
+}
+
+impl<E> From<StageError<E>> for Fail<E> {
+    fn from(e: StageError<E>) -> Self {
+        Self::Stage(e)
+    }
+}
+
+impl<E> From<RigError> for Fail<E> {
+    fn from(e: RigError) -> Self {
+        Self::Rig(e)
+    }
+}
+
+/// The homed stage, or the rig's reason to refuse a move.
+fn homed<S: crate::Stage>(
+    stage: &mut HomingStage<S>,
+) -> Result<&mut LimitedStage<S, crate::stage::Homed>, RigError> {
+    stage.homed().map_err(|state| match state {
+        HomingState::Failed(why) => RigError::HomingFailed(why),
+        HomingState::Homing => RigError::NotHomed("homing under way".to_owned()),
+        _ => RigError::NotHomed("homing starts at the next stage sample".to_owned()),
+    })
 }
 
 enum ServoDevice {
@@ -135,6 +180,9 @@ pub struct DaemonRig {
     solved_for: Option<(f64, f64)>,
     last_stage_mm: f64,
     last_base_rad: f64,
+    /// Why the stage lost its home since the motion thread last asked.
+    home_lost: Option<String>,
+    homing_toward: crate::stage::HomingDirection,
 }
 
 impl std::fmt::Debug for DaemonRig {
@@ -154,32 +202,51 @@ fn stage_error<E: core::error::Error>(e: StageError<E>) -> String {
 }
 
 impl DaemonRig {
-    /// The rig of `config`: a VXM on `stage.port` unless it is `sim` (put on line and homed
-    /// where it stands), a Maestro on `servo.port` unless it is `sim`; with `physics`, the
-    /// simulated antenna follows them. Errors name the configuration key.
+    /// The rig of `config`: a VXM on `stage.port` unless it is `sim` (put on line, not
+    /// homed: the motion thread homes it, [`DaemonRig::step_homing`]), a Maestro on
+    /// `servo.port` unless it is `sim`; with `physics`, the simulated antenna follows them.
+    /// Errors name the configuration key.
     pub fn open(config: &Config, physics: Option<Shared<SimState>>) -> anyhow::Result<Self> {
+        Self::open_with_stage(config, physics, FakeStage::new())
+    }
+
+    /// [`DaemonRig::open`], with `sim_stage` as the simulated stage (e.g. one away from its
+    /// limit switch) if the stage is simulated.
+    pub fn open_with_stage(
+        config: &Config,
+        physics: Option<Shared<SimState>>,
+        sim_stage: FakeStage,
+    ) -> anyhow::Result<Self> {
         use anyhow::{Context, anyhow};
         let geometry = config.stage_geometry().context("`stage.steps_per_mm`")?;
+        let homing = HomingSettings {
+            toward: config.stage.homing_direction,
+            speed_steps_per_s: (config.stage.homing_speed_mm_per_s * config.stage.steps_per_mm)
+                .round()
+                .clamp(1.0, f64::from(crate::vxm::MAX_SPEED_STEPS_PER_S))
+                as u32,
+            timeout: Duration::from_secs_f64(config.stage.homing_timeout_s),
+        };
         let stage = if config.stage.port == "sim" {
-            let stage = LimitedStage::new(FakeStage::new(), geometry)
+            let stage = LimitedStage::new(sim_stage, geometry)
                 .online()
-                .map_err(|e| anyhow!("{e}"))?
-                .home()
                 .map_err(|e| anyhow!("{e}"))?;
-            StageDevice::Sim(stage)
+            StageDevice::Sim(HomingStage::new(stage, homing))
         } else {
             let path = config.stage.port.clone();
             let port =
                 open_serial("stage.port", &path, config.stage.baud).map_err(|e| anyhow!(e))?;
+            let kill = VxmKill::new();
+            kill.arm(port.as_ref())
+                .map_err(|e| anyhow!("`stage.port` = {path:?}: cloning the port for kill: {e}"))?;
             let vxm = Vxm::new(port)
                 .with_reply_timeout(Duration::from_millis(config.stage.reply_timeout_ms));
             let stage = LimitedStage::new(vxm, geometry)
                 .online()
-                .map_err(|e| anyhow!("`stage.port` = {path:?}: {e}"))?
-                .home()
                 .map_err(|e| anyhow!("`stage.port` = {path:?}: {e}"))?;
             StageDevice::Vxm {
-                stage: Box::new(stage),
+                kill,
+                stage: Box::new(HomingStage::new(stage, homing)),
                 link: Link {
                     part: "stage",
                     path,
@@ -224,6 +291,8 @@ impl DaemonRig {
             solved_for: None,
             last_stage_mm: 0.0,
             last_base_rad: 0.0,
+            home_lost: None,
+            homing_toward: config.stage.homing_direction,
         };
         rig.advance(Duration::ZERO)
             .map_err(|e| anyhow!("starting the rig: {e}"))?;
@@ -244,6 +313,67 @@ impl DaemonRig {
             ServoDevice::Sim(_) => "simulated servo".to_owned(),
             ServoDevice::Maestro { link, .. } => format!("Maestro on {}", link.path),
         }
+    }
+
+    /// The kill line of a VXM stage (a second handle on its port that only sends `K`), for a
+    /// `stop_all` that must not wait behind a query; `None` for a simulated stage.
+    pub fn stage_kill(&self) -> Option<VxmKill> {
+        match &self.stage {
+            StageDevice::Sim(_) => None,
+            StageDevice::Vxm { kill, .. } => Some(kill.clone()),
+        }
+    }
+
+    /// Where the stage's homing is.
+    pub fn homing_state(&self) -> HomingState {
+        match &self.stage {
+            StageDevice::Sim(stage) => stage.state(),
+            StageDevice::Vxm { stage, .. } => stage.state(),
+        }
+    }
+
+    /// Why the stage lost its home (a power cycle) since the last call, if it did.
+    pub fn take_home_lost(&mut self) -> Option<String> {
+        self.home_lost.take()
+    }
+
+    /// A failed homing is tried again (when a trial starts).
+    pub fn retry_homing(&mut self) {
+        match &mut self.stage {
+            StageDevice::Sim(stage) => stage.retry(),
+            StageDevice::Vxm { stage, .. } => stage.retry(),
+        }
+    }
+
+    /// Steps the stage's homing (starts it when not homed, finishes it when the stage has
+    /// stopped); says what changed, for the log.
+    pub fn step_homing(&mut self, now: Duration) -> Result<Option<String>, RigError> {
+        self.advance(now)?;
+        let description = self.stage_description();
+        let event = match &mut self.stage {
+            StageDevice::Sim(stage) => stage
+                .step(Instant::now())
+                .map_err(|e| RigError::Refused(stage_error(e)))?,
+            StageDevice::Vxm { stage, link, kill } => {
+                Self::with_vxm(stage, link, kill, &mut self.home_lost, |s| {
+                    Ok(s.step(Instant::now())?)
+                })?
+            }
+        };
+        let toward = match self.homing_toward {
+            crate::stage::HomingDirection::Negative => "negative",
+            crate::stage::HomingDirection::Positive => "positive",
+        };
+        Ok(event.map(|event| match event {
+            HomingEvent::Started => format!(
+                "homing the stage ({description}): indexing to its {toward} limit switch, zeroed \
+                 there, before anything else"
+            ),
+            HomingEvent::Homed => {
+                format!("stage homed ({description}): step zero is the limit switch")
+            }
+            HomingEvent::Failed(why) => format!("homing the stage failed: {why}"),
+        }))
     }
 
     /// Whether the stage answers (a simulated one always does).
@@ -267,9 +397,11 @@ impl DaemonRig {
         let dt = now.saturating_sub(self.advanced_to);
         self.advanced_to = self.advanced_to.max(now);
         if let StageDevice::Sim(stage) = &mut self.stage {
-            stage.stage_mut().advance(dt);
-            self.last_stage_mm =
-                stage.stage_mut().exact_position_steps() / stage.geometry().steps_per_mm();
+            let steps_per_mm = stage.steps_per_mm();
+            if let Some(fake) = stage.driver_mut() {
+                fake.advance(dt);
+                self.last_stage_mm = fake.exact_position_steps() / steps_per_mm;
+            }
         }
         if let ServoDevice::Sim(servo) = &mut self.servo {
             servo.advance(dt);
@@ -293,24 +425,55 @@ impl DaemonRig {
         Ok(())
     }
 
-    /// Runs `f` on the VXM, reopening its port first if it had vanished; a vanished device
-    /// makes the stage unavailable.
+    /// Runs `f` on the VXM, reopening its port first if it had vanished (a VXM that comes
+    /// back echoing was power-cycled: its home is lost); a vanished device makes the stage
+    /// unavailable, an echo loses the home.
     fn with_vxm<T>(
         stage: &mut VxmStage,
         link: &mut Link,
-        f: impl FnOnce(&mut VxmStage) -> Result<T, StageError<VxmError>>,
+        kill: &VxmKill,
+        home_lost: &mut Option<String>,
+        f: impl FnOnce(&mut VxmStage) -> Result<T, Fail<VxmError>>,
     ) -> Result<T, RigError> {
         if let Some(port) = link.reopen()? {
-            if let Err(e) = stage.stage_mut().reconnect(port) {
-                return Err(link.lost(format!("back on line: {e}")));
+            // The kill line first: a stop must reach the VXM as soon as it is back.
+            let _ = kill.arm(port.as_ref());
+            let reconnected = match stage.driver_mut() {
+                Some(vxm) => vxm.reconnect(port),
+                None => Err(VxmError::Disconnected(std::io::Error::other("no driver"))),
+            };
+            match reconnected {
+                Ok((_old, power_cycled)) => {
+                    if power_cycled {
+                        stage.lose_home();
+                        *home_lost = Some(format!(
+                            "the VXM on {} came back off line, echoing (power-cycled): its                              position is lost",
+                            link.path
+                        ));
+                    }
+                }
+                Err(e) => {
+                    kill.disarm();
+                    return Err(link.lost(format!("back on line: {e}")));
+                }
             }
             link.available = true;
             link.reason.clear();
         }
         match f(stage) {
             Ok(v) => Ok(v),
-            Err(StageError::Device(VxmError::Disconnected(e))) => Err(link.lost(e.to_string())),
-            Err(e) => Err(RigError::Refused(stage_error(e))),
+            Err(Fail::Stage(StageError::Device(VxmError::Disconnected(e)))) => {
+                kill.disarm();
+                Err(link.lost(e.to_string()))
+            }
+            Err(Fail::Stage(StageError::Device(e @ VxmError::PowerCycled { .. }))) => {
+                stage.lose_home();
+                let why = format!("the VXM on {}: {e}", link.path);
+                *home_lost = Some(why.clone());
+                Err(RigError::NotHomed(why))
+            }
+            Err(Fail::Stage(e)) => Err(RigError::Refused(stage_error(e))),
+            Err(Fail::Rig(e)) => Err(e),
         }
     }
 
@@ -341,14 +504,19 @@ impl DaemonRig {
     ) -> Result<(), RigError> {
         self.advance(now)?;
         match &mut self.stage {
-            StageDevice::Sim(stage) => stage
-                .set_speed_mm_per_s(speed_mm_per_s)
-                .and_then(|()| stage.start_relative_mm(distance_mm))
-                .map_err(|e| RigError::Refused(stage_error(e))),
-            StageDevice::Vxm { stage, link } => Self::with_vxm(stage, link, |s| {
-                s.set_speed_mm_per_s(speed_mm_per_s)?;
-                s.start_relative_mm(distance_mm)
-            }),
+            StageDevice::Sim(stage) => {
+                let s = homed(stage)?;
+                s.set_speed_mm_per_s(speed_mm_per_s)
+                    .and_then(|()| s.start_relative_mm(distance_mm))
+                    .map_err(|e| RigError::Refused(stage_error(e)))
+            }
+            StageDevice::Vxm { stage, link, kill } => {
+                Self::with_vxm(stage, link, kill, &mut self.home_lost, |s| {
+                    let s = homed(s)?;
+                    s.set_speed_mm_per_s(speed_mm_per_s)?;
+                    Ok(s.start_relative_mm(distance_mm)?)
+                })
+            }
         }
     }
 
@@ -361,14 +529,19 @@ impl DaemonRig {
     ) -> Result<(), RigError> {
         self.advance(now)?;
         match &mut self.stage {
-            StageDevice::Sim(stage) => stage
-                .set_speed_mm_per_s(speed_mm_per_s)
-                .and_then(|()| stage.start_absolute_mm(position_mm))
-                .map_err(|e| RigError::Refused(stage_error(e))),
-            StageDevice::Vxm { stage, link } => Self::with_vxm(stage, link, |s| {
-                s.set_speed_mm_per_s(speed_mm_per_s)?;
-                s.start_absolute_mm(position_mm)
-            }),
+            StageDevice::Sim(stage) => {
+                let s = homed(stage)?;
+                s.set_speed_mm_per_s(speed_mm_per_s)
+                    .and_then(|()| s.start_absolute_mm(position_mm))
+                    .map_err(|e| RigError::Refused(stage_error(e)))
+            }
+            StageDevice::Vxm { stage, link, kill } => {
+                Self::with_vxm(stage, link, kill, &mut self.home_lost, |s| {
+                    let s = homed(s)?;
+                    s.set_speed_mm_per_s(speed_mm_per_s)?;
+                    Ok(s.start_absolute_mm(position_mm)?)
+                })
+            }
         }
     }
 
@@ -376,24 +549,29 @@ impl DaemonRig {
     pub fn stage_moving(&mut self, now: Duration) -> Result<bool, RigError> {
         self.advance(now)?;
         match &mut self.stage {
-            StageDevice::Sim(stage) => Ok(stage.stage_mut().is_moving()),
-            StageDevice::Vxm { stage, link } => Self::with_vxm(stage, link, |s| {
-                s.stage_mut()
-                    .status()
-                    .map(|status| status != VxmStatus::Ready)
-                    .map_err(StageError::Device)
-            }),
+            StageDevice::Sim(stage) => stage
+                .is_moving()
+                .map_err(|e| RigError::Refused(stage_error(e))),
+            StageDevice::Vxm { stage, link, kill } => {
+                Self::with_vxm(stage, link, kill, &mut self.home_lost, |s| {
+                    Ok(s.is_moving()?)
+                })
+            }
         }
     }
 
-    /// The stage position, millimetres from home.
+    /// The stage position, millimetres from home; [`RigError::NotHomed`] (or
+    /// [`RigError::HomingFailed`]) before it is homed, as a position from an unknown origin
+    /// means nothing.
     pub fn stage_mm(&mut self, now: Duration) -> Result<f64, RigError> {
-        if let StageDevice::Vxm { stage, link } = &mut self.stage {
-            self.last_stage_mm = Self::with_vxm(stage, link, |s| s.position_mm())?;
+        if let StageDevice::Vxm { stage, link, kill } = &mut self.stage {
+            self.last_stage_mm = Self::with_vxm(stage, link, kill, &mut self.home_lost, |s| {
+                Ok(homed(s)?.position_mm()?)
+            })?;
         }
         self.advance(now)?;
         match &mut self.stage {
-            StageDevice::Sim(stage) => stage
+            StageDevice::Sim(stage) => homed(stage)?
                 .position_mm()
                 .map_err(|e| RigError::Refused(stage_error(e))),
             StageDevice::Vxm { .. } => Ok(self.last_stage_mm),
@@ -432,12 +610,14 @@ impl DaemonRig {
         Ok(self.last_base_rad)
     }
 
-    /// Stops the stage at once (the VXM's kill).
+    /// Stops the stage at once (the VXM's kill); a homing under way fails.
     pub fn stop(&mut self, now: Duration) -> Result<(), RigError> {
         self.advance(now)?;
         match &mut self.stage {
             StageDevice::Sim(stage) => stage.kill().map_err(|e| RigError::Refused(stage_error(e))),
-            StageDevice::Vxm { stage, link } => Self::with_vxm(stage, link, |s| s.kill()),
+            StageDevice::Vxm { stage, link, kill } => {
+                Self::with_vxm(stage, link, kill, &mut self.home_lost, |s| Ok(s.kill()?))
+            }
         }
     }
 }

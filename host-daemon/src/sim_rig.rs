@@ -1,7 +1,8 @@
 //! The simulated rig, used when no hardware is configured: a virtual I2C bus ([`SimBus`])
-//! whose segments run `firmware-segment`'s own logic, a [`FakeStage`] and a [`FakeServo`]
-//! that move in real time at their set speeds, and joint angles from sim-core's equilibrium
-//! solver as the stage carries the antenna along a configured wall.
+//! whose segments run `firmware-segment`'s own logic, a [`crate::FakeStage`] (homed against
+//! its limit switch like the VXM) and a [`crate::FakeServo`] that move in real time at their
+//! set speeds, and joint angles from sim-core's equilibrium solver as the stage carries the
+//! antenna along a configured wall.
 //!
 //! # Contact
 //! The physics is `antenna-sim-physics`' [`SimPhysics`] (shared with `antenna-monitor`'s
@@ -10,18 +11,19 @@
 //! downhill, a segment's touch switches closing where its link touches the wall.
 
 use crate::acquisition::{
-    AcquisitionEvent, MotionSettings, PollReport, PollSettings, Rig, Shared, event_channel,
-    spawn_motion, spawn_poller,
+    AcquisitionEvent, PollReport, PollSettings, Shared, event_channel, spawn_poller,
 };
 use crate::clock::TrialClock;
 use crate::config::{Config, TrialConfig};
+use crate::motion::{MotionCommand, MotionShared, RigStatus, spawn_motion};
 use crate::poll::{Poller, SegmentHealth};
+use crate::rig::DaemonRig;
 use crate::sim_bus::{SimBus, SimSegment};
-use crate::stage::{Homed, LimitedStage};
-use crate::{FakeServo, FakeStage, Servo};
+use crate::trial_script::ScriptEnds;
 pub use antenna_sim_physics::{AntennaSpec, FlatWallSpec, SimPhysics, SimState};
 use anyhow::{Context, Result, anyhow};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::channel;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -51,113 +53,6 @@ pub fn wall_spec(config: &Config) -> FlatWallSpec {
         distance_m: wall.distance_m,
         angle_deg: wall.angle_deg,
         mu: wall.mu,
-    }
-}
-
-/// The simulated stage and servo, moving in real time, with the antenna following them.
-#[derive(Debug)]
-pub struct SimRig {
-    stage: LimitedStage<FakeStage, Homed>,
-    servo: FakeServo,
-    physics: SimPhysics,
-    state: Shared<SimState>,
-    mount_rad: f64,
-    advanced_to: Duration,
-    solved_for: Option<(f64, f64)>,
-}
-
-impl SimRig {
-    /// The rig of `config`, its stage homed at 0 mm; the antenna's state is written to
-    /// `state` for the simulated segments to sense.
-    pub fn new(config: &Config, state: Shared<SimState>) -> Result<Self> {
-        let geometry = config.stage_geometry().context("stage geometry")?;
-        let stage = LimitedStage::new(FakeStage::new(), geometry)
-            .online()
-            .map_err(|e| anyhow!("{e}"))?
-            .home()
-            .map_err(|e| anyhow!("{e}"))?;
-        let mut rig = Self {
-            stage,
-            servo: FakeServo::new(),
-            physics: sim_physics(config)?,
-            state,
-            mount_rad: config.sim.antenna.base_angle_deg.to_radians(),
-            advanced_to: Duration::ZERO,
-            solved_for: None,
-        };
-        rig.advance(Duration::ZERO)?;
-        Ok(rig)
-    }
-
-    /// The stage, e.g. to check a position in a test.
-    pub fn stage_mut(&mut self) -> &mut LimitedStage<FakeStage, Homed> {
-        &mut self.stage
-    }
-
-    /// The shared physical state.
-    pub fn state(&self) -> Shared<SimState> {
-        Arc::clone(&self.state)
-    }
-
-    /// Lets the stage and servo move until `now` and updates the antenna.
-    fn advance(&mut self, now: Duration) -> Result<()> {
-        let dt = now.saturating_sub(self.advanced_to);
-        self.advanced_to = self.advanced_to.max(now);
-        self.stage.stage_mut().advance(dt);
-        self.servo.advance(dt);
-        let x_m = self.stage.stage_mut().exact_position_steps()
-            / self.stage.geometry().steps_per_mm()
-            * 1e-3;
-        let base = self.mount_rad + self.servo.angle_rad()?;
-        if self.solved_for != Some((x_m, base)) {
-            let state = self.physics.update(x_m, base)?;
-            self.solved_for = Some((x_m, base));
-            *self
-                .state
-                .lock()
-                .map_err(|_| anyhow!("simulated state lock poisoned"))? = state;
-        }
-        Ok(())
-    }
-}
-
-impl Rig for SimRig {
-    fn start_move_mm(
-        &mut self,
-        distance_mm: f64,
-        speed_mm_per_s: f64,
-        now: Duration,
-    ) -> Result<()> {
-        self.advance(now)?;
-        self.stage.set_speed_mm_per_s(speed_mm_per_s)?;
-        self.stage.start_relative_mm(distance_mm)?;
-        Ok(())
-    }
-
-    fn stage_moving(&mut self, now: Duration) -> Result<bool> {
-        self.advance(now)?;
-        Ok(self.stage.stage_mut().is_moving())
-    }
-
-    fn stage_mm(&mut self, now: Duration) -> Result<f64> {
-        self.advance(now)?;
-        Ok(self.stage.position_mm()?)
-    }
-
-    fn set_base_angle_rad(&mut self, angle_rad: f64, now: Duration) -> Result<()> {
-        self.advance(now)?;
-        self.servo.set_angle_rad(angle_rad)?;
-        Ok(())
-    }
-
-    fn base_angle_rad(&mut self, now: Duration) -> Result<f64> {
-        self.advance(now)?;
-        Ok(self.servo.angle_rad()?)
-    }
-
-    fn stop(&mut self, now: Duration) -> Result<()> {
-        self.advance(now)?;
-        Ok(self.stage.kill()?)
     }
 }
 
@@ -237,10 +132,11 @@ pub struct TrialSummary {
     pub elapsed: Duration,
 }
 
-/// Runs `trial` on the simulated rig of `config`: the polling and motion threads on one
-/// clock, every event handed to `on_event` on this thread as it arrives. Ends when the
+/// Runs `trial` on the simulated rig of `config`: the polling thread and the daemon's own
+/// motion thread (`crate::motion`, homing the simulated stage first, as antennad does) on
+/// one clock, every event handed to `on_event` on this thread as it arrives. Ends when the
 /// duration has passed (the trial's, or `options.duration`; zero: when its moves are done)
-/// or `stop` is set.
+/// or `stop` is set. The stage, servo and bus of `config` are simulated whatever it says.
 pub fn run_sim_trial(
     config: &Config,
     trial: &TrialConfig,
@@ -249,12 +145,15 @@ pub fn run_sim_trial(
     mut on_event: impl FnMut(&AcquisitionEvent),
 ) -> Result<TrialSummary> {
     let state: Shared<SimState> = Arc::new(Mutex::new(SimState::default()));
-    let rig = SimRig::new(config, Arc::clone(&state))?;
+    let mut sim_config = config.clone();
+    sim_config.stage.port = "sim".to_owned();
+    sim_config.servo.port = "sim".to_owned();
+    let rig = DaemonRig::open(&sim_config, Some(Arc::clone(&state)))?;
     let bus = sim_bus(config);
     let poller = Poller::new(bus, &config.bus.addresses());
     let (events, receiver) = event_channel(options.queue);
     let threads_stop = Arc::new(AtomicBool::new(false));
-    let script_done = Arc::new(AtomicBool::new(false));
+    let script_ends = Arc::new(ScriptEnds::default());
     let clock = TrialClock::start();
     let poll = spawn_poller(
         poller,
@@ -274,17 +173,28 @@ pub fn run_sim_trial(
         Arc::clone(&threads_stop),
     )
     .context("starting the polling thread")?;
+    let (commands, motion_commands) = channel();
+    commands
+        .send(MotionCommand::RunScript {
+            id: 1,
+            trial: Box::new(trial.clone()),
+        })
+        .map_err(|_| anyhow!("the motion thread's queue is closed"))?;
     let motion = spawn_motion(
         rig,
-        trial.clone(),
         clock,
-        MotionSettings {
-            stage_period: Duration::from_secs_f64(1.0 / config.stage.sample_hz),
-            base_period: Duration::from_secs_f64(1.0 / config.servo.sample_hz),
-        },
+        (
+            Duration::from_secs_f64(1.0 / config.stage.sample_hz),
+            Duration::from_secs_f64(1.0 / config.servo.sample_hz),
+        ),
         events.clone(),
-        Arc::clone(&threads_stop),
-        Arc::clone(&script_done),
+        MotionShared {
+            commands: motion_commands,
+            stop_pending: Arc::new(AtomicBool::new(false)),
+            stop: Arc::clone(&threads_stop),
+            status: Arc::new(RigStatus::default()),
+            script_ends: Arc::clone(&script_ends),
+        },
     )
     .context("starting the motion thread")?;
     let duration = options
@@ -292,7 +202,7 @@ pub fn run_sim_trial(
         .unwrap_or(Duration::from_secs_f64(trial.duration_s));
     loop {
         let finished = if duration.is_zero() {
-            script_done.load(Ordering::Relaxed)
+            script_ends.is_done(1) || script_ends.failure(1).is_some()
         } else {
             clock.elapsed() >= duration
         };
@@ -323,8 +233,8 @@ pub fn run_sim_trial(
         max_lateness: poll.max_lateness,
         health: poll.health,
         dropped: events.dropped(),
-        moves_started: motion.moves_started,
-        moves_refused: motion.moves_refused,
+        moves_started: motion.moves.started,
+        moves_refused: motion.moves.refused,
         elapsed,
     })
 }

@@ -5,12 +5,17 @@
 //! homed.
 //!
 //! ```
+//! use host_daemon::stage::HomingDirection;
 //! use host_daemon::{FakeStage, LimitedStage, StageError, StageGeometry};
 //! use std::time::Duration;
 //!
 //! let geometry = StageGeometry::new(100.0, 0.0, 300.0).expect("valid geometry");
 //! let stage = LimitedStage::new(FakeStage::new(), geometry);
-//! let mut stage = stage.online().expect("on line").home().expect("homed");
+//! let mut stage = stage
+//!     .online()
+//!     .expect("on line")
+//!     .home(HomingDirection::Negative, Duration::from_secs(10))
+//!     .expect("homed");
 //! stage.move_absolute_mm(150.0, Duration::from_secs(10)).expect("within limits");
 //! assert!(matches!(
 //!     stage.start_relative_mm(200.0),
@@ -44,8 +49,13 @@ pub trait Stage {
 
     /// Puts the controller on line (ready to take commands from the host).
     fn online(&mut self) -> Result<(), Self::Error>;
-    /// Declares the current position step zero.
-    fn zero(&mut self) -> Result<(), Self::Error>;
+    /// Starts homing: runs toward the limit switch at `toward` (at the set speed) until it
+    /// trips, then makes that position step zero. Like a move, it ends when
+    /// [`Stage::is_moving`] says `false` or [`Stage::wait_done`] returns; killed before
+    /// the switch, the position is not zeroed.
+    fn start_homing(&mut self, toward: HomingDirection) -> Result<(), Self::Error>;
+    /// Whether a move (or homing) is under way; does not wait.
+    fn is_moving(&mut self) -> Result<bool, Self::Error>;
     /// Sets the speed of the following moves, steps per second.
     fn set_speed_steps_per_s(&mut self, speed_steps_per_s: u32) -> Result<(), Self::Error>;
     /// Starts a move of `steps` from the current position.
@@ -58,6 +68,17 @@ pub trait Stage {
     fn position_steps(&mut self) -> Result<i32, Self::Error>;
     /// Stops the motor at once and abandons the current move.
     fn kill(&mut self) -> Result<(), Self::Error>;
+}
+
+/// Which limit switch a stage homes against: the one at its near end, where the soft
+/// limits' `min_mm` is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HomingDirection {
+    /// The limit switch in the negative direction (the VXM's `I1M-0`).
+    Negative,
+    /// The limit switch in the positive direction (the VXM's `I1M0`).
+    Positive,
 }
 
 /// Invalid stage geometry.
@@ -152,6 +173,12 @@ pub enum StageError<E> {
         /// The value given.
         value: f64,
     },
+    /// Homing ended away from step zero: it was stopped before its limit switch.
+    #[error("homing ended at step {position_steps}, not at the limit switch (stopped early?)")]
+    NotAtHome {
+        /// Where the stage reads after homing, steps.
+        position_steps: i32,
+    },
     /// The stage itself failed.
     #[error("stage: {0}")]
     Device(#[source] E),
@@ -225,18 +252,43 @@ impl<S: Stage> LimitedStage<S, Offline> {
 }
 
 impl<S: Stage> LimitedStage<S, Online> {
-    /// Homes the stage: the current position becomes step zero, the origin of the soft limits.
-    /// Bring the stage to its reference first.
+    /// Homes the stage against its limit switch at `toward` (see [`Stage::start_homing`]),
+    /// waiting at most `timeout`: the switch becomes step zero, the origin of the soft limits.
+    /// A homing that does not finish in time is killed and the stage handed back unhomed.
     #[allow(clippy::type_complexity)]
     pub fn home(
         mut self,
+        toward: HomingDirection,
+        timeout: Duration,
     ) -> Result<LimitedStage<S, Homed>, ModeChangeError<StageError<S::Error>, Self>> {
-        match self.stage.zero() {
-            Ok(()) => Ok(self.into_mode()),
-            Err(error) => Err(ModeChangeError {
-                error: StageError::Device(error),
+        let homed = self
+            .start_homing(toward)
+            .and_then(|()| self.wait_done(timeout).inspect_err(|_| _ = self.kill()));
+        match homed {
+            Ok(()) => self.finish_homing(),
+            Err(error) => Err(ModeChangeError { error, stage: self }),
+        }
+    }
+
+    /// Starts homing against the limit switch at `toward` and returns at once; when
+    /// [`LimitedStage::is_moving`] says it is over, [`LimitedStage::finish_homing`].
+    pub fn start_homing(&mut self, toward: HomingDirection) -> Result<(), StageError<S::Error>> {
+        self.stage.start_homing(toward).map_err(StageError::Device)
+    }
+
+    /// After a homing has ended: checks that the stage reads step zero (a homing killed before
+    /// its switch does not) and makes it [`Homed`].
+    #[allow(clippy::type_complexity)]
+    pub fn finish_homing(
+        mut self,
+    ) -> Result<LimitedStage<S, Homed>, ModeChangeError<StageError<S::Error>, Self>> {
+        match self.position_steps() {
+            Ok(0) => Ok(self.into_mode()),
+            Ok(position_steps) => Err(ModeChangeError {
+                error: StageError::NotAtHome { position_steps },
                 stage: self,
             }),
+            Err(error) => Err(ModeChangeError { error, stage: self }),
         }
     }
 }
@@ -258,6 +310,11 @@ impl<S: Stage, M: OnLineMode> LimitedStage<S, M> {
         self.stage.kill().map_err(StageError::Device)
     }
 
+    /// Whether a move (or homing) is under way.
+    pub fn is_moving(&mut self) -> Result<bool, StageError<S::Error>> {
+        self.stage.is_moving().map_err(StageError::Device)
+    }
+
     /// Waits for the current move to finish, at most `timeout`.
     pub fn wait_done(&mut self, timeout: Duration) -> Result<(), StageError<S::Error>> {
         self.stage.wait_done(timeout).map_err(StageError::Device)
@@ -265,6 +322,12 @@ impl<S: Stage, M: OnLineMode> LimitedStage<S, M> {
 }
 
 impl<S: Stage> LimitedStage<S, Homed> {
+    /// Forgets the home (the controller lost its position, e.g. it was power-cycled): no
+    /// moves until it is homed again.
+    pub fn lose_home(self) -> LimitedStage<S, Online> {
+        self.into_mode()
+    }
+
     /// Sets the speed of the following moves, steps per second.
     pub fn set_speed_steps_per_s(&mut self, speed: u32) -> Result<(), StageError<S::Error>> {
         self.stage

@@ -9,7 +9,8 @@
 //! | [`Vxm::zero`] | `N` | none |
 //! | [`Vxm::start_relative_steps`]`(400)` | `C,S1M2000,I1M400,R` | `^` when the move ends |
 //! | [`Vxm::start_absolute_steps`]`(-400)` | `C,S1M2000,IA1M-400,R` | `^` when the move ends |
-//! | [`Vxm::status`] | `V` | `R` ready, `B` busy, `J` jog |
+//! | [`Vxm::start_homing`]`(Negative)` | `C,S1M2000,I1M-0,IA1M-0,R` | `^` when at the switch, zeroed |
+//! | [`Vxm::status`] | `V` | `R` ready, `B` busy, `J` jog, `b` jog busy |
 //! | [`Vxm::position_steps`] | `X` | a signed number and CR, e.g. `+0000400\r` |
 //! | [`Vxm::kill`] | `K` | none |
 //! | [`Vxm::decelerate`] | `D` | none |
@@ -18,10 +19,26 @@
 //! move's program, so a move never runs at a speed left over from someone else's program.
 //! A relative move of zero steps sends nothing (the VXM reads `I1M0` as "run to the positive
 //! limit switch").
+//!
+//! # Power cycles
+//!
+//! A VXM that lost power comes back off line with echo on and its position register at
+//! zero, wherever the carriage is. The driver takes an echo as the sign: a `V` or `X` whose
+//! answer starts with the command's own letter is [`VxmError::PowerCycled`] (the daemon
+//! queries `X` at the stage's sampling rate, so a power blip shows at the next sample), and
+//! [`Vxm::reconnect`] asks `V` before putting the VXM back on line and says whether it
+//! echoed. Either way the position is lost: home again.
+//!
+//! # Stopping while a query waits
+//!
+//! [`VxmKill`] is a second handle on the same serial port ([`SerialPort::try_clone`]) that
+//! only ever writes `K`, from any thread: a `stop_all` does not wait behind a query that is
+//! waiting for its answer on the driver's handle.
 
-use crate::stage::Stage;
+use crate::stage::{HomingDirection, Stage};
 use serialport::{DataBits, FlowControl, Parity, SerialPort, StopBits};
 use std::io::{self, Read, Write};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 /// The VXM's factory baud rate.
@@ -65,6 +82,15 @@ pub enum VxmError {
     /// sent.
     #[error("{0} steps is beyond the VXM's ±16777215")]
     StepsOutOfRange(i32),
+    /// The VXM echoed the command: it is off line with echo on, as after power-up, and its
+    /// position register was zeroed wherever the carriage is. Home it again.
+    #[error(
+        "the VXM echoed {command:?}: it is off line, as after a power cycle; its position is lost"
+    )]
+    PowerCycled {
+        /// The command it echoed.
+        command: &'static str,
+    },
 }
 
 /// The VXM's answer to `V`.
@@ -76,6 +102,8 @@ pub enum VxmStatus {
     Busy,
     /// Jog mode.
     Jog,
+    /// Jog mode, the motor moving.
+    JogBusy,
 }
 
 /// Opens `path` as a VXM port: 9600 baud, 8 data bits, no parity, 1 stop bit, no flow
@@ -151,6 +179,20 @@ impl<P: Read + Write> Vxm<P> {
         Ok(())
     }
 
+    /// Starts homing (`C,S1M<speed>,I1M-0,IA1M-0,R` toward the negative limit switch,
+    /// `I1M0` toward the positive one): the motor runs until the switch trips, then the
+    /// absolute zero is set there; `^` follows. A kill before the switch leaves the
+    /// position register as it was.
+    pub fn start_homing(&mut self, toward: HomingDirection) -> Result<(), VxmError> {
+        self.finished_seen = false;
+        let index = match toward {
+            HomingDirection::Negative => "I1M-0",
+            HomingDirection::Positive => "I1M0",
+        };
+        let program = format!("C,S1M{},{index},IA1M-0,R", self.speed_steps_per_s);
+        self.send(program.as_bytes())
+    }
+
     /// Starts a move of `steps` (`C,S1M<speed>,I1M<steps>,R`); zero steps sends nothing.
     pub fn start_relative_steps(&mut self, steps: i32) -> Result<(), VxmError> {
         check_steps(steps)?;
@@ -188,7 +230,7 @@ impl<P: Read + Write> Vxm<P> {
         }
     }
 
-    /// Asks for the status (`V`).
+    /// Asks for the status (`V`); an echoed `V` is [`VxmError::PowerCycled`].
     pub fn status(&mut self) -> Result<VxmStatus, VxmError> {
         self.send(b"V")?;
         let deadline = Instant::now() + self.reply_timeout;
@@ -197,7 +239,9 @@ impl<P: Read + Write> Vxm<P> {
                 b'R' => return Ok(VxmStatus::Ready),
                 b'B' => return Ok(VxmStatus::Busy),
                 b'J' => return Ok(VxmStatus::Jog),
+                b'b' => return Ok(VxmStatus::JogBusy),
                 b'^' => self.finished_seen = true,
+                b'V' => return Err(self.power_cycled("V")),
                 other => {
                     return Err(VxmError::Garbage {
                         command: "V",
@@ -208,7 +252,7 @@ impl<P: Read + Write> Vxm<P> {
         }
     }
 
-    /// Asks for the position (`X`), steps.
+    /// Asks for the position (`X`), steps; an echoed `X` is [`VxmError::PowerCycled`].
     pub fn position_steps(&mut self) -> Result<i32, VxmError> {
         self.send(b"X")?;
         let deadline = Instant::now() + self.reply_timeout;
@@ -216,6 +260,7 @@ impl<P: Read + Write> Vxm<P> {
         loop {
             match self.read_byte(deadline, "position")? {
                 b'^' if answer.is_empty() => self.finished_seen = true,
+                b'X' if answer.is_empty() => return Err(self.power_cycled("X")),
                 b'\r' => break,
                 byte => {
                     answer.push(byte);
@@ -244,13 +289,33 @@ impl<P: Read + Write> Vxm<P> {
     }
 
     /// After the device vanished and came back: drives `port` instead (giving back the old
-    /// one) and puts the VXM on line again. The position register survives a lost USB link
-    /// but not a power cycle of the controller; home again if in doubt.
-    pub fn reconnect(&mut self, port: P) -> Result<P, VxmError> {
+    /// one), asks `V` and puts the VXM on line again. Also says whether the VXM echoed the
+    /// `V`, the sign of a power cycle (see the module documentation): the position register
+    /// survives a lost USB link but not a power cycle, so then home again.
+    pub fn reconnect(&mut self, port: P) -> Result<(P, bool), VxmError> {
         let old = core::mem::replace(&mut self.port, port);
         self.finished_seen = false;
+        let power_cycled = match self.status() {
+            Ok(_) => false,
+            Err(VxmError::PowerCycled { .. }) => true,
+            Err(e) => return Err(e),
+        };
         self.online()?;
-        Ok(old)
+        Ok((old, power_cycled))
+    }
+
+    /// The port handle (e.g. to clone it for a [`VxmKill`]).
+    pub fn port(&self) -> &P {
+        &self.port
+    }
+
+    /// After an echo: reads what else the VXM sends (the rest of the echoed answer) for a
+    /// short while, so the next query starts clean.
+    fn power_cycled(&mut self, command: &'static str) -> VxmError {
+        let deadline = Instant::now() + Duration::from_millis(50).min(self.reply_timeout);
+        while self.read_byte(deadline, "the rest of an echo").is_ok() {}
+        self.finished_seen = false;
+        VxmError::PowerCycled { command }
     }
 
     /// Gives the port back.
@@ -295,6 +360,72 @@ impl<P: Read + Write> Vxm<P> {
     }
 }
 
+/// A second handle on the VXM's serial port that only ever sends `K` (kill), usable from
+/// any thread while the driver's own handle waits for an answer. Clones share the handle;
+/// [`VxmKill::arm`] swaps in a new one after a reconnect.
+#[derive(Clone, Default)]
+pub struct VxmKill {
+    port: Arc<Mutex<Option<Box<dyn SerialPort>>>>,
+}
+
+impl std::fmt::Debug for VxmKill {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VxmKill")
+            .field("armed", &self.is_armed())
+            .finish()
+    }
+}
+
+impl VxmKill {
+    /// Unarmed: [`VxmKill::kill`] sends nothing until [`VxmKill::arm`].
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Kills through a clone of `port` from now on (a failed clone leaves it unarmed and
+    /// is returned).
+    pub fn arm(&self, port: &dyn SerialPort) -> serialport::Result<()> {
+        let clone = port.try_clone();
+        let mut slot = self.port.lock().unwrap_or_else(PoisonError::into_inner);
+        match clone {
+            Ok(clone) => {
+                *slot = Some(clone);
+                Ok(())
+            }
+            Err(e) => {
+                *slot = None;
+                Err(e)
+            }
+        }
+    }
+
+    /// Sends nothing from now on (the device vanished).
+    pub fn disarm(&self) {
+        *self.port.lock().unwrap_or_else(PoisonError::into_inner) = None;
+    }
+
+    /// Whether a port is there to kill through.
+    pub fn is_armed(&self) -> bool {
+        self.port
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .is_some()
+    }
+
+    /// Sends `K` at once: `Ok(true)` if sent, `Ok(false)` if unarmed.
+    pub fn kill(&self) -> Result<bool, VxmError> {
+        let mut slot = self.port.lock().unwrap_or_else(PoisonError::into_inner);
+        match slot.as_mut() {
+            Some(port) => port
+                .write_all(b"K")
+                .and_then(|()| port.flush())
+                .map(|()| true)
+                .map_err(VxmError::Disconnected),
+            None => Ok(false),
+        }
+    }
+}
+
 fn check_steps(steps: i32) -> Result<(), VxmError> {
     if steps.unsigned_abs() > MAX_INDEX_STEPS.unsigned_abs() {
         Err(VxmError::StepsOutOfRange(steps))
@@ -319,8 +450,11 @@ impl<P: Read + Write> Stage for Vxm<P> {
     fn online(&mut self) -> Result<(), VxmError> {
         Vxm::online(self)
     }
-    fn zero(&mut self) -> Result<(), VxmError> {
-        Vxm::zero(self)
+    fn start_homing(&mut self, toward: HomingDirection) -> Result<(), VxmError> {
+        Vxm::start_homing(self, toward)
+    }
+    fn is_moving(&mut self) -> Result<bool, VxmError> {
+        Vxm::status(self).map(|status| matches!(status, VxmStatus::Busy | VxmStatus::JogBusy))
     }
     fn set_speed_steps_per_s(&mut self, speed_steps_per_s: u32) -> Result<(), VxmError> {
         Vxm::set_speed_steps_per_s(self, speed_steps_per_s)

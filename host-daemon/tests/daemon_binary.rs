@@ -315,3 +315,47 @@ fn a_missing_i2c_device_names_the_key_and_the_path() {
         "{stderr}"
     );
 }
+
+/// With hardware configured (here a VXM, emulated on a pseudo-terminal) a restart must not
+/// drive the stage from wherever it is: no trial starts by itself, antennad says it waits for
+/// a client's start_trial, and the stage is only homed.
+#[test]
+fn with_a_stage_configured_no_trial_starts_by_itself_and_it_waits_idle() {
+    use host_daemon::emulator::VxmEmulator;
+    use serialport::{SerialPort, TTYPort};
+    let dir = std::env::temp_dir().join(format!("antennad-idle-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (master, slave) = TTYPort::pair().unwrap();
+    let port = slave.name().unwrap();
+    drop(slave);
+    let vxm = VxmEmulator::spawn(master);
+    let config = dir.join("robot.toml");
+    std::fs::write(&config, format!("[stage]\nport = \"{port}\"\n")).unwrap();
+    let args = ["--config", config.to_str().unwrap()];
+    let (mut child, _addr, mut lines) = spawn(&args, &dir);
+    assert!(
+        lines
+            .by_ref()
+            .any(|l| l.contains("no trial starts by itself; waiting idle")),
+    );
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    while vxm.negative_limit_steps() != 0 {
+        assert!(std::time::Instant::now() < deadline, "never homed");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let sent = String::from_utf8_lossy(&vxm.received()).into_owned();
+    // The homing program's `I1M-0` and nothing else that moves.
+    assert_eq!(sent.matches("I1M").count(), 1, "{sent}");
+    assert_eq!(vxm.position_steps(), 0);
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let rest: Vec<String> = lines.collect();
+    assert!(child.wait().unwrap().success(), "{rest:?}");
+    assert!(!rest.iter().any(|l| l.contains("started")), "{rest:?}");
+    assert!(rest.iter().any(|l| l.contains("0 trials")), "{rest:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}

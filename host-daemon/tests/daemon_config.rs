@@ -74,3 +74,28 @@ fn the_example_files_parse_and_sim_toml_is_the_default() {
     assert!(robot.server.token.is_some());
     assert_eq!(robot.server.token_env, None);
 }
+
+#[test]
+fn no_trial_starts_by_itself_with_any_hardware_configured() {
+    use host_daemon::daemon::first_trial_for;
+    let sim = Config::default();
+    assert!(!sim.has_hardware());
+    // The simulated rig keeps its demo trial.
+    assert_eq!(first_trial_for(&sim, None, false), Some(None));
+    assert_eq!(first_trial_for(&sim, None, true), None);
+    for hardware in ["bus", "stage", "servo"] {
+        let mut config = Config::default();
+        match hardware {
+            "bus" => config.bus.device = "/dev/i2c-1".to_owned(),
+            "stage" => config.stage.port = "/dev/ttyUSB0".to_owned(),
+            _ => config.servo.port = "/dev/ttyACM0".to_owned(),
+        }
+        assert!(config.has_hardware(), "{hardware}");
+        assert_eq!(first_trial_for(&config, None, false), None, "{hardware}");
+        // Named explicitly, it starts (its moves after homing).
+        assert_eq!(
+            first_trial_for(&config, Some("t".to_owned()), false),
+            Some(Some("t".to_owned()))
+        );
+    }
+}

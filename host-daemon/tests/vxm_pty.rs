@@ -2,8 +2,8 @@
 //! slave side (as it would `/dev/ttyUSB0`), the emulator the master side.
 
 use host_daemon::emulator::{VxmEmulator, VxmFault};
-use host_daemon::stage::{LimitedStage, StageError, StageGeometry};
-use host_daemon::vxm::{self, Vxm, VxmError, VxmStatus};
+use host_daemon::stage::{HomingDirection, LimitedStage, StageError, StageGeometry};
+use host_daemon::vxm::{self, Vxm, VxmError, VxmKill, VxmStatus};
 use serialport::{SerialPort, TTYPort};
 use std::time::{Duration, Instant};
 
@@ -177,12 +177,13 @@ fn a_vanished_device_is_a_typed_error_and_reconnecting_by_path_restores_it() {
     let port = vxm::open_port(&path, READ_TIMEOUT).unwrap();
     drop(pair_slave);
     let emulator = VxmEmulator::spawn_at(master, 300);
-    let _dead = vxm.reconnect(port).unwrap();
+    let (_dead, power_cycled) = vxm.reconnect(port).unwrap();
+    assert!(!power_cycled, "a VXM that kept its power does not echo");
     assert_eq!(vxm.position_steps().unwrap(), 300);
     vxm.start_relative_steps(-300).unwrap();
     vxm.wait_done(Duration::from_secs(1)).unwrap();
     assert_eq!(vxm.position_steps().unwrap(), 0);
-    assert_received(&emulator, "FXC,S1M6000,I1M-300,RX");
+    assert_received(&emulator, "VFXC,S1M6000,I1M-300,RX");
 }
 
 #[test]
@@ -190,9 +191,13 @@ fn soft_limits_refuse_a_move_and_nothing_is_sent() {
     let (emulator, vxm) = rig();
     let geometry = StageGeometry::new(100.0, -5.0, 20.0).unwrap();
     let stage = LimitedStage::new(vxm, geometry);
-    let mut stage = stage.online().unwrap().home().unwrap();
+    let mut stage = stage
+        .online()
+        .unwrap()
+        .home(HomingDirection::Negative, Duration::from_secs(2))
+        .unwrap();
     stage.set_speed_mm_per_s(40.0).unwrap();
-    assert_received(&emulator, "FN");
+    assert_received(&emulator, "FC,S1M2000,I1M-0,IA1M-0,RX");
     emulator.clear_received();
 
     let refused = stage.start_absolute_mm(20.5);
@@ -227,4 +232,74 @@ fn soft_limits_refuse_a_move_and_nothing_is_sent() {
     stage.move_absolute_mm(2.0, Duration::from_secs(1)).unwrap();
     assert_eq!(stage.position_mm().unwrap(), 2.0);
     assert_eq!(emulator.position_steps(), 200);
+}
+
+#[test]
+fn homing_runs_to_the_limit_switch_and_a_power_cycle_shows_as_an_echo() {
+    let (emulator, mut vxm) = rig();
+    vxm.online().unwrap();
+    vxm.set_speed_steps_per_s(4000).unwrap();
+    vxm.start_homing(HomingDirection::Negative).unwrap();
+    assert_eq!(vxm.status().unwrap(), VxmStatus::Busy);
+    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    // Zero is the switch, 400 steps below where it started.
+    assert_eq!(vxm.position_steps().unwrap(), 0);
+    assert_eq!(emulator.negative_limit_steps(), 0);
+    assert_received(&emulator, "FC,S1M4000,I1M-0,IA1M-0,RVX");
+    vxm.start_absolute_steps(200).unwrap();
+    vxm.wait_done(Duration::from_secs(1)).unwrap();
+
+    // Power lost and back: the register reads zero 200 steps from the switch, and the VXM
+    // echoes. The driver says so instead of trusting the zero.
+    emulator.power_cycle();
+    assert!(matches!(
+        vxm.position_steps(),
+        Err(VxmError::PowerCycled { command: "X" })
+    ));
+    assert!(matches!(
+        vxm.status(),
+        Err(VxmError::PowerCycled { command: "V" })
+    ));
+    assert_eq!(emulator.negative_limit_steps(), -200);
+    // Homing again finds the switch.
+    vxm.online().unwrap();
+    vxm.start_homing(HomingDirection::Negative).unwrap();
+    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    assert_eq!(vxm.position_steps().unwrap(), 0);
+    assert_eq!(emulator.negative_limit_steps(), 0);
+}
+
+#[test]
+fn the_kill_line_reaches_the_vxm_while_a_query_hangs() {
+    let (master, mut slave) = TTYPort::pair().unwrap();
+    slave.set_timeout(READ_TIMEOUT).unwrap();
+    let emulator = VxmEmulator::spawn(master);
+    let port: Box<dyn SerialPort> = Box::new(slave);
+    let kill = VxmKill::new();
+    assert!(!kill.kill().unwrap(), "unarmed: nothing sent");
+    kill.arm(port.as_ref()).unwrap();
+    let mut vxm = Vxm::new(port).with_reply_timeout(Duration::from_secs(2));
+    vxm.online().unwrap();
+    vxm.set_speed_steps_per_s(100).unwrap();
+    vxm.start_relative_steps(1000).unwrap();
+    emulator.set_fault(VxmFault::Stall);
+    let query = std::thread::spawn(move || {
+        let answer = vxm.position_steps();
+        (vxm, answer)
+    });
+    std::thread::sleep(Duration::from_millis(100));
+    let sent = Instant::now();
+    assert!(kill.kill().unwrap());
+    while !emulator.received().contains(&b'K') {
+        assert!(sent.elapsed() < Duration::from_secs(1), "no K");
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    let latency = sent.elapsed();
+    assert!(!emulator.is_busy(), "the move was killed");
+    // The query was still waiting when the kill went through.
+    assert!(!query.is_finished());
+    let (_vxm, answer) = query.join().unwrap();
+    assert!(matches!(answer, Err(VxmError::Timeout { .. })));
+    // Generous: a loaded machine with two shared cores.
+    assert!(latency < Duration::from_millis(500), "{latency:?}");
 }

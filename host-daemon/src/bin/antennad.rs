@@ -1,9 +1,11 @@
 //! `antennad`: the antenna host daemon, a thin shell around [`host_daemon::daemon::Daemon`].
 //!
 //! It polls the segments continuously, streams every poll to TCP clients and takes control
-//! commands (start/stop a trial, move the stage, set the base angle, stop everything). By
-//! default it starts the configuration's first trial at once, so a first run shows a trial
-//! happening, and keeps serving afterwards; `--exit-after-trial` exits when that trial ends.
+//! commands (start/stop a trial, move the stage, set the base angle, stop everything). On the
+//! simulated rig it starts the configuration's first trial at once, so a first run shows a
+//! trial happening, and keeps serving afterwards; `--exit-after-trial` exits when that trial
+//! ends. With any hardware configured no trial starts by itself (`--trial NAME` starts one
+//! after homing): it waits idle for a client's start_trial.
 //!
 //! With no configuration it runs the simulated rig: nine segments running the firmware's own
 //! logic on a virtual I2C bus, a virtual stage carrying the antenna along a wall, and joint
@@ -12,7 +14,7 @@
 use anyhow::{Result, bail};
 use clap::Parser;
 use host_daemon::config::Config;
-use host_daemon::daemon::{Daemon, DaemonOptions};
+use host_daemon::daemon::{Daemon, DaemonOptions, first_trial_for};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -25,7 +27,8 @@ struct Args {
     /// Configuration file (TOML; see host-daemon/config/). Default: the simulated rig.
     #[arg(long)]
     config: Option<PathBuf>,
-    /// The trial to start at once (by name; default: the first in the configuration).
+    /// The trial to start at once (by name; default: the first in the configuration, on the
+    /// simulated rig only: with hardware none starts unless named).
     #[arg(long)]
     trial: Option<String>,
     /// Start no trial; wait for a client's start_trial.
@@ -80,8 +83,10 @@ fn run(args: Args) -> Result<()> {
         Some(s) => bail!("--duration-s must be finite and >= 0, got {s}"),
         None => None,
     };
+    let first_trial = first_trial_for(&config, args.trial.clone(), args.idle);
+    let waits_idle = first_trial.is_none() && !args.idle;
     let options = DaemonOptions {
-        first_trial: (!args.idle).then(|| args.trial.clone()),
+        first_trial,
         first_trial_duration,
         exit_after_trial: args.exit_after_trial,
         record: !args.no_record,
@@ -96,6 +101,12 @@ fn run(args: Args) -> Result<()> {
         println!(
             "antennad: control token for this run (generated; shown only here): {}",
             daemon.token()
+        );
+    }
+    if waits_idle {
+        println!(
+            "antennad: hardware configured: no trial starts by itself; waiting idle for a \
+             client's start_trial (or give --trial NAME)"
         );
     }
     if !args.exit_after_trial {

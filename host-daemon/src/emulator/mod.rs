@@ -8,7 +8,7 @@ mod maestro;
 mod vxm;
 
 pub use maestro::{MaestroEmulator, MaestroFault};
-pub use vxm::{VxmEmulator, VxmFault};
+pub use vxm::{DEFAULT_LIMIT_BELOW_STEPS, VxmEmulator, VxmFault};
 
 use serialport::SerialPort;
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -5,6 +5,9 @@ use serialport::SerialPort;
 use std::sync::MutexGuard;
 use std::time::Instant;
 
+/// How far below its start an emulated VXM's negative limit switch is, steps.
+pub const DEFAULT_LIMIT_BELOW_STEPS: u32 = 400;
+
 /// How the emulated VXM misbehaves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum VxmFault {
@@ -15,6 +18,9 @@ pub enum VxmFault {
     NeverFinish,
     /// `V` and `X` are answered with noise.
     Garbage,
+    /// `V` and `X` are never answered (the controller hangs on a query); every other
+    /// command, `K` too, still works.
+    Stall,
 }
 
 /// One command of a program.
@@ -23,6 +29,10 @@ enum ProgramStep {
     Speed(i64),
     Relative(i64),
     Absolute(i64),
+    /// `I1M-0` (`false`) or `I1M0` (`true`): run to that limit switch.
+    ToLimit(bool),
+    /// `IA1M-0`: the current position becomes absolute zero.
+    SetZero,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,6 +60,10 @@ struct VxmModel {
     received: Vec<u8>,
     pending: Vec<u8>,
     online: bool,
+    /// Every byte received is sent back (after power-up, until `F`).
+    echo: bool,
+    /// The limit switches, steps in the register's frame (negative, positive).
+    limits_steps: (f64, f64),
     fault: VxmFault,
     position_steps: f64,
     speed_steps_per_s: i64,
@@ -61,6 +75,13 @@ struct VxmModel {
 }
 
 impl VxmModel {
+    /// The register reads zero here; the limit switches stay where they are.
+    fn zero_here(&mut self) {
+        let here = self.position_steps;
+        self.limits_steps = (self.limits_steps.0 - here, self.limits_steps.1 - here);
+        self.position_steps = 0.0;
+    }
+
     fn position_now(&self) -> f64 {
         self.motion
             .map_or(self.position_steps, |m| m.position(Instant::now()).0)
@@ -82,6 +103,7 @@ impl VxmModel {
             b',' | b' ' | b'\r' | b'\n' => return Some(1),
             b'F' => {
                 self.online = true;
+                self.echo = false;
                 return Some(1);
             }
             b'C' => {
@@ -106,15 +128,18 @@ impl VxmModel {
                 return Some(1);
             }
             b'V' => {
-                out.push(match (self.fault, self.running) {
-                    (VxmFault::Garbage, _) => b'?',
-                    (_, true) => b'B',
-                    (_, false) => b'R',
-                });
+                if self.fault != VxmFault::Stall {
+                    out.push(match (self.fault, self.running) {
+                        (VxmFault::Garbage, _) => b'?',
+                        (_, true) => b'B',
+                        (_, false) => b'R',
+                    });
+                }
                 return Some(1);
             }
             b'X' => {
-                if self.fault == VxmFault::Garbage {
+                if self.fault == VxmFault::Stall {
+                } else if self.fault == VxmFault::Garbage {
                     out.extend_from_slice(b"?!#\r");
                 } else {
                     let position = self.position_now().round() as i64;
@@ -155,9 +180,12 @@ impl VxmModel {
             self.unknown_bytes += 1;
             return Some(end);
         };
-        self.program.push(match command {
-            b"S1M" => ProgramStep::Speed(value),
-            b"IA1M" => ProgramStep::Absolute(value),
+        self.program.push(match (command, text) {
+            (b"S1M", _) => ProgramStep::Speed(value),
+            (b"IA1M", "-0") => ProgramStep::SetZero,
+            (b"IA1M", _) => ProgramStep::Absolute(value),
+            (_, "-0") => ProgramStep::ToLimit(false),
+            (_, "0") => ProgramStep::ToLimit(true),
             _ => ProgramStep::Relative(value),
         });
         Some(end)
@@ -167,6 +195,11 @@ impl VxmModel {
 impl Device for VxmModel {
     fn feed(&mut self, bytes: &[u8], out: &mut Vec<u8>) {
         self.received.extend_from_slice(bytes);
+        if self.echo {
+            // Everything up to the `F` that turns the echo off.
+            let until = bytes.iter().position(|&b| b == b'F').unwrap_or(bytes.len());
+            out.extend_from_slice(&bytes[..until]);
+        }
         self.pending.extend_from_slice(bytes);
         while let Some(consumed) = self.parse_one(out) {
             self.pending.drain(..consumed);
@@ -185,12 +218,22 @@ impl Device for VxmModel {
         while self.running && self.motion.is_none() {
             match self.queue.pop() {
                 Some(ProgramStep::Speed(speed)) => self.speed_steps_per_s = speed.max(1),
+                Some(ProgramStep::SetZero) => self.zero_here(),
                 Some(step) => {
                     let to_steps = match step {
                         ProgramStep::Absolute(to) => to as f64,
                         ProgramStep::Relative(by) => self.position_steps + by as f64,
-                        ProgramStep::Speed(_) => self.position_steps,
+                        ProgramStep::ToLimit(positive) => {
+                            if positive {
+                                self.limits_steps.1
+                            } else {
+                                self.limits_steps.0
+                            }
+                        }
+                        ProgramStep::Speed(_) | ProgramStep::SetZero => self.position_steps,
                     };
+                    // The limit switches stop the motor wherever it was sent.
+                    let to_steps = to_steps.clamp(self.limits_steps.0, self.limits_steps.1);
                     self.motion = Some(Motion {
                         from_steps: self.position_steps,
                         to_steps,
@@ -210,8 +253,11 @@ impl Device for VxmModel {
 }
 
 /// An emulated VXM on its own thread, answering at the far end of `port`. Moves run in real
-/// time at the programmed speed; `^` follows the end of each program; `X` answers
-/// `+0000400\r`-style positions; `K` and `D` stop at once without `^`.
+/// time at the programmed speed and stop at the limit switches (by default 400 steps below
+/// the start and a million above); `I1M-0`/`I1M0` run to a switch and `IA1M-0` zeroes the
+/// register there; `^` follows the end of each program; `X` answers `+0000400\r`-style
+/// positions; `K` and `D` stop at once without `^`. [`VxmEmulator::power_cycle`] brings it
+/// back as after power-up: off line, echoing, the register zeroed where it stands.
 #[derive(Debug)]
 pub struct VxmEmulator {
     runner: Runner<VxmModel>,
@@ -230,6 +276,11 @@ impl VxmEmulator {
             received: Vec::new(),
             pending: Vec::new(),
             online: false,
+            echo: false,
+            limits_steps: (
+                f64::from(position_steps) - f64::from(DEFAULT_LIMIT_BELOW_STEPS),
+                f64::from(position_steps) + 1e6,
+            ),
             fault: VxmFault::None,
             position_steps: f64::from(position_steps),
             speed_steps_per_s: 2000,
@@ -246,6 +297,31 @@ impl VxmEmulator {
 
     fn model(&self) -> MutexGuard<'_, VxmModel> {
         self.runner.model()
+    }
+
+    /// Puts the negative limit switch `steps` below where the carriage is now.
+    pub fn set_limit_below(&self, steps: u32) {
+        let mut model = self.model();
+        let here = model.position_now();
+        model.limits_steps.0 = here - f64::from(steps);
+    }
+
+    /// Its power is cycled: the program and motion stop, it comes back off line with echo
+    /// on, and the register reads zero where the carriage is (the switches stay put).
+    pub fn power_cycle(&self) {
+        let mut model = self.model();
+        model.stop_motion();
+        model.program.clear();
+        model.pending.clear();
+        model.zero_here();
+        model.online = false;
+        model.echo = true;
+    }
+
+    /// Where the negative limit switch is, steps in the register's frame (0 after homing
+    /// against it).
+    pub fn negative_limit_steps(&self) -> i64 {
+        self.model().limits_steps.0.round() as i64
     }
 
     /// Makes the emulator misbehave from now on.
