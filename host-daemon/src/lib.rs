@@ -23,6 +23,7 @@
 
 pub mod acquisition;
 pub mod clock;
+pub mod commission;
 pub mod config;
 pub mod daemon;
 pub mod emulator;

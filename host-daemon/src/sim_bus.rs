@@ -1,6 +1,6 @@
 //! A virtual I2C bus whose segments run the firmware's own logic.
 
-use antenna_protocol::{Calibration, SampleWord, StatusFlags, TouchBits};
+use antenna_protocol::{Calibration, DEFAULT_ADDRESS, SampleWord, StatusFlags, TouchBits};
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use firmware_segment::{BusEvent, Debouncer, TargetMachine, adc_fault, oversample};
 
@@ -38,6 +38,9 @@ pub enum SegmentFault {
     /// The segment's main loop has stopped: its I2C target still answers with the last word,
     /// but no new sample is published, so its sample counter stops moving.
     StuckCounter,
+    /// The angle sensor's output sits on a rail (the Hall sensor's diagnostic clamp or a
+    /// broken wire): every conversion reads 0, so the firmware sets its ADC-fault status bit.
+    SensorRail,
 }
 
 /// One simulated segment: a physical joint angle and touch switches, sampled by the
@@ -62,6 +65,15 @@ impl SimSegment {
             angle_rad: 0.0,
             touch_raw: 0,
             fault: SegmentFault::None,
+        }
+    }
+
+    /// A segment fresh from programming: no address stored, so it answers at
+    /// [`DEFAULT_ADDRESS`] with its address-not-set status bit until one is assigned.
+    pub fn unassigned(calibration: Calibration) -> Self {
+        Self {
+            machine: TargetMachine::new(DEFAULT_ADDRESS, false),
+            ..Self::new(DEFAULT_ADDRESS, calibration)
         }
     }
 
@@ -97,7 +109,11 @@ impl SimSegment {
             return;
         }
         let counts = self.calibration.counts_for_angle(self.angle_rad);
-        let conversions = conversions_for_counts(counts);
+        let conversions = if self.fault == SegmentFault::SensorRail {
+            [0; 16]
+        } else {
+            conversions_for_counts(counts)
+        };
         let touch = self.debouncer.step(self.touch_raw);
         let word = SampleWord::pack_truncate(oversample(&conversions), touch.bits());
         let status = StatusFlags::default()
@@ -159,17 +175,27 @@ impl ErrorType for SimBus {
 }
 
 impl I2c for SimBus {
+    /// Every segment at `address` takes part, as on a real shared bus: each receives the
+    /// bytes and answers with its own ACK, the controller sees an ACK when any of them gives
+    /// one, and the bytes read are the wired AND of what each sends (open-drain: a 0 wins).
+    /// Two segments at one address thus read back garbage whose PEC fails unless their bytes
+    /// happen to agree.
     fn transaction(
         &mut self,
         address: u8,
         operations: &mut [Operation<'_>],
     ) -> Result<(), Self::Error> {
-        let segment = self
+        let mut targets: Vec<&mut SimSegment> = self
             .segments
             .iter_mut()
-            .find(|segment| segment.address() == address && segment.fault != SegmentFault::Nack)
-            .ok_or(SimBusError::AddressNack(address))?;
-        let corrupt = segment.fault == SegmentFault::CorruptPec;
+            .filter(|segment| segment.address() == address && segment.fault != SegmentFault::Nack)
+            .collect();
+        if targets.is_empty() {
+            return Err(SimBusError::AddressNack(address));
+        }
+        let corrupt = targets
+            .iter()
+            .any(|segment| segment.fault == SegmentFault::CorruptPec);
         let mut index = 0;
         while index < operations.len() {
             // Adjacent operations of one kind are one transfer (no repeated start between).
@@ -181,21 +207,36 @@ impl I2c for SimBus {
                 end += 1;
             }
             if is_write {
-                let mut ack = segment.step(BusEvent::StartWrite).ack_next;
+                // Each segment's own AA bit: whether it acknowledges the next byte.
+                let mut acks: Vec<bool> = targets
+                    .iter_mut()
+                    .map(|segment| segment.step(BusEvent::StartWrite).ack_next)
+                    .collect();
                 for operation in &operations[index..end] {
                     if let Operation::Write(bytes) = operation {
                         for &byte in bytes.iter() {
-                            if !ack {
-                                segment.step(BusEvent::DataNacked(byte));
-                                segment.step(BusEvent::Stop);
+                            let acked = acks.iter().any(|&ack| ack);
+                            for (segment, ack) in targets.iter_mut().zip(acks.iter_mut()) {
+                                *ack = if *ack {
+                                    segment.step(BusEvent::DataAcked(byte)).ack_next
+                                } else {
+                                    segment.step(BusEvent::DataNacked(byte));
+                                    false
+                                };
+                            }
+                            if !acked {
+                                for segment in targets.iter_mut() {
+                                    segment.step(BusEvent::Stop);
+                                }
                                 return Err(SimBusError::DataNack(address));
                             }
-                            ack = segment.step(BusEvent::DataAcked(byte)).ack_next;
                         }
                     }
                 }
                 // A stop, or the repeated start before the next transfer: the same event.
-                segment.step(BusEvent::Stop);
+                for segment in targets.iter_mut() {
+                    segment.step(BusEvent::Stop);
+                }
             } else {
                 let mut first = true;
                 for operation in &mut operations[index..end] {
@@ -207,18 +248,22 @@ impl I2c for SimBus {
                                 BusEvent::ByteAcked
                             };
                             first = false;
-                            *byte = segment.step(event).tx;
+                            *byte = targets
+                                .iter_mut()
+                                .fold(0xFF, |wired, segment| wired & segment.step(event).tx);
                         }
                         if corrupt && let Some(last) = buffer.last_mut() {
                             *last ^= 0x5a;
                         }
                     }
                 }
-                if first {
-                    // A zero-length read still addresses the segment.
-                    segment.step(BusEvent::StartRead);
+                for segment in targets.iter_mut() {
+                    if first {
+                        // A zero-length read still addresses the segment.
+                        segment.step(BusEvent::StartRead);
+                    }
+                    segment.step(BusEvent::ReadDone);
                 }
-                segment.step(BusEvent::ReadDone);
             }
             index = end;
         }
@@ -346,5 +391,66 @@ mod tests {
             bus.read(0x21, &mut [0u8; 2]),
             Err(SimBusError::AddressNack(0x21))
         );
+    }
+
+    #[test]
+    fn an_unassigned_segment_answers_at_the_default_address_until_assigned() {
+        let mut bus = SimBus::new(vec![SimSegment::unassigned(Calibration::default())]);
+        bus.sample_all();
+        let status = |bus: &mut SimBus, address: u8| {
+            let mut byte = [0u8; 1];
+            bus.write_read(address, &[Register::Status.number()], &mut byte)
+                .unwrap();
+            StatusFlags::from_bits(byte[0])
+        };
+        assert!(status(&mut bus, DEFAULT_ADDRESS).address_not_set());
+        bus.write(
+            DEFAULT_ADDRESS,
+            &AddressAssignment::new(0x30).unwrap().to_bytes(),
+        )
+        .unwrap();
+        assert!(!status(&mut bus, 0x30).address_not_set());
+    }
+
+    #[test]
+    fn two_segments_at_one_address_both_ack_and_their_bytes_are_wired_and() {
+        let mut bus = SimBus::new(vec![
+            SimSegment::new(0x21, Calibration::new(0x0F0, Direction::CounterClockwise)),
+            SimSegment::new(0x21, Calibration::new(0x00F, Direction::CounterClockwise)),
+        ]);
+        bus.sample_all();
+        let mut bytes = [0u8; 3];
+        bus.read(0x21, &mut bytes).unwrap();
+        // 0x0F0 << 4 = 0x0F00 and 0x00F << 4 = 0x00F0: the AND is 0x0000.
+        assert_eq!([bytes[0], bytes[1]], [0x00, 0x00]);
+        assert!(SampleWord::from_read_with_pec(0x21, bytes).is_err());
+        // An assignment reaches both: they move together.
+        bus.write(0x21, &AddressAssignment::new(0x40).unwrap().to_bytes())
+            .unwrap();
+        assert!(bus.segments().iter().all(|s| s.address() == 0x40));
+        // With one of them silent, the other answers alone, with a good PEC.
+        bus.segment_mut(1).unwrap().set_fault(SegmentFault::Nack);
+        let mut bytes = [0u8; 3];
+        bus.read(0x40, &mut bytes).unwrap();
+        assert_eq!(
+            SampleWord::from_read_with_pec(0x40, bytes).map(|w| w.angle_counts()),
+            Ok(0x0F0)
+        );
+    }
+
+    #[test]
+    fn a_sensor_on_a_rail_sets_the_adc_fault_bit() {
+        let mut bus = bus();
+        bus.segment_mut(1)
+            .unwrap()
+            .set_fault(SegmentFault::SensorRail);
+        bus.sample_all();
+        let mut byte = [0u8; 1];
+        bus.write_read(0x22, &[Register::Status.number()], &mut byte)
+            .unwrap();
+        assert!(StatusFlags::from_bits(byte[0]).adc_fault());
+        bus.write_read(0x21, &[Register::Status.number()], &mut byte)
+            .unwrap();
+        assert!(!StatusFlags::from_bits(byte[0]).adc_fault());
     }
 }

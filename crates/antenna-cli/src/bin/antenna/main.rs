@@ -1,6 +1,6 @@
 //! `antenna`: solve scene files, sweep them along their walls, run studies of many sweeps,
 //! design Nitinol wires for a stiffness profile, identify joint stiffness from a
-//! free-oscillation recording, export recorded trials. See the README section "Scene files
+//! free-oscillation recording, export recorded trials, commission the robot's segments. See the README section "Scene files
 //! and the `antenna` command" and `shared/spec/scene-format.md`.
 //!
 //! Exit status: 0 success; 1 the solver did not converge (`solve`; the JSON is still printed
@@ -9,6 +9,7 @@
 //! (`identify`); 2 bad input (a message on stderr that says what and where, nothing on
 //! stdout); 3 the solver broke down numerically.
 
+mod segments;
 mod study;
 mod sweep;
 
@@ -47,6 +48,7 @@ enum Command {
     Design(DesignArgs),
     Identify(IdentifyArgs),
     Export(ExportArgs),
+    Segments(segments::SegmentsArgs),
 }
 
 /// Find the static equilibrium of a scene file.
@@ -231,6 +233,7 @@ fn main() -> ExitCode {
         Command::Design(args) => run_design(&args),
         Command::Identify(args) => run_identify(&args),
         Command::Export(args) => run_export(&args),
+        Command::Segments(args) => segments::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
