@@ -24,6 +24,7 @@
 pub mod acquisition;
 pub mod clock;
 pub mod config;
+pub mod config_source;
 pub mod daemon;
 pub mod emulator;
 mod fake_servo;
@@ -37,10 +38,12 @@ mod poll;
 pub mod realtime;
 pub mod rig;
 pub mod samples;
+pub mod service;
 pub mod servo;
 mod sim_bus;
 pub mod sim_rig;
 pub mod stage;
+pub mod stdout_lines;
 pub mod vxm;
 
 pub use fake_servo::{FakeServo, FakeServoError};
