@@ -67,6 +67,7 @@ use crate::net::{ControlHandler, ControlToken, ServerLog, ServerOptions, StreamS
 use crate::poll::{PollError, Poller, SegmentHealth};
 use crate::rig::DaemonRig;
 use crate::samples::{record_sample, stream_sample};
+use crate::service::Watchdog;
 use crate::sim_rig::{SimState, sense, sim_bus};
 use crate::trial_script::ScriptEnds;
 use crate::vxm::VxmKill;
@@ -109,10 +110,14 @@ pub struct DaemonOptions {
     pub record: bool,
     /// Start the TCP server on `server.listen`.
     pub serve: bool,
-    /// Print the log and, during a trial, sample lines to stdout.
+    /// Print sample lines to stdout during a trial ([`crate::stdout_lines::stdout`]: a
+    /// closed or stalled stdout costs lines, never the daemon). The log goes to `tracing`
+    /// either way (target `antennad`), and is kept ([`DaemonHandle::log_lines`]).
     pub echo: bool,
     /// Sample lines printed per second during a trial (with `echo`).
     pub print_hz: f64,
+    /// Ping the service manager's watchdog from the hub thread (see [`crate::service`]).
+    pub watchdog: Option<Watchdog>,
     /// Capacity of the acquisition event queue.
     pub queue: usize,
     /// Where free space under the data directory is learnt (the file system's count by
@@ -131,6 +136,7 @@ impl Default for DaemonOptions {
             serve: true,
             echo: false,
             print_hz: 4.0,
+            watchdog: None,
             queue: 16_384,
             free_space: Arc::new(StatvfsFreeSpace),
         }
@@ -268,7 +274,8 @@ impl Drop for DaemonHandle {
     }
 }
 
-/// Lines for humans: echoed to stdout if asked, and kept.
+/// Lines for humans: logged through `tracing` (target `antennad`, at the level given) and
+/// kept; sample lines go to stdout instead, if asked (`echo`), and are kept too.
 #[derive(Debug, Clone)]
 struct Log {
     echo: bool,
@@ -276,10 +283,39 @@ struct Log {
 }
 
 impl Log {
+    /// An informational line.
     fn line(&self, text: String) {
+        tracing::info!(target: "antennad", "{}", Self::message(&text));
+        self.keep(text);
+    }
+
+    /// Something is wrong, and the daemon goes on (a segment gone stale, a disk filling up).
+    fn warn(&self, text: String) {
+        tracing::warn!(target: "antennad", "{}", Self::message(&text));
+        self.keep(text);
+    }
+
+    /// Something failed (a recording).
+    fn error(&self, text: String) {
+        tracing::error!(target: "antennad", "{}", Self::message(&text));
+        self.keep(text);
+    }
+
+    /// A sample line (or the table's header): data, for stdout.
+    fn sample(&self, text: String) {
         if self.echo {
-            println!("{text}");
+            crate::stdout_lines::stdout().line(text.as_str());
         }
+        self.keep(text);
+    }
+
+    /// `text` as a log message: the logger names the target (`antennad`) itself.
+    fn message(text: &str) -> &str {
+        let text = text.trim_start();
+        text.strip_prefix("antennad: ").unwrap_or(text)
+    }
+
+    fn keep(&self, text: String) {
         if let Ok(mut lines) = self.lines.lock() {
             if lines.len() >= LOG_LINES_KEPT {
                 lines.pop_front();
@@ -893,7 +929,17 @@ impl Hub {
         requests: &Receiver<HubRequest>,
         stop: &AtomicBool,
     ) {
+        let mut watchdog_due = Instant::now();
         while !stop.load(Ordering::Relaxed) && !self.finished {
+            // The hub proves the daemon alive: wedged, it stops the pings.
+            if let Some(watchdog) = &self.options.watchdog
+                && Instant::now() >= watchdog_due
+            {
+                watchdog_due = Instant::now() + watchdog.ping_every();
+                if let Err(e) = watchdog.ping() {
+                    tracing::warn!(target: "antennad", "watchdog ping failed: {e}");
+                }
+            }
             if let Ok(event) = receiver.recv_timeout(Duration::from_millis(10)) {
                 self.on_event(&event);
                 self.drain(receiver);
@@ -1023,7 +1069,7 @@ impl Hub {
         }
         self.log.line(format!("antennad: {message}"));
         if self.options.echo {
-            self.log.line(format!(
+            self.log.sample(format!(
                 "{:>7} {:>8}  joint angles, deg (base to tip)                      touch",
                 "t_s", "stage_mm"
             ));
@@ -1129,7 +1175,7 @@ impl Hub {
             self.free_check_due = Instant::now() + FREE_SPACE_CHECK;
             if let Some(short) = self.free_space_short() {
                 self.log
-                    .line(format!("antennad: {short}; ending the trial"));
+                    .warn(format!("antennad: {short}; ending the trial"));
                 let why: &'static str = "the disk is nearly full";
                 self.record_log(self.clock.elapsed_ns(), &short);
                 self.end_trial(why);
@@ -1171,7 +1217,7 @@ impl Hub {
         };
         if let Err(e) = f(recorder, t_s).and_then(|()| recorder.flush_if_due(t_s)) {
             self.log
-                .line(format!("antennad: recording failed, ending the trial: {e}"));
+                .error(format!("antennad: recording failed, ending the trial: {e}"));
             self.end_trial("the recording failed");
         }
     }
@@ -1209,8 +1255,11 @@ impl Hub {
                         format!("segment {address:#04x}: counter moving again")
                     }
                 };
-                self.log
-                    .line(format!("{:7.2}   -- {text}", self.t_s(*t_ns)));
+                let line = format!("{:7.2}   -- {text}", self.t_s(*t_ns));
+                match change {
+                    HealthChange::Stale => self.log.warn(line),
+                    HealthChange::Recovered => self.log.line(line),
+                }
                 self.record_log(*t_ns, &text);
                 self.note = Some(text);
                 self.publish_status();
@@ -1312,7 +1361,7 @@ impl Hub {
         {
             let t_s = (poll.t_ns - trial.start_ns) as f64 * 1e-9;
             self.log
-                .line(sample_line(t_s, self.stage_mm, poll, &self.calibrations));
+                .sample(sample_line(t_s, self.stage_mm, poll, &self.calibrations));
         }
     }
 

@@ -1,5 +1,5 @@
 //! The `antennad` binary end to end: a short trial on the simulated rig prints sample lines
-//! and its summary and records every poll to MCAP; without `--exit-after-trial` it keeps
+//! and its summary on stdout, its log on stderr, and records every poll to MCAP; without `--exit-after-trial` it keeps
 //! serving after the trial and stops cleanly on SIGTERM; `kill -9` during a trial leaves a
 //! file that reads back up to its last flush; bad configurations and a missing I2C device are
 //! clear errors naming the key.
@@ -28,18 +28,33 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stdout}\n{stderr}");
+    // The log, on stderr: timestamped and leveled.
+    assert!(stderr.contains("watch it with: nc 127.0.0.1 "), "{stderr}");
     assert!(
-        output.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&output.stderr)
+        stderr.contains("-- move 1: +150.0 mm at 30 mm/s"),
+        "{stderr}"
     );
-    assert!(stdout.contains("watch it with: nc 127.0.0.1 "), "{stdout}");
+    let started = stderr
+        .lines()
+        .find(|l| l.contains("trial \"wall-sweep\" started"))
+        .unwrap();
+    assert!(started.contains(" INFO antennad: trial"), "{started}");
     assert!(
-        stdout.contains("-- move 1: +150.0 mm at 30 mm/s"),
-        "{stdout}"
+        started.starts_with("20") && started.contains('T'),
+        "{started}"
     );
+    // The data, on stdout: sample lines ("   0.25     7.5  ...") and the summary.
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.trim_start().starts_with("0.") && l.ends_with("........."))
+    );
+    assert!(stdout.contains("polls in"), "{stdout}");
+    assert!(!stdout.contains("watch it with"), "{stdout}");
     // "... ended (its duration passed); recorded N polls, ..." and the file agree.
-    let polls: u64 = stdout
+    let polls: u64 = stderr
         .lines()
         .find_map(|l| {
             l.split_once("ended (its duration passed); recorded ")?
@@ -50,7 +65,6 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
                 .ok()
         })
         .unwrap();
-    assert!(stdout.contains("antennad: "), "{stdout}");
     let trial = TrialReader::read(dir.join("wall-sweep.mcap")).unwrap();
     assert!(trial.truncated.is_none());
     assert_eq!(trial.segments.len() as u64, polls);
@@ -140,27 +154,30 @@ fn a_bad_configuration_names_the_key_and_exits_with_failure() {
     );
 }
 
-/// Spawns antennad with `args` and reads its stdout until the "watch it with" line; returns
-/// the child, the stream address and the reader.
+/// A running antennad: its log lines (stderr) and its data lines (stdout).
+type Lines = Box<dyn Iterator<Item = String>>;
+
+/// Spawns antennad with `args` and reads its log (stderr) until the "watch it with" line;
+/// returns the child, the stream address, the rest of the log and the stdout lines.
 fn spawn(
     args: &[&str],
     dir: &std::path::Path,
-) -> (
-    std::process::Child,
-    std::net::SocketAddr,
-    impl Iterator<Item = String>,
-) {
+) -> (std::process::Child, std::net::SocketAddr, Lines, Lines) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_antennad"))
         .args(args)
         .args(["--listen", "127.0.0.1:0", "--data-dir"])
         .arg(dir)
         .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap())
+    let mut log = BufReader::new(child.stderr.take().unwrap())
         .lines()
         .map(Result::unwrap);
-    let addr = lines
+    let out = BufReader::new(child.stdout.take().unwrap())
+        .lines()
+        .map(Result::unwrap);
+    let addr = log
         .by_ref()
         .find_map(|l| {
             let rest = l.split_once("watch it with: nc ")?.1;
@@ -170,16 +187,15 @@ fn spawn(
             format!("{ip}:{port}").parse().ok()
         })
         .unwrap();
-    (child, addr, lines)
+    (child, addr, Box::new(log), Box::new(out))
 }
 
 #[test]
 fn without_exit_after_trial_it_keeps_serving_and_stops_cleanly_on_sigterm() {
     let dir = std::env::temp_dir().join(format!("antennad-serve-{}", std::process::id()));
-    let (mut child, addr, mut lines) = spawn(&["--duration-s", "0.5"], &dir);
+    let (mut child, addr, mut log, out) = spawn(&["--duration-s", "0.5"], &dir);
     assert!(
-        lines
-            .by_ref()
+        log.by_ref()
             .any(|l| l.contains("ended (its duration passed)"))
     );
     // After the trial: still streaming.
@@ -197,9 +213,14 @@ fn without_exit_after_trial_it_keeps_serving_and_stops_cleanly_on_sigterm() {
         .status()
         .unwrap();
     assert!(status.success());
-    let rest: Vec<String> = lines.collect();
-    assert!(child.wait().unwrap().success(), "{rest:?}");
+    let rest: Vec<String> = out.collect();
+    let log: Vec<String> = log.collect();
+    assert!(child.wait().unwrap().success(), "{rest:?}\n{log:?}");
     assert!(rest.iter().any(|l| l.contains("polls in")), "{rest:?}");
+    assert!(
+        log.iter().any(|l| l.contains("SIGTERM received, stopping")),
+        "{log:?}"
+    );
     assert!(
         TrialReader::read(dir.join("wall-sweep.mcap"))
             .unwrap()
@@ -215,7 +236,8 @@ fn without_exit_after_trial_it_keeps_serving_and_stops_cleanly_on_sigterm() {
 #[test]
 fn kill_9_during_a_trial_leaves_every_poll_up_to_the_last_flush() {
     let dir = std::env::temp_dir().join(format!("antennad-kill9-{}", std::process::id()));
-    let (mut child, _addr, mut lines) = spawn(&["--duration-s", "60", "--print-hz", "10"], &dir);
+    let (mut child, _addr, _log, mut lines) =
+        spawn(&["--duration-s", "60", "--print-hz", "10"], &dir);
     // Wait for two seconds of trial, in sample lines ("   2.00 ..."): antennad prints a
     // poll's line after recording it.
     let printed_t_s: f64 = lines
@@ -332,10 +354,9 @@ fn with_a_stage_configured_no_trial_starts_by_itself_and_it_waits_idle() {
     let config = dir.join("robot.toml");
     std::fs::write(&config, format!("[stage]\nport = \"{port}\"\n")).unwrap();
     let args = ["--config", config.to_str().unwrap()];
-    let (mut child, _addr, mut lines) = spawn(&args, &dir);
+    let (mut child, _addr, mut log, out) = spawn(&args, &dir);
     assert!(
-        lines
-            .by_ref()
+        log.by_ref()
             .any(|l| l.contains("no trial starts by itself; waiting idle")),
     );
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
@@ -353,9 +374,10 @@ fn with_a_stage_configured_no_trial_starts_by_itself_and_it_waits_idle() {
         .status()
         .unwrap();
     assert!(status.success());
-    let rest: Vec<String> = lines.collect();
+    let rest: Vec<String> = log.collect();
+    let data: Vec<String> = out.collect();
     assert!(child.wait().unwrap().success(), "{rest:?}");
     assert!(!rest.iter().any(|l| l.contains("started")), "{rest:?}");
-    assert!(rest.iter().any(|l| l.contains("0 trials")), "{rest:?}");
+    assert!(data.iter().any(|l| l.contains("0 trials")), "{data:?}");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -69,8 +69,14 @@ fn the_example_files_parse_and_sim_toml_is_the_default() {
     );
     let robot = Config::from_toml_str(&text, "robot.toml").unwrap();
     assert_eq!(robot.bus.device, "/dev/i2c-1");
-    assert_eq!(robot.stage.port, "/dev/ttyUSB0");
-    assert_eq!(robot.servo.port, "/dev/ttyACM0");
+    // Serial ports by their stable /dev/serial/by-id/ names.
+    assert!(robot.stage.port.starts_with("/dev/serial/by-id/usb-FTDI_"));
+    assert!(
+        robot
+            .servo
+            .port
+            .starts_with("/dev/serial/by-id/usb-Pololu_")
+    );
     assert!(robot.server.token.is_some());
     assert_eq!(robot.server.token_env, None);
 }
