@@ -22,6 +22,7 @@
 //! ```
 
 pub mod acquisition;
+pub mod bus_budget;
 pub mod clock;
 pub mod config;
 pub mod daemon;
@@ -42,6 +43,7 @@ mod sim_bus;
 pub mod sim_rig;
 pub mod stage;
 pub mod vxm;
+pub mod watchdog;
 
 pub use fake_servo::{FakeServo, FakeServoError};
 pub use fake_stage::{FakeStage, FakeStageError};

@@ -38,6 +38,10 @@ pub enum SegmentFault {
     /// The segment's main loop has stopped: its I2C target still answers with the last word,
     /// but no new sample is published, so its sample counter stops moving.
     StuckCounter,
+    /// A transfer addressed to the segment never returns: the calling thread blocks for
+    /// good, as on a bus a segment holds low behind a driver without a timeout (the stuck
+    /// ioctl the daemon's watchdog is for).
+    Hang,
 }
 
 /// One simulated segment: a physical joint angle and touch switches, sampled by the
@@ -169,6 +173,12 @@ impl I2c for SimBus {
             .iter_mut()
             .find(|segment| segment.address() == address && segment.fault != SegmentFault::Nack)
             .ok_or(SimBusError::AddressNack(address))?;
+        if segment.fault == SegmentFault::Hang {
+            // Nothing can lift the fault from here: the thread that would is this one.
+            loop {
+                std::thread::park();
+            }
+        }
         let corrupt = segment.fault == SegmentFault::CorruptPec;
         let mut index = 0;
         while index < operations.len() {

@@ -48,6 +48,10 @@ pub enum StreamMessage {
         segments: Vec<SegmentStatus>,
         /// Free text, e.g. `"stage moving"`.
         note: Option<String>,
+        /// The polling thread as its watchdog sees it (added in 0.1 without a version
+        /// change; absent from older daemons' lines, read as `None`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        polling: Option<PollingStatus>,
     },
     /// Sent before the next message when messages were dropped for this (slow) client.
     Lagged {
@@ -140,6 +144,37 @@ pub struct SegmentStatus {
     pub pec_error: u64,
     /// Reads whose sample counter had not advanced.
     pub stale: u64,
+    /// Reads that failed with another bus error (arbitration lost, a bus fault, a timeout).
+    /// Added in 0.1; absent from older daemons' lines, read as 0.
+    #[serde(default)]
+    pub bus_error: u64,
+    /// The segment's status register (0x02) as last read: bit 0 ADC fault, bit 1 a touch
+    /// switch stuck closed, bit 2 address not assigned (`antenna_protocol::StatusFlags`);
+    /// `None` until first read (a few seconds after start). Added in 0.1.
+    #[serde(default)]
+    pub status_flags: Option<u8>,
+    /// The segment's firmware version (register 0x01) as last read, `"major.minor"`; `None`
+    /// until first read. Added in 0.1.
+    #[serde(default)]
+    pub firmware_version: Option<String>,
+}
+
+/// The polling thread as the daemon's watchdog sees it, in [`StreamMessage::Status`].
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PollingStatus {
+    /// No poll has finished for longer than `stall_after_ms`: the polling thread is stuck
+    /// (typically in an I2C transfer that does not return).
+    pub stalled: bool,
+    /// Milliseconds since the last poll finished.
+    pub since_last_poll_ms: u64,
+    /// The watchdog's bound, milliseconds.
+    pub stall_after_ms: u64,
+    /// Polls made since the daemon started.
+    pub polls: u64,
+    /// Poll deadlines missed since the daemon started (the thread was a whole period late).
+    pub missed_deadlines: u64,
+    /// Stalls seen since the daemon started, one going on included.
+    pub stalls: u64,
 }
 
 /// The reply to a control request.
