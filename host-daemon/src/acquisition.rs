@@ -300,7 +300,7 @@ where
                     firmware_due = tick.woke + FIRMWARE_READ_INTERVAL;
                     // Each segment's status, then its version, then the next segment's.
                     let k = (firmware_next / 2) % addresses.len();
-                    let reading = if firmware_next % 2 == 0 {
+                    let reading = if firmware_next.is_multiple_of(2) {
                         poller
                             .read_status(k)
                             .map_or_else(FirmwareReading::Unread, FirmwareReading::Status)
