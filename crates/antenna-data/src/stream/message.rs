@@ -318,4 +318,41 @@ mod tests {
         assert!(!sample.stale);
         assert_eq!((sample.contact, sample.touch_bits), (Some(true), None));
     }
+
+    /// The `status` example in docs/stream-protocol.md, byte for byte; a line from a daemon
+    /// without the bus fields (bus errors, firmware, the watchdog) still reads.
+    #[test]
+    fn documented_status_line_and_older_status_lines() {
+        let doc = include_str!("../../../../docs/stream-protocol.md");
+        let line = doc
+            .lines()
+            .find(|l| l.starts_with(r#"{"type":"status""#))
+            .unwrap();
+        let message: StreamMessage = serde_json::from_str(line).unwrap();
+        assert_eq!(serde_json::to_string(&message).unwrap(), line);
+        let StreamMessage::Status {
+            segments, polling, ..
+        } = &message
+        else {
+            panic!("not status: {message:?}");
+        };
+        assert_eq!(segments[0].firmware_version.as_deref(), Some("1.0"));
+        assert_eq!(polling.as_ref().map(|p| p.stall_after_ms), Some(100));
+        let old = r#"{"type":"status","t_ns":5,"trial":null,"segments":[{"address":33,"ok":4990,"nack":10,"pec_error":0,"stale":0}],"note":null}"#;
+        let StreamMessage::Status {
+            segments, polling, ..
+        } = serde_json::from_str(old).unwrap()
+        else {
+            panic!("not status");
+        };
+        assert_eq!(polling, None);
+        assert_eq!(
+            (
+                segments[0].bus_error,
+                segments[0].status_flags,
+                segments[0].firmware_version.clone()
+            ),
+            (0, None, None)
+        );
+    }
 }
