@@ -539,6 +539,7 @@ fn on_message(
             trial,
             segments,
             note,
+            ..
         } => {
             state.status = Some(DaemonStatus {
                 t_s: t_ns as f64 * 1e-9,

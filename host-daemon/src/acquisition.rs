@@ -4,10 +4,17 @@
 //! - **Polling** ([`spawn_poller`]): a dedicated thread wakes on absolute deadlines
 //!   (`start + k * period`, [`Schedule`]), reads every segment through the [`Poller`]
 //!   (PEC-checked 3-byte reads), stamps the poll with the time since the trial started and
-//!   sends it. Every `counter_check_every` polls it also reads each segment's sample counter:
-//!   a counter that has not moved marks the segment stale ([`PollRecord::stale_mask`]). A
-//!   NACK, a PEC error or a stale counter is recorded in the segment's health and the poll
-//!   goes on.
+//!   sends it. After the reads it makes at most one housekeeping register read, round-robin,
+//!   so every poll costs the bus the same (`crate::bus_budget`): in each cycle of
+//!   `counter_check_every` polls (at least one more than there are segments) the first polls
+//!   read one segment's sample counter each, and a counter that has not moved marks the
+//!   segment stale ([`PollRecord::stale_mask`]); in the others, every
+//!   [`FIRMWARE_READ_INTERVAL`], the next segment's status register or firmware version
+//!   ([`AcquisitionEvent::Firmware`]: each segment's status every few seconds). A NACK, a PEC
+//!   error, a bus error or a stale counter is recorded in the segment's health and the poll
+//!   goes on. After every poll the thread beats its [`PollHeartbeat`], which the daemon's
+//!   watchdog reads ([`crate::watchdog`]): a poll stuck in the I2C driver is seen from
+//!   outside.
 //! - **Motion**: the motion thread (`crate::motion`, the daemon's one motion loop) samples
 //!   the stage position and the base angle at their own rates under the same clock and sends
 //!   them into the same stream.
@@ -17,7 +24,9 @@
 //!   forwards events to the recorder and the TCP server, which have their own queues).
 
 use crate::clock::{Schedule, TrialClock};
-use crate::poll::{CounterCheck, Poller, SegmentHealth, SegmentReading};
+use crate::poll::{CounterCheck, PollError, Poller, SegmentHealth, SegmentReading};
+use crate::watchdog::PollHeartbeat;
+use antenna_protocol::StatusFlags;
 use embedded_hal::i2c::I2c;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
@@ -57,6 +66,21 @@ pub enum HealthChange {
     Recovered,
 }
 
+/// How often the polling thread reads a firmware register (status or version, one segment
+/// at a time, round-robin): with 9 segments each one's status every 4.5 s.
+pub const FIRMWARE_READ_INTERVAL: Duration = Duration::from_millis(250);
+
+/// What a read of a segment's firmware registers found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FirmwareReading {
+    /// The status register (0x02): the firmware's own fault flags.
+    Status(StatusFlags),
+    /// The firmware version register (0x01): (major, minor).
+    Version(u8, u8),
+    /// The read failed (it is not counted in the segment's health, which counts polls).
+    Unread(PollError),
+}
+
 /// What the acquisition threads send.
 #[derive(Debug, Clone, PartialEq)]
 pub enum AcquisitionEvent {
@@ -84,6 +108,15 @@ pub enum AcquisitionEvent {
         address: u8,
         /// What changed.
         change: HealthChange,
+    },
+    /// A segment's firmware register, read at a low rate.
+    Firmware {
+        /// Nanoseconds since the trial started.
+        t_ns: u64,
+        /// The segment.
+        address: u8,
+        /// What the read found.
+        reading: FirmwareReading,
     },
     /// Something the trial did or refused (a move started, a move beyond the soft limits).
     Note {
@@ -134,7 +167,8 @@ pub fn event_channel(capacity: usize) -> (EventSender, Receiver<AcquisitionEvent
 pub struct PollSettings {
     /// Poll period.
     pub period: Duration,
-    /// Read the sample counters every this many polls (at least 1).
+    /// Read each segment's sample counter every this many polls (one segment per poll, so
+    /// at least one poll more than there are segments).
     pub counter_check_every: u32,
     /// Busy-wait this long before each deadline (zero: sleep only).
     pub spin: Duration,
@@ -164,12 +198,38 @@ pub struct PollReport<I> {
 /// let its segments sample; give `|_, _| {}` for hardware, whose segments sample on their
 /// own).
 pub fn spawn_poller<I, H>(
+    poller: Poller<I>,
+    clock: TrialClock,
+    settings: PollSettings,
+    before_poll: H,
+    events: EventSender,
+    stop: Arc<AtomicBool>,
+) -> std::io::Result<JoinHandle<PollReport<I>>>
+where
+    I: I2c + Send + 'static,
+    H: FnMut(&mut I, Duration) + Send + 'static,
+{
+    let heartbeat = Arc::new(PollHeartbeat::new(clock.elapsed_ns()));
+    spawn_watched_poller(
+        poller,
+        clock,
+        settings,
+        before_poll,
+        events,
+        stop,
+        heartbeat,
+    )
+}
+
+/// [`spawn_poller`], beating `heartbeat` after every poll for a watchdog to read.
+pub fn spawn_watched_poller<I, H>(
     mut poller: Poller<I>,
     clock: TrialClock,
     settings: PollSettings,
     mut before_poll: H,
     events: EventSender,
     stop: Arc<AtomicBool>,
+    heartbeat: Arc<PollHeartbeat>,
 ) -> std::io::Result<JoinHandle<PollReport<I>>>
 where
     I: I2c + Send + 'static,
@@ -196,8 +256,13 @@ where
                 });
             }
             let mut schedule = Schedule::new(clock, settings.period).with_spin(settings.spin);
-            let check_every = u64::from(settings.counter_check_every.max(1));
             let addresses = poller.addresses().to_vec();
+            let segments = addresses.len() as u64;
+            // One counter read per poll for the first `segments` polls of each cycle; at
+            // least one poll per cycle is left for the firmware registers.
+            let cycle = u64::from(settings.counter_check_every.max(1)).max(segments + 1);
+            let mut firmware_due = Duration::ZERO;
+            let mut firmware_next = 0usize;
             let mut stale_mask = 0u64;
             let mut skipped = 0;
             let mut max_lateness = Duration::ZERO;
@@ -207,30 +272,52 @@ where
                 max_lateness = max_lateness.max(tick.lateness());
                 before_poll(poller.bus_mut(), tick.woke);
                 let readings = poller.poll_all();
-                if tick.index % check_every == check_every - 1 {
-                    let t_ns = clock.elapsed_ns();
-                    for (k, check) in poller.check_counters().into_iter().enumerate() {
-                        let bit = if k < 64 { 1u64 << k } else { 0 };
-                        let was = stale_mask & bit != 0;
-                        let change = match check {
-                            CounterCheck::Stale if !was => Some(HealthChange::Stale),
-                            CounterCheck::Moving if was => Some(HealthChange::Recovered),
-                            _ => None,
-                        };
-                        match check {
-                            CounterCheck::Stale => stale_mask |= bit,
-                            CounterCheck::Moving => stale_mask &= !bit,
-                            CounterCheck::Unread => {}
-                        }
-                        if let Some(change) = change {
-                            events.send(AcquisitionEvent::Health {
-                                t_ns,
-                                address: addresses[k],
-                                change,
-                            });
-                        }
+                let slot = tick.index % cycle;
+                if slot < segments {
+                    let k = slot as usize;
+                    let check = poller.check_counter(k);
+                    let bit = if k < 64 { 1u64 << k } else { 0 };
+                    let was = stale_mask & bit != 0;
+                    let change = match check {
+                        CounterCheck::Stale if !was => Some(HealthChange::Stale),
+                        CounterCheck::Moving if was => Some(HealthChange::Recovered),
+                        _ => None,
+                    };
+                    match check {
+                        CounterCheck::Stale => stale_mask |= bit,
+                        CounterCheck::Moving => stale_mask &= !bit,
+                        CounterCheck::Unread => {}
                     }
+                    if let Some(change) = change {
+                        events.send(AcquisitionEvent::Health {
+                            t_ns: clock.elapsed_ns(),
+                            address: addresses[k],
+                            change,
+                        });
+                    }
+                } else if tick.woke >= firmware_due && !addresses.is_empty() {
+                    firmware_due = tick.woke + FIRMWARE_READ_INTERVAL;
+                    // Each segment's status, then its version, then the next segment's.
+                    let k = (firmware_next / 2) % addresses.len();
+                    let reading = if firmware_next.is_multiple_of(2) {
+                        poller
+                            .read_status(k)
+                            .map_or_else(FirmwareReading::Unread, FirmwareReading::Status)
+                    } else {
+                        poller
+                            .read_version(k)
+                            .map_or_else(FirmwareReading::Unread, |v| {
+                                FirmwareReading::Version(v.0, v.1)
+                            })
+                    };
+                    firmware_next = (firmware_next + 1) % (2 * addresses.len());
+                    events.send(AcquisitionEvent::Firmware {
+                        t_ns: clock.elapsed_ns(),
+                        address: addresses[k],
+                        reading,
+                    });
                 }
+                heartbeat.beat(clock.elapsed_ns(), tick.skipped);
                 events.send(AcquisitionEvent::Poll(PollRecord {
                     seq: tick.index,
                     t_ns: nanos(tick.woke),

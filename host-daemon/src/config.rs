@@ -96,8 +96,17 @@ pub struct BusConfig {
     pub device: String,
     /// Poll rate, hertz (every segment read once per period).
     pub poll_hz: f64,
-    /// Read every segment's sample counter every this many polls (a counter that has not
-    /// moved since the last check marks the segment stale).
+    /// The bus clock, hertz, as the board sets it (the device tree; antennad does not change
+    /// it): a poll rate the bus cannot carry is refused, with the arithmetic
+    /// ([`crate::bus_budget`]). Left out: 100 kHz (standard mode) for a real device; the
+    /// simulated bus moves no bits and is treated as unlimited unless this is given (then it
+    /// is checked as a real bus would be, to try a hardware configuration on the simulator).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_hz: Option<u32>,
+    /// Read each segment's sample counter every this many polls (a counter that has not
+    /// moved since the last check marks the segment stale). The counters are read one per
+    /// poll, round-robin, so a cycle is never shorter than one poll more than there are
+    /// segments.
     pub counter_check_every: u32,
     /// Busy-wait this many microseconds before each poll deadline instead of sleeping
     /// (0: sleep only). Cuts wake-up lateness to about a microsecond at the cost of CPU.
@@ -117,6 +126,7 @@ impl Default for BusConfig {
         Self {
             device: "sim".to_owned(),
             poll_hz: 1000.0,
+            speed_hz: None,
             counter_check_every: 50,
             spin_us: 0,
             realtime_priority: 50,
@@ -153,6 +163,16 @@ impl BusConfig {
     /// The segment addresses, base to tip.
     pub fn addresses(&self) -> Vec<u8> {
         self.segments.iter().map(|s| s.address).collect()
+    }
+
+    /// The bus clock the poll rate is checked against: `bus.speed_hz`, or 100 kHz for a real
+    /// device; `None` for the simulated bus without `bus.speed_hz` (unlimited).
+    pub fn checked_speed_hz(&self) -> Option<u32> {
+        match self.speed_hz {
+            Some(speed_hz) => Some(speed_hz),
+            None if self.is_sim() => None,
+            None => Some(crate::bus_budget::DEFAULT_HARDWARE_SPEED_HZ),
+        }
     }
 
     /// The segment calibrations, base to tip.
@@ -455,6 +475,9 @@ pub enum SimFaultKind {
     Pec,
     /// Its main loop stops: it answers with its last word, its sample counter stuck.
     Stuck,
+    /// The first transfer to it from `from_s` on never returns: the polling thread is stuck
+    /// in it for good (`until_s` cannot end it), as behind an I2C driver without a timeout.
+    Hang,
 }
 
 /// A fault injected into one simulated segment for a while.
@@ -463,7 +486,7 @@ pub enum SimFaultKind {
 pub struct SimFaultConfig {
     /// The segment's address (one of `bus.segments`).
     pub address: u8,
-    /// `nack`, `pec` or `stuck`.
+    /// `nack`, `pec`, `stuck` or `hang`.
     pub kind: SimFaultKind,
     /// From this many seconds after the daemon started...
     pub from_s: f64,
@@ -677,6 +700,18 @@ impl Config {
         }
         if bus.counter_check_every == 0 {
             return fail("bus.counter_check_every", "must be at least 1".to_owned());
+        }
+        if let Some(speed_hz) = bus.checked_speed_hz()
+            && let Err(why) =
+                crate::bus_budget::BusBudget::new(bus.segments.len(), bus.poll_hz, speed_hz).check()
+        {
+            // Named by the key the file gave (the rate when the speed was left out).
+            let key = if bus.speed_hz.is_some() {
+                "bus.speed_hz"
+            } else {
+                "bus.poll_hz"
+            };
+            return fail(key, why);
         }
         if bus.spin_us * 1000 >= (1e9 / bus.poll_hz) as u64 {
             return fail(

@@ -56,8 +56,8 @@
 //! ```
 
 use crate::acquisition::{
-    AcquisitionEvent, EventSender, HealthChange, PollRecord, PollSettings, Shared, event_channel,
-    spawn_poller,
+    AcquisitionEvent, EventSender, FirmwareReading, HealthChange, PollRecord, PollSettings, Shared,
+    event_channel, spawn_watched_poller,
 };
 use crate::clock::TrialClock;
 use crate::config::{Config, SimFaultKind};
@@ -71,15 +71,16 @@ use crate::service::Watchdog;
 use crate::sim_rig::{SimState, sense, sim_bus};
 use crate::trial_script::ScriptEnds;
 use crate::vxm::VxmKill;
+use crate::watchdog::{PollHeartbeat, PollWatchdog, WatchdogEvent, stall_bound};
 use crate::{SegmentFault, SimBus};
 use antenna_data::record::{
     LogMessage, RecordCounts, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
     TrialRecorder,
 };
 use antenna_data::stream::{
-    ControlCommand, RigInfo, RigWall, SegmentStatus, StageTarget, StreamMessage,
+    ControlCommand, PollingStatus, RigInfo, RigWall, SegmentStatus, StageTarget, StreamMessage,
 };
-use antenna_protocol::Calibration;
+use antenna_protocol::{Calibration, FIRMWARE_VERSION, StatusFlags};
 use anyhow::{Context, Result, anyhow, bail};
 use std::collections::{BTreeMap, VecDeque};
 use std::net::SocketAddr;
@@ -94,6 +95,9 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 const CONTROL_TIMEOUT: Duration = Duration::from_secs(5);
 /// Log lines kept for [`DaemonHandle::log_lines`].
 const LOG_LINES_KEPT: usize = 4000;
+/// How long a stopping daemon waits for its polling thread (at least; longer if the
+/// watchdog's bound is longer) before leaving it behind in a transfer that does not return.
+const POLL_THREAD_STOP_WAIT: Duration = Duration::from_secs(1);
 
 /// How [`Daemon::start`] runs the daemon.
 #[derive(Debug, Clone)]
@@ -188,6 +192,10 @@ pub struct DaemonSummary {
     pub health: Vec<SegmentHealth>,
     /// Acquisition events dropped because the hub fell behind (should be 0).
     pub dropped: u64,
+    /// The polling thread was still stuck (in a bus transfer that did not return) when the
+    /// daemon stopped: it was left behind, the recording finalized without it, and the
+    /// counts above are what the hub had seen.
+    pub poll_thread_stuck: bool,
     /// The trials, in order.
     pub trials: Vec<TrialOutcome>,
     /// How long the daemon ran.
@@ -489,7 +497,33 @@ fn free_path(dir: &Path, name: &str) -> PathBuf {
         .unwrap_or(first)
 }
 
-type PollJoin = Box<dyn FnOnce() -> Result<(u64, u64, Duration, Vec<SegmentHealth>)> + Send>;
+/// What the polling thread reports when it stops: polls, deadlines skipped, the latest
+/// wake-up, health per segment.
+type PollTotals = (u64, u64, Duration, Vec<SegmentHealth>);
+
+/// Waits at most the given time for the polling thread to stop: `None` if it has not (stuck
+/// in a bus transfer; it is then left behind, not joined).
+type PollJoin = Box<dyn FnOnce(Duration) -> Result<Option<PollTotals>> + Send>;
+
+/// A [`PollJoin`] for the polling thread `handle`.
+fn bounded_join<I: Send + 'static>(
+    handle: JoinHandle<crate::acquisition::PollReport<I>>,
+) -> PollJoin {
+    Box::new(move |bound: Duration| {
+        let deadline = Instant::now() + bound;
+        while !handle.is_finished() {
+            if Instant::now() >= deadline {
+                // Dropping the handle detaches the thread: it stays in its transfer.
+                return Ok(None);
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let r = handle
+            .join()
+            .map_err(|_| anyhow!("the polling thread panicked"))?;
+        Ok(Some((r.polls, r.skipped, r.max_lateness, r.health)))
+    })
+}
 
 impl Daemon {
     /// Starts the daemon of `config`: opens the bus (`bus.device`), the stage and the servo,
@@ -534,32 +568,40 @@ impl Daemon {
             spin: Duration::from_micros(config.bus.spin_us),
             realtime_priority: config.bus.realtime_priority,
         };
+        let heartbeat = Arc::new(PollHeartbeat::new(clock.elapsed_ns()));
         let (poll_join, bus_description) = match &sim_state {
             Some(state) => {
-                let handle = spawn_poller(
+                let handle = spawn_watched_poller(
                     Poller::new(sim_bus(&config), &addresses),
                     clock,
                     settings,
                     sense_with_faults(sense(Arc::clone(state)), &config),
                     events.clone(),
                     Arc::clone(&stop_threads),
+                    Arc::clone(&heartbeat),
                 )
                 .context("starting the polling thread")?;
-                let join: PollJoin = Box::new(move || {
-                    let r = handle
-                        .join()
-                        .map_err(|_| anyhow!("the polling thread panicked"))?;
-                    Ok((r.polls, r.skipped, r.max_lateness, r.health))
-                });
-                (join, "simulated rig (virtual I2C bus)".to_owned())
+                (
+                    bounded_join(handle),
+                    "simulated rig (virtual I2C bus)".to_owned(),
+                )
             }
-            None => hardware_poller(&config, &addresses, clock, settings, &events, &stop_threads)?,
+            None => hardware_poller(
+                &config,
+                &addresses,
+                clock,
+                settings,
+                &events,
+                (&stop_threads, &heartbeat),
+            )?,
         };
+        // However the daemon stops, it waits this long for the polling thread, not forever.
+        let poll_join_bound = stall_bound(settings.period).max(POLL_THREAD_STOP_WAIT);
         let rig = match DaemonRig::open(&config, sim_state.clone()) {
             Ok(rig) => rig,
             Err(e) => {
                 stop_threads.store(true, Ordering::Relaxed);
-                let _ = poll_join();
+                let _ = poll_join(poll_join_bound);
                 return Err(e);
             }
         };
@@ -618,7 +660,7 @@ impl Daemon {
                 Err(e) => {
                     stop_threads.store(true, Ordering::Relaxed);
                     let _ = motion.join();
-                    let _ = poll_join();
+                    let _ = poll_join(poll_join_bound);
                     return Err(anyhow!(e)).context(format!(
                         "`server.listen` = {:?}: starting the TCP server",
                         config.server.listen
@@ -633,9 +675,10 @@ impl Daemon {
         let last = &addresses[addresses.len() - 1];
         log.line(format!(
             "antennad: {bus_description}; {} segments at {first:#04x}..={last:#04x}, polling at \
-             {} Hz; {rig_description}",
+             {} Hz ({}); {rig_description}",
             addresses.len(),
             config.bus.poll_hz,
+            bus_load(&config),
         ));
         if let Some(addr) = local_addr {
             let token_source = if token_generated {
@@ -683,14 +726,19 @@ impl Daemon {
                     nack: 0,
                     pec_error: 0,
                     stale: 0,
+                    bus_error: 0,
+                    status_flags: None,
+                    firmware_version: None,
                 })
                 .collect(),
+            watchdog: PollWatchdog::new(heartbeat, stall_bound(settings.period)),
             note: None,
             status_due: Instant::now(),
             outcomes: Vec::new(),
             finished: false,
             sim_state: sim_state.clone(),
             sim_relaxed_logged: 0,
+            max_lateness_seen: Duration::ZERO,
         };
         if let Some(name) = &options.first_trial {
             let name = hub
@@ -701,7 +749,7 @@ impl Daemon {
             if let Err(e) = hub.start_trial(&name, BTreeMap::new(), options.first_trial_duration) {
                 stop_threads.store(true, Ordering::Relaxed);
                 let _ = motion.join();
-                let _ = poll_join();
+                let _ = poll_join(poll_join_bound);
                 bail!("starting trial {name:?}: {e}");
             }
         }
@@ -713,20 +761,26 @@ impl Daemon {
                     hub.run(&receiver, &hub_rx, &stop);
                     stop_threads.store(true, Ordering::Relaxed);
                     let motion_ok = motion.join().is_ok();
-                    let polled = poll_join();
+                    let polled = poll_join(poll_join_bound)?;
                     // Whatever the threads sent last.
                     hub.drain(&receiver);
+                    if polled.is_none() {
+                        hub.poll_thread_left_behind(poll_join_bound);
+                    }
                     hub.finish();
                     if !motion_ok {
                         bail!("the motion thread panicked");
                     }
-                    let (polls, skipped, max_lateness, health) = polled?;
+                    let poll_thread_stuck = polled.is_none();
+                    let (polls, skipped, max_lateness, health) =
+                        polled.unwrap_or_else(|| hub.totals_seen());
                     Ok(DaemonSummary {
                         polls,
                         skipped,
                         max_lateness,
                         health,
                         dropped: events.dropped(),
+                        poll_thread_stuck,
                         trials: hub.outcomes,
                         elapsed: clock.elapsed(),
                     })
@@ -798,6 +852,7 @@ fn sense_with_faults(
                 SimFaultKind::Nack => SegmentFault::Nack,
                 SimFaultKind::Pec => SegmentFault::CorruptPec,
                 SimFaultKind::Stuck => SegmentFault::StuckCounter,
+                SimFaultKind::Hang => SegmentFault::Hang,
             };
             Some((
                 index,
@@ -824,6 +879,43 @@ fn sense_with_faults(
     }
 }
 
+/// What a poll costs the bus, for the start line: `"399 bit times a poll, 40 % of the period
+/// at bus.speed_hz = 1000000"` or the simulated bus's `"virtual bus: no bit-time limit"`.
+fn bus_load(config: &Config) -> String {
+    let bus = &config.bus;
+    match bus.checked_speed_hz() {
+        Some(speed_hz) => {
+            let budget =
+                crate::bus_budget::BusBudget::new(bus.segments.len(), bus.poll_hz, speed_hz);
+            format!(
+                "{} bit times a poll, {:.0} % of the period at bus.speed_hz = {speed_hz}",
+                budget.bit_times_per_poll(),
+                budget.share() * 100.0
+            )
+        }
+        None => "virtual bus: no bit-time limit".to_owned(),
+    }
+}
+
+/// The names of the status register's flags that are set, e.g. `["ADC fault"]`.
+fn flag_names(flags: StatusFlags) -> Vec<String> {
+    let mut names = Vec::new();
+    if flags.adc_fault() {
+        names.push("ADC fault (angle sensor on a rail)".to_owned());
+    }
+    if flags.touch_stuck() {
+        names.push("touch switch stuck closed".to_owned());
+    }
+    if flags.address_not_set() {
+        names.push("address not assigned".to_owned());
+    }
+    let unknown = flags.bits() & !StatusFlags::DEFINED;
+    if unknown != 0 {
+        names.push(format!("unknown flags {unknown:#04x}"));
+    }
+    names
+}
+
 fn trial_names(config: &Config) -> String {
     config
         .trials
@@ -841,25 +933,23 @@ fn hardware_poller(
     clock: TrialClock,
     settings: PollSettings,
     events: &EventSender,
-    stop: &Arc<AtomicBool>,
+    (stop, heartbeat): (&Arc<AtomicBool>, &Arc<PollHeartbeat>),
 ) -> Result<(PollJoin, String)> {
     let bus = crate::i2c_bus::LinuxI2cBus::open(&config.bus.device, addresses)?;
-    let handle = spawn_poller(
+    let handle = spawn_watched_poller(
         Poller::new(bus, addresses),
         clock,
         settings,
         |_: &mut crate::i2c_bus::LinuxI2cBus, _| {},
         events.clone(),
         Arc::clone(stop),
+        Arc::clone(heartbeat),
     )
     .context("starting the polling thread")?;
-    let join: PollJoin = Box::new(move || {
-        let r = handle
-            .join()
-            .map_err(|_| anyhow!("the polling thread panicked"))?;
-        Ok((r.polls, r.skipped, r.max_lateness, r.health))
-    });
-    Ok((join, format!("I2C bus {}", config.bus.device)))
+    Ok((
+        bounded_join(handle),
+        format!("I2C bus {}", config.bus.device),
+    ))
 }
 
 /// The polling thread on a hardware bus: Linux only.
@@ -870,7 +960,7 @@ fn hardware_poller(
     _clock: TrialClock,
     _settings: PollSettings,
     _events: &EventSender,
-    _stop: &Arc<AtomicBool>,
+    _stop: (&Arc<AtomicBool>, &Arc<PollHeartbeat>),
 ) -> Result<(PollJoin, String)> {
     bail!(
         "`bus.device` = {:?}: hardware I2C needs Linux; use \"sim\"",
@@ -920,6 +1010,10 @@ struct Hub {
     sim_state: Option<Shared<SimState>>,
     /// Relaxed steps of the simulation already logged.
     sim_relaxed_logged: u64,
+    /// Watches the polling thread's heartbeat.
+    watchdog: PollWatchdog,
+    /// The latest poll wake-up after its deadline, as the hub saw the polls.
+    max_lateness_seen: Duration,
 }
 
 impl Hub {
@@ -947,11 +1041,85 @@ impl Hub {
             while let Ok(request) = requests.try_recv() {
                 self.on_request(request);
             }
+            self.check_watchdog();
             self.check_trial_end();
             if Instant::now() >= self.status_due {
                 self.publish_status();
             }
         }
+    }
+
+    /// Looks at the polling thread's heartbeat: a stall starting or ending is logged,
+    /// recorded in the trial and sent in a status line.
+    fn check_watchdog(&mut self) {
+        let now_ns = self.clock.elapsed_ns();
+        let Some(event) = self.watchdog.check(now_ns) else {
+            return;
+        };
+        let text = match event {
+            WatchdogEvent::Stalled {
+                last_poll_ns,
+                silent,
+            } => format!(
+                "polling stalled: no poll since t = {:.3} s, {} ms ago (bound {} ms); the \
+                 polling thread is stuck, most likely in an I2C transfer that does not return; \
+                 no samples until it does",
+                self.t_s(last_poll_ns),
+                silent.as_millis(),
+                self.watchdog.status(now_ns).bound.as_millis()
+            ),
+            WatchdogEvent::Resumed {
+                stalled_for,
+                missed_deadlines,
+            } => format!(
+                "polling resumed after {} ms without a poll; {missed_deadlines} poll deadlines \
+                 missed",
+                stalled_for.as_millis()
+            ),
+        };
+        self.log
+            .line(format!("{:7.2}   -- {text}", self.t_s(now_ns)));
+        self.record_log(now_ns, &text);
+        self.note = Some(text);
+        self.publish_status();
+    }
+
+    /// The polling thread did not stop within `waited` (stuck in a transfer): said in the
+    /// log and, before it is finalized, in the running trial's recording.
+    fn poll_thread_left_behind(&mut self, waited: Duration) {
+        let now_ns = self.clock.elapsed_ns();
+        let text = format!(
+            "the polling thread did not stop within {} ms (last poll at t = {:.3} s; stuck in a \
+             bus transfer): left behind, the recording is finalized without it",
+            waited.as_millis(),
+            self.t_s(self.watchdog.heartbeat().last_poll_ns())
+        );
+        self.log.line(format!("antennad: {text}"));
+        self.record_log(now_ns, &text);
+    }
+
+    /// Polls, deadlines skipped, the latest wake-up and the health per segment as the hub
+    /// counted them (for a polling thread that never reported; `stale` counts polls made
+    /// while the segment was stale).
+    fn totals_seen(&self) -> PollTotals {
+        let heartbeat = self.watchdog.heartbeat();
+        let health = self
+            .health
+            .iter()
+            .map(|s| SegmentHealth {
+                ok: s.ok,
+                nacks: s.nack,
+                pec_errors: s.pec_error,
+                bus_errors: s.bus_error,
+                stale: s.stale,
+            })
+            .collect();
+        (
+            heartbeat.polls(),
+            heartbeat.missed_deadlines(),
+            self.max_lateness_seen,
+            health,
+        )
     }
 
     fn drain(&mut self, receiver: &Receiver<AcquisitionEvent>) {
@@ -1271,7 +1439,51 @@ impl Hub {
                 self.note = Some(text.clone());
                 self.publish_status();
             }
+            AcquisitionEvent::Firmware {
+                t_ns,
+                address,
+                reading,
+            } => self.on_firmware(*t_ns, *address, *reading),
         }
+    }
+
+    /// A firmware register read: kept in the segment's status; a change of its flags, or a
+    /// version other than the one this antennad speaks, is logged and recorded.
+    fn on_firmware(&mut self, t_ns: u64, address: u8, reading: FirmwareReading) {
+        let Some(status) = self.health.iter_mut().find(|s| s.address == address) else {
+            return;
+        };
+        let text = match reading {
+            FirmwareReading::Status(flags) => {
+                let previous = status.status_flags.replace(flags.bits());
+                if previous.unwrap_or(0) == flags.bits() {
+                    return;
+                }
+                let names = flag_names(flags);
+                if names.is_empty() {
+                    format!("segment {address:#04x}: firmware status clear again")
+                } else {
+                    format!("segment {address:#04x} reports {}", names.join(", "))
+                }
+            }
+            FirmwareReading::Version(major, minor) => {
+                let version = format!("{major}.{minor}");
+                let previous = status.firmware_version.replace(version.clone());
+                if previous.as_ref() == Some(&version) || (major, minor) == FIRMWARE_VERSION {
+                    return;
+                }
+                format!(
+                    "segment {address:#04x} runs firmware {version}; this antennad speaks \
+                     protocol {}.{}",
+                    FIRMWARE_VERSION.0, FIRMWARE_VERSION.1
+                )
+            }
+            FirmwareReading::Unread(_) => return,
+        };
+        self.log.line(format!("{:7.2}   -- {text}", self.t_s(t_ns)));
+        self.record_log(t_ns, &text);
+        self.note = Some(text);
+        self.publish_status();
     }
 
     fn record_log(&mut self, t_ns: u64, text: &str) {
@@ -1307,12 +1519,15 @@ impl Hub {
 
     fn on_poll(&mut self, poll: &PollRecord) {
         self.log_sim_relaxations();
+        self.max_lateness_seen = self.max_lateness_seen.max(Duration::from_nanos(
+            poll.t_ns.saturating_sub(poll.deadline_ns),
+        ));
         for (k, (reading, status)) in poll.readings.iter().zip(&mut self.health).enumerate() {
             match reading.result {
                 Ok(_) => status.ok += 1,
                 Err(PollError::Nack { .. }) => status.nack += 1,
                 Err(PollError::Corrupted { .. }) => status.pec_error += 1,
-                Err(PollError::Bus { .. }) => {}
+                Err(PollError::Bus { .. }) => status.bus_error += 1,
             }
             if poll.is_stale(k) {
                 status.stale += 1;
@@ -1375,14 +1590,41 @@ impl Hub {
         if !self.rig_status.servo.load(Ordering::Relaxed) {
             notes.push("servo unavailable".to_owned());
         }
+        let now_ns = self.clock.elapsed_ns();
+        let polling = self.watchdog.status(now_ns);
+        if polling.stalled {
+            notes.push(format!(
+                "polling stalled for {} ms",
+                polling.since_last_poll.as_millis()
+            ));
+        }
+        for segment in &self.health {
+            let names = flag_names(StatusFlags::from_bits(segment.status_flags.unwrap_or(0)));
+            if !names.is_empty() {
+                notes.push(format!(
+                    "segment {:#04x}: {}",
+                    segment.address,
+                    names.join(", ")
+                ));
+            }
+        }
         if let Some(note) = self.note.take() {
             notes.push(note);
         }
         server.publish(&StreamMessage::Status {
-            t_ns: self.clock.elapsed_ns(),
+            t_ns: now_ns,
             trial: self.trial.as_ref().map(|t| t.name.clone()),
             segments: self.health.clone(),
             note: (!notes.is_empty()).then(|| notes.join("; ")),
+            polling: Some(PollingStatus {
+                stalled: polling.stalled,
+                since_last_poll_ms: u64::try_from(polling.since_last_poll.as_millis())
+                    .unwrap_or(u64::MAX),
+                stall_after_ms: u64::try_from(polling.bound.as_millis()).unwrap_or(u64::MAX),
+                polls: polling.polls,
+                missed_deadlines: polling.missed_deadlines,
+                stalls: polling.stalls,
+            }),
         });
     }
 }

@@ -6,6 +6,13 @@
 //! [`LinuxI2cBus`] opens one `I2cdev` per segment address at start (each keeps its address)
 //! plus one for any other address.
 //!
+//! A failed transfer's errno is sorted as the kernel's I2C fault codes say
+//! (Documentation/i2c/fault-codes): `ENXIO` (no acknowledge of the address) and
+//! `EREMOTEIO` (what several controller drivers answer for a missing acknowledge, which
+//! linux-embedded-hal leaves as `ErrorKind::Other`) are NACKs; `ENODEV` a data NACK, `EAGAIN`
+//! a lost arbitration, `EIO`, `EBUSY`, `EINVAL`, `ETIMEDOUT` and the rest bus errors
+//! ([`LinuxI2cError`]).
+//!
 //! ```
 //! use host_daemon::i2c_bus::LinuxI2cBus;
 //!
@@ -13,7 +20,7 @@
 //! assert!(error.to_string().starts_with("`bus.device` = \"/dev/i2c-250\": cannot open"));
 //! ```
 
-use embedded_hal::i2c::{ErrorType, I2c, Operation};
+use embedded_hal::i2c::{Error as _, ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use linux_embedded_hal::{I2CError, I2cdev};
 
 /// The I2C device named by `bus.device` could not be opened.
@@ -79,8 +86,78 @@ impl LinuxI2cBus {
     }
 }
 
+/// A failed transfer on a Linux I2C device: its errno, sorted into an [`ErrorKind`].
+///
+/// ```
+/// use embedded_hal::i2c::{Error, ErrorKind, NoAcknowledgeSource};
+/// use host_daemon::i2c_bus::LinuxI2cError;
+///
+/// // EREMOTEIO (121): a missing acknowledge on drivers that say so.
+/// let error = LinuxI2cError::from_errno(121);
+/// assert_eq!(error.kind(), ErrorKind::NoAcknowledge(NoAcknowledgeSource::Unknown));
+/// assert_eq!(LinuxI2cError::from_errno(5).kind(), ErrorKind::Bus); // EIO
+/// ```
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct LinuxI2cError {
+    errno: Option<i32>,
+    kind: ErrorKind,
+    message: String,
+}
+
+impl LinuxI2cError {
+    /// The error of a transfer that failed with `errno`.
+    pub fn from_errno(errno: i32) -> Self {
+        Self {
+            errno: Some(errno),
+            kind: errno_kind(errno),
+            message: std::io::Error::from_raw_os_error(errno).to_string(),
+        }
+    }
+
+    /// The errno, when the failure had one.
+    pub fn errno(&self) -> Option<i32> {
+        self.errno
+    }
+}
+
+impl From<I2CError> for LinuxI2cError {
+    fn from(error: I2CError) -> Self {
+        let errno = match error.inner() {
+            i2cdev::linux::LinuxI2CError::Errno(errno) => Some(*errno),
+            i2cdev::linux::LinuxI2CError::Io(e) => e.raw_os_error(),
+        };
+        match errno {
+            Some(errno) => Self::from_errno(errno),
+            None => Self {
+                errno: None,
+                kind: error.kind(),
+                message: error.to_string(),
+            },
+        }
+    }
+}
+
+impl embedded_hal::i2c::Error for LinuxI2cError {
+    fn kind(&self) -> ErrorKind {
+        self.kind
+    }
+}
+
+/// The kind of a failed I2C transfer's errno (the kernel's I2C fault codes).
+fn errno_kind(errno: i32) -> ErrorKind {
+    match errno {
+        libc::ENXIO => ErrorKind::NoAcknowledge(NoAcknowledgeSource::Address),
+        libc::EREMOTEIO => ErrorKind::NoAcknowledge(NoAcknowledgeSource::Unknown),
+        libc::ENODEV => ErrorKind::NoAcknowledge(NoAcknowledgeSource::Data),
+        libc::EAGAIN => ErrorKind::ArbitrationLoss,
+        libc::EIO | libc::EBUSY | libc::EINVAL | libc::ETIMEDOUT | libc::EPROTO => ErrorKind::Bus,
+        _ => ErrorKind::Other,
+    }
+}
+
 impl ErrorType for LinuxI2cBus {
-    type Error = I2CError;
+    type Error = LinuxI2cError;
 }
 
 impl I2c for LinuxI2cBus {
@@ -93,6 +170,75 @@ impl I2c for LinuxI2cBus {
             Some((_, device)) => device,
             None => &mut self.other,
         };
-        device.transaction(address, operations)
+        device
+            .transaction(address, operations)
+            .map_err(LinuxI2cError::from)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{PollError, Poller};
+
+    /// A bus whose every transfer fails with one errno.
+    struct FailingBus(i32);
+
+    impl ErrorType for FailingBus {
+        type Error = LinuxI2cError;
+    }
+
+    impl I2c for FailingBus {
+        fn transaction(&mut self, _: u8, _: &mut [Operation<'_>]) -> Result<(), LinuxI2cError> {
+            Err(LinuxI2cError::from_errno(self.0))
+        }
+    }
+
+    #[test]
+    fn eremoteio_is_counted_as_a_nack_and_eio_as_a_bus_error() {
+        for (errno, nack) in [
+            (libc::EREMOTEIO, true),
+            (libc::ENXIO, true),
+            (libc::EIO, false),
+            (libc::ETIMEDOUT, false),
+            (libc::ENODEV, false),
+        ] {
+            let mut poller = Poller::new(FailingBus(errno), &[0x21, 0x22]);
+            let readings = poller.poll_all();
+            if nack {
+                assert_eq!(readings[0].result, Err(PollError::Nack { address: 0x21 }));
+            } else {
+                assert!(
+                    matches!(
+                        readings[1].result,
+                        Err(PollError::Bus { address: 0x22, .. })
+                    ),
+                    "errno {errno}: {:?}",
+                    readings[1].result
+                );
+            }
+            for health in poller.health() {
+                assert_eq!(
+                    (health.nacks, health.bus_errors),
+                    if nack { (1, 0) } else { (0, 1) },
+                    "errno {errno}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn an_io_error_from_linux_embedded_hal_keeps_its_errno() {
+        let hal = I2CError::from(i2cdev::linux::LinuxI2CError::Io(
+            std::io::Error::from_raw_os_error(libc::EREMOTEIO),
+        ));
+        let error = LinuxI2cError::from(hal);
+        assert_eq!(error.errno(), Some(libc::EREMOTEIO));
+        assert_eq!(
+            error.kind(),
+            ErrorKind::NoAcknowledge(NoAcknowledgeSource::Unknown)
+        );
+        let hal = I2CError::from(i2cdev::linux::LinuxI2CError::Errno(libc::EIO));
+        assert_eq!(LinuxI2cError::from(hal).kind(), ErrorKind::Bus);
     }
 }

@@ -22,6 +22,7 @@
 //! ```
 
 pub mod acquisition;
+pub mod bus_budget;
 pub mod clock;
 pub mod commission;
 pub mod config;
@@ -49,6 +50,7 @@ pub mod stage;
 pub mod stdout_lines;
 mod trial_script;
 pub mod vxm;
+pub mod watchdog;
 
 pub use fake_servo::{FakeServo, FakeServoError};
 pub use fake_stage::{FakeStage, FakeStageError};

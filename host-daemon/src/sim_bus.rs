@@ -41,6 +41,10 @@ pub enum SegmentFault {
     /// The angle sensor's output sits on a rail (the Hall sensor's diagnostic clamp or a
     /// broken wire): every conversion reads 0, so the firmware sets its ADC-fault status bit.
     SensorRail,
+    /// A transfer addressed to the segment never returns: the calling thread blocks for
+    /// good, as on a bus a segment holds low behind a driver without a timeout (the stuck
+    /// ioctl the daemon's watchdog is for).
+    Hang,
 }
 
 /// One simulated segment: a physical joint angle and touch switches, sampled by the
@@ -196,6 +200,15 @@ impl I2c for SimBus {
         let corrupt = targets
             .iter()
             .any(|segment| segment.fault == SegmentFault::CorruptPec);
+        if targets
+            .iter()
+            .any(|segment| segment.fault == SegmentFault::Hang)
+        {
+            // Nothing can lift the fault from here: the thread that would is this one.
+            loop {
+                std::thread::park();
+            }
+        }
         let mut index = 0;
         while index < operations.len() {
             // Adjacent operations of one kind are one transfer (no repeated start between).

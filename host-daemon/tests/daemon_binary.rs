@@ -317,7 +317,8 @@ fn kill_9_during_a_trial_leaves_every_poll_up_to_the_last_flush() {
 #[test]
 fn a_missing_i2c_device_names_the_key_and_the_path() {
     let path = std::env::temp_dir().join(format!("antennad-i2c-{}.toml", std::process::id()));
-    std::fs::write(&path, "[bus]\ndevice = \"/dev/i2c-250\"\n").unwrap();
+    // 100 Hz: a rate the default 100 kHz bus carries (9 segments at 1 kHz it does not).
+    std::fs::write(&path, "[bus]\ndevice = \"/dev/i2c-250\"\npoll_hz = 100.0\n").unwrap();
     let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
         .arg("--config")
         .arg(&path)
@@ -380,4 +381,35 @@ fn with_a_stage_configured_no_trial_starts_by_itself_and_it_waits_idle() {
     assert!(!rest.iter().any(|l| l.contains("started")), "{rest:?}");
     assert!(data.iter().any(|l| l.contains("0 trials")), "{data:?}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_poll_rate_the_bus_cannot_carry_is_refused_with_the_arithmetic() {
+    let path = std::env::temp_dir().join(format!("antennad-rate-{}.toml", std::process::id()));
+    // The default nine segments at the default 1 kHz, on a real device at the default 100 kHz.
+    std::fs::write(&path, "[bus]\ndevice = \"/dev/i2c-250\"\n").unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
+        .arg("--config")
+        .arg(&path)
+        .args([
+            "--exit-after-trial",
+            "--listen",
+            "127.0.0.1:0",
+            "--no-record",
+        ])
+        .output()
+        .unwrap();
+    std::fs::remove_file(&path).ok();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    for part in [
+        "`bus.poll_hz`",
+        "9 segments x 38 + 57 = 399 bit times",
+        "bus.speed_hz = 100000 is 3990 us",
+        "lower bus.poll_hz to 200 or less",
+    ] {
+        assert!(stderr.contains(part), "{part:?} missing from: {stderr}");
+    }
+    // Nothing was opened: the refusal comes before the device.
+    assert!(!stderr.contains("cannot open the I2C bus"), "{stderr}");
 }

@@ -105,3 +105,39 @@ fn no_trial_starts_by_itself_with_any_hardware_configured() {
         );
     }
 }
+
+#[test]
+fn a_poll_rate_the_bus_cannot_carry_is_refused_with_the_arithmetic() {
+    // Nine segments (the default) at 1 kHz on a real device at the default 100 kHz.
+    let e = error("[bus]\ndevice = \"/dev/i2c-1\"\npoll_hz = 1000.0\n");
+    assert_eq!((e.key.as_str(), e.line), ("bus.poll_hz", Some(3)));
+    for part in [
+        "9 segments x 38 + 57 = 399 bit times",
+        "bus.speed_hz = 100000 is 3990 us, 399 % of the 1000 us poll period",
+        "lower bus.poll_hz to 200 or less, raise bus.speed_hz to 498750 or more",
+    ] {
+        assert!(e.message.contains(part), "{part:?} missing from: {e}");
+    }
+    // A given speed is the key named; 400 kHz does not carry 1 kHz either (99.75 %).
+    let e = error("[bus]\ndevice = \"/dev/i2c-1\"\nspeed_hz = 400000\n");
+    assert_eq!((e.key.as_str(), e.line), ("bus.speed_hz", Some(3)));
+    assert!(
+        e.message.contains("100 % of the 1000 us poll period"),
+        "{e}"
+    );
+    // What it does carry is accepted.
+    for text in [
+        "[bus]\ndevice = \"/dev/i2c-1\"\npoll_hz = 200.0\n",
+        "[bus]\ndevice = \"/dev/i2c-1\"\nspeed_hz = 400000\npoll_hz = 500.0\n",
+        "[bus]\ndevice = \"/dev/i2c-1\"\nspeed_hz = 1000000\n",
+    ] {
+        assert!(Config::from_toml_str(text, "t.toml").is_ok(), "{text}");
+    }
+    // The simulated bus moves no bits: unlimited unless a speed is given, then checked too.
+    let sim = Config::from_toml_str("[bus]\npoll_hz = 5000.0\n", "t.toml").unwrap();
+    assert_eq!(sim.bus.checked_speed_hz(), None);
+    let e = error("[bus]\nspeed_hz = 100000\n");
+    assert_eq!(e.key, "bus.speed_hz");
+    let e = error("[bus]\nspeed_hz = 0\n");
+    assert!(e.message.contains("must be positive"), "{e}");
+}

@@ -48,6 +48,10 @@ pub enum StreamMessage {
         segments: Vec<SegmentStatus>,
         /// Free text, e.g. `"stage moving"`.
         note: Option<String>,
+        /// The polling thread as its watchdog sees it (added in 0.1 without a version
+        /// change; absent from older daemons' lines, read as `None`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        polling: Option<PollingStatus>,
     },
     /// Sent before the next message when messages were dropped for this (slow) client.
     Lagged {
@@ -140,6 +144,37 @@ pub struct SegmentStatus {
     pub pec_error: u64,
     /// Reads whose sample counter had not advanced.
     pub stale: u64,
+    /// Reads that failed with another bus error (arbitration lost, a bus fault, a timeout).
+    /// Added in 0.1; absent from older daemons' lines, read as 0.
+    #[serde(default)]
+    pub bus_error: u64,
+    /// The segment's status register (0x02) as last read: bit 0 ADC fault, bit 1 a touch
+    /// switch stuck closed, bit 2 address not assigned (`antenna_protocol::StatusFlags`);
+    /// `None` until first read (a few seconds after start). Added in 0.1.
+    #[serde(default)]
+    pub status_flags: Option<u8>,
+    /// The segment's firmware version (register 0x01) as last read, `"major.minor"`; `None`
+    /// until first read. Added in 0.1.
+    #[serde(default)]
+    pub firmware_version: Option<String>,
+}
+
+/// The polling thread as the daemon's watchdog sees it, in [`StreamMessage::Status`].
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PollingStatus {
+    /// No poll has finished for longer than `stall_after_ms`: the polling thread is stuck
+    /// (typically in an I2C transfer that does not return).
+    pub stalled: bool,
+    /// Milliseconds since the last poll finished.
+    pub since_last_poll_ms: u64,
+    /// The watchdog's bound, milliseconds.
+    pub stall_after_ms: u64,
+    /// Polls made since the daemon started.
+    pub polls: u64,
+    /// Poll deadlines missed since the daemon started (the thread was a whole period late).
+    pub missed_deadlines: u64,
+    /// Stalls seen since the daemon started, one going on included.
+    pub stalls: u64,
 }
 
 /// The reply to a control request.
@@ -282,5 +317,42 @@ mod tests {
         let sample: SegmentSample = serde_json::from_str(old).unwrap();
         assert!(!sample.stale);
         assert_eq!((sample.contact, sample.touch_bits), (Some(true), None));
+    }
+
+    /// The `status` example in docs/stream-protocol.md, byte for byte; a line from a daemon
+    /// without the bus fields (bus errors, firmware, the watchdog) still reads.
+    #[test]
+    fn documented_status_line_and_older_status_lines() {
+        let doc = include_str!("../../../../docs/stream-protocol.md");
+        let line = doc
+            .lines()
+            .find(|l| l.starts_with(r#"{"type":"status""#))
+            .unwrap();
+        let message: StreamMessage = serde_json::from_str(line).unwrap();
+        assert_eq!(serde_json::to_string(&message).unwrap(), line);
+        let StreamMessage::Status {
+            segments, polling, ..
+        } = &message
+        else {
+            panic!("not status: {message:?}");
+        };
+        assert_eq!(segments[0].firmware_version.as_deref(), Some("1.0"));
+        assert_eq!(polling.as_ref().map(|p| p.stall_after_ms), Some(100));
+        let old = r#"{"type":"status","t_ns":5,"trial":null,"segments":[{"address":33,"ok":4990,"nack":10,"pec_error":0,"stale":0}],"note":null}"#;
+        let StreamMessage::Status {
+            segments, polling, ..
+        } = serde_json::from_str(old).unwrap()
+        else {
+            panic!("not status");
+        };
+        assert_eq!(polling, None);
+        assert_eq!(
+            (
+                segments[0].bus_error,
+                segments[0].status_flags,
+                segments[0].firmware_version.clone()
+            ),
+            (0, None, None)
+        );
     }
 }
