@@ -138,8 +138,8 @@ mod tests {
         let path =
             std::env::temp_dir().join(format!("monitor-recording-{}.mcap", std::process::id()));
         let mut metadata = synthetic_metadata("unit");
-        let config = host_daemon::config::Config::default();
-        metadata.rig = Some(host_daemon::daemon::rig_info(&config));
+        let config = host_daemon::service::config::Config::default();
+        metadata.rig = Some(host_daemon::service::daemon::rig_info(&config));
         let mut recorder = TrialRecorder::create(&path, &metadata).unwrap();
         for i in 0..300 {
             let segments = synthetic_segments(i, 9);

@@ -253,8 +253,9 @@ pub(crate) mod tests {
 
     /// The geometry antennad's default configuration sends in `hello`.
     pub(crate) fn default_rig() -> RigGeometry {
-        let config = host_daemon::config::Config::default();
-        RigGeometry::from_rig_info(&host_daemon::daemon::rig_info(&config), "test").unwrap()
+        let config = host_daemon::service::config::Config::default();
+        RigGeometry::from_rig_info(&host_daemon::service::daemon::rig_info(&config), "test")
+            .unwrap()
     }
 
     #[test]

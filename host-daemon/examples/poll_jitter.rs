@@ -15,9 +15,9 @@
 //! per run. The event consumer only keeps the time stamps (no recording, no TCP server).
 
 use anyhow::{Context, Result};
-use host_daemon::acquisition::AcquisitionEvent;
-use host_daemon::config::Config;
-use host_daemon::sim_rig::{TrialOptions, run_sim_trial};
+use host_daemon::service::acquisition::AcquisitionEvent;
+use host_daemon::service::config::Config;
+use host_daemon::sim::rig::{TrialOptions, run_sim_trial};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};

@@ -20,10 +20,10 @@ use antenna_data::record::{
     TrialRecorder,
 };
 use anyhow::{Context, Result};
-use host_daemon::acquisition::AcquisitionEvent;
-use host_daemon::config::Config;
-use host_daemon::samples::record_sample;
-use host_daemon::sim_rig::{TrialOptions, run_sim_trial};
+use host_daemon::service::acquisition::AcquisitionEvent;
+use host_daemon::service::config::Config;
+use host_daemon::service::samples::record_sample;
+use host_daemon::sim::rig::{TrialOptions, run_sim_trial};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
@@ -72,7 +72,7 @@ fn run(
         started_unix_ns: Some(0),
         config: config.to_recorded_toml(),
         notes: Default::default(),
-        rig: Some(host_daemon::daemon::rig_info(config)),
+        rig: Some(host_daemon::service::daemon::rig_info(config)),
     };
     let _ = std::fs::remove_file(path);
     let mut recorder = options

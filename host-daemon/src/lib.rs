@@ -6,6 +6,17 @@
 //! logic (oversampling, debouncing and the I2C target state machine), so the whole path from
 //! sensor to sample is the one the robot uses.
 //!
+//! # Layout
+//!
+//! - [`hardware`]: the drivers (the Linux I2C bus and the poller, the VXM stage and its
+//!   homing, the Maestro servo) behind their traits;
+//! - [`sim`]: the simulated rig, the fakes, and the pseudo-terminal emulators of the serial
+//!   devices;
+//! - [`service`]: the daemon (configuration, hub, polling thread and watchdog, the motion loop
+//!   and trial script, systemd);
+//! - [`net`]: the TCP server (token, throttle, admission);
+//! - [`commission`]: `antenna segments` (scan, assign, zero, status) on any bus.
+//!
 //! # Example
 //!
 //! ```
@@ -21,43 +32,18 @@
 //! assert!((Calibration::default().angle_rad(word.angle_counts()) - 0.5).abs() < 0.002);
 //! ```
 
-pub mod acquisition;
-pub mod bus_budget;
-pub mod clock;
 pub mod commission;
-pub mod config;
-pub mod config_source;
-pub mod daemon;
-pub mod emulator;
-mod fake_servo;
-mod fake_stage;
-pub mod free_space;
-pub mod homing;
-#[cfg(target_os = "linux")]
-pub mod i2c_bus;
-pub mod maestro;
-mod motion;
+pub mod hardware;
 pub mod net;
-mod poll;
-pub mod realtime;
-pub mod rig;
-pub mod samples;
 pub mod service;
-pub mod servo;
-mod sim_bus;
-pub mod sim_rig;
-pub mod stage;
-pub mod stdout_lines;
-mod trial_script;
-pub mod vxm;
-pub mod watchdog;
+pub mod sim;
 
-pub use fake_servo::{FakeServo, FakeServoError};
-pub use fake_stage::{FakeStage, FakeStageError};
-pub use maestro::{Maestro, MaestroConfig, MaestroError};
+pub use hardware::maestro::{Maestro, MaestroConfig, MaestroError};
+pub use hardware::poll::{CounterCheck, PollError, Poller, SegmentHealth, SegmentReading};
+pub use hardware::servo::{PulseCalibration, Servo};
+pub use hardware::stage::{LimitedStage, Stage, StageError, StageGeometry};
+pub use hardware::vxm::{Vxm, VxmError};
 pub use net::{ControlHandler, ControlToken, StreamServer};
-pub use poll::{CounterCheck, PollError, Poller, SegmentHealth, SegmentReading};
-pub use servo::{PulseCalibration, Servo};
-pub use sim_bus::{SegmentFault, SimBus, SimBusError, SimSegment};
-pub use stage::{LimitedStage, Stage, StageError, StageGeometry};
-pub use vxm::{Vxm, VxmError};
+pub use sim::bus::{SegmentFault, SimBus, SimBusError, SimSegment};
+pub use sim::fake_servo::{FakeServo, FakeServoError};
+pub use sim::fake_stage::{FakeStage, FakeStageError};

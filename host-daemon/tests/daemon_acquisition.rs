@@ -4,11 +4,11 @@
 #![allow(clippy::unwrap_used)]
 
 use antenna_protocol::{Calibration, Direction};
-use host_daemon::acquisition::{
+use host_daemon::service::acquisition::{
     AcquisitionEvent, FIRMWARE_READ_INTERVAL, FirmwareReading, HealthChange, PollSettings,
     event_channel, spawn_poller,
 };
-use host_daemon::clock::TrialClock;
+use host_daemon::service::clock::TrialClock;
 use host_daemon::{PollError, Poller, SegmentFault, SimBus, SimBusError, SimSegment};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};

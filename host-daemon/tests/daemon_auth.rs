@@ -11,9 +11,9 @@ use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
 use antenna_data::stream::{ErrorCode, StreamMessage};
-use host_daemon::config::Config;
-use host_daemon::daemon::{Daemon, DaemonHandle, DaemonOptions};
 use host_daemon::net::{AuthPolicy, ControlToken};
+use host_daemon::service::config::Config;
+use host_daemon::service::daemon::{Daemon, DaemonHandle, DaemonOptions};
 use net_support::{Client, TOKEN};
 
 fn start(name: &str) -> (DaemonHandle, std::path::PathBuf) {

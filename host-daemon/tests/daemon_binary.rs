@@ -344,7 +344,7 @@ fn a_missing_i2c_device_names_the_key_and_the_path() {
 /// a client's start_trial, and the stage is only homed.
 #[test]
 fn with_a_stage_configured_no_trial_starts_by_itself_and_it_waits_idle() {
-    use host_daemon::emulator::VxmEmulator;
+    use host_daemon::sim::emulator::VxmEmulator;
     use serialport::{SerialPort, TTYPort};
     let dir = std::env::temp_dir().join(format!("antennad-idle-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -8,8 +8,8 @@ mod net_support;
 
 use antenna_data::record::TrialReader;
 use antenna_data::stream::StreamMessage;
-use host_daemon::config::{Config, SimFaultConfig, SimFaultKind};
-use host_daemon::daemon::{Daemon, DaemonOptions};
+use host_daemon::service::config::{Config, SimFaultConfig, SimFaultKind};
+use host_daemon::service::daemon::{Daemon, DaemonOptions};
 use net_support::{Client, TOKEN};
 use std::time::{Duration, Instant};
 

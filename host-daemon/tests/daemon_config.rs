@@ -1,10 +1,10 @@
 //! Configuration errors name the key, line and column; the example files parse.
 #![allow(clippy::unwrap_used)]
 
-use host_daemon::config::Config;
+use host_daemon::service::config::Config;
 use std::path::Path;
 
-fn error(text: &str) -> host_daemon::config::ConfigError {
+fn error(text: &str) -> host_daemon::service::config::ConfigError {
     Config::from_toml_str(text, "test.toml").unwrap_err()
 }
 
@@ -83,7 +83,7 @@ fn the_example_files_parse_and_sim_toml_is_the_default() {
 
 #[test]
 fn no_trial_starts_by_itself_with_any_hardware_configured() {
-    use host_daemon::daemon::first_trial_for;
+    use host_daemon::service::daemon::first_trial_for;
     let sim = Config::default();
     assert!(!sim.has_hardware());
     // The simulated rig keeps its demo trial.

@@ -8,8 +8,8 @@ mod net_support;
 
 use antenna_data::record::TrialReader;
 use antenna_data::stream::{ControlReply, ErrorCode, StreamMessage};
-use host_daemon::config::{Config, MoveConfig};
-use host_daemon::daemon::{Daemon, DaemonHandle, DaemonOptions};
+use host_daemon::service::config::{Config, MoveConfig};
+use host_daemon::service::daemon::{Daemon, DaemonHandle, DaemonOptions};
 use net_support::{Client, TOKEN};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};

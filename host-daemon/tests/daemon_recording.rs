@@ -14,10 +14,10 @@ use std::time::{Duration, Instant};
 
 use antenna_data::record::TrialReader;
 use antenna_data::stream::StreamMessage;
-use host_daemon::config::Config;
-use host_daemon::daemon::{Daemon, DaemonOptions};
-use host_daemon::free_space::FreeSpace;
 use host_daemon::net::ControlToken;
+use host_daemon::service::config::Config;
+use host_daemon::service::daemon::{Daemon, DaemonOptions};
+use host_daemon::service::free_space::FreeSpace;
 use net_support::{Client, TOKEN};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {

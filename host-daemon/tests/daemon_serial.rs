@@ -9,9 +9,9 @@ mod net_support;
 
 use antenna_data::record::TrialReader;
 use antenna_data::stream::StreamMessage;
-use host_daemon::config::{Config, MoveConfig};
-use host_daemon::daemon::{Daemon, DaemonOptions};
-use host_daemon::emulator::{MaestroEmulator, VxmEmulator, VxmFault};
+use host_daemon::service::config::{Config, MoveConfig};
+use host_daemon::service::daemon::{Daemon, DaemonOptions};
+use host_daemon::sim::emulator::{MaestroEmulator, VxmEmulator, VxmFault};
 use net_support::{Client, TOKEN};
 use serialport::{SerialPort, TTYPort};
 use std::path::{Path, PathBuf};
@@ -362,7 +362,7 @@ fn a_missing_serial_port_names_the_key_and_the_path() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-fn log_has(daemon: &host_daemon::daemon::DaemonHandle, text: &str) -> bool {
+fn log_has(daemon: &host_daemon::service::daemon::DaemonHandle, text: &str) -> bool {
     daemon.log_lines().iter().any(|l| l.contains(text))
 }
 

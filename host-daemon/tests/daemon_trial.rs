@@ -2,14 +2,14 @@
 //! segments' angles and touch bits change; a move beyond the soft limits is refused.
 #![allow(clippy::unwrap_used)]
 
-use host_daemon::acquisition::AcquisitionEvent;
-use host_daemon::config::{Config, MoveConfig};
-use host_daemon::sim_rig::{TrialOptions, run_sim_trial};
+use host_daemon::service::acquisition::AcquisitionEvent;
+use host_daemon::service::config::{Config, MoveConfig};
+use host_daemon::sim::rig::{TrialOptions, run_sim_trial};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-fn run(config: &Config) -> (host_daemon::sim_rig::TrialSummary, Vec<AcquisitionEvent>) {
+fn run(config: &Config) -> (host_daemon::sim::rig::TrialSummary, Vec<AcquisitionEvent>) {
     let mut events = Vec::new();
     let options = TrialOptions {
         duration: Some(Duration::ZERO), // until the moves are done
@@ -68,7 +68,7 @@ fn the_stage_carries_the_antenna_to_the_wall_and_the_segments_feel_it() {
         })
         .collect();
     assert_eq!(polls.len() as u64, summary.polls);
-    let angles = |p: &host_daemon::acquisition::PollRecord| -> Vec<f64> {
+    let angles = |p: &host_daemon::service::acquisition::PollRecord| -> Vec<f64> {
         p.readings
             .iter()
             .zip(&calibrations)

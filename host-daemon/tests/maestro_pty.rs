@@ -1,9 +1,9 @@
 //! The Maestro driver against the emulated Maestro over real pseudo-terminals.
 
 use core::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
-use host_daemon::emulator::{MaestroEmulator, MaestroFault};
-use host_daemon::maestro::{Maestro, MaestroConfig, MaestroError};
-use host_daemon::servo::{PulseCalibration, Servo};
+use host_daemon::hardware::maestro::{Maestro, MaestroConfig, MaestroError};
+use host_daemon::hardware::servo::{PulseCalibration, Servo};
+use host_daemon::sim::emulator::{MaestroEmulator, MaestroFault};
 use serialport::{SerialPort, TTYPort};
 use std::time::{Duration, Instant};
 

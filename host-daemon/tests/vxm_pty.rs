@@ -1,9 +1,9 @@
 //! The VXM driver against the emulated VXM over real pseudo-terminals: the driver holds the
 //! slave side (as it would `/dev/ttyUSB0`), the emulator the master side.
 
-use host_daemon::emulator::{VxmEmulator, VxmFault};
-use host_daemon::stage::{HomingDirection, LimitedStage, StageError, StageGeometry};
-use host_daemon::vxm::{self, Vxm, VxmError, VxmKill, VxmStatus};
+use host_daemon::hardware::stage::{HomingDirection, LimitedStage, StageError, StageGeometry};
+use host_daemon::hardware::vxm::{self, Vxm, VxmError, VxmKill, VxmStatus};
+use host_daemon::sim::emulator::{VxmEmulator, VxmFault};
 use serialport::{SerialPort, TTYPort};
 use std::time::{Duration, Instant};
 

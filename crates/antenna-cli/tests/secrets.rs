@@ -14,8 +14,8 @@ use std::process::Command;
 use std::time::Duration;
 
 use antenna_data::record::{TrialReader, TrialRecorder, synthetic_metadata, synthetic_segments};
-use host_daemon::config::Config;
-use host_daemon::daemon::{Daemon, DaemonOptions};
+use host_daemon::service::config::Config;
+use host_daemon::service::daemon::{Daemon, DaemonOptions};
 
 const TOKEN: &str = "SECRET-TOKEN-123-abcdef";
 

@@ -7,7 +7,7 @@
 mod common;
 
 use common::{run, stderr, stdout};
-use host_daemon::config::Config;
+use host_daemon::service::config::Config;
 use std::path::PathBuf;
 
 fn dir(name: &str) -> PathBuf {

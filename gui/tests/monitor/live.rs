@@ -13,7 +13,7 @@ use antenna_monitor::client::ConnectionState;
 use antenna_monitor::history::Health;
 use egui::accesskit::Role;
 use egui_kittest::kittest::{NodeT, Queryable};
-use host_daemon::config::{SimFaultConfig, SimFaultKind};
+use host_daemon::service::config::{SimFaultConfig, SimFaultKind};
 
 #[test]
 fn connect_shows_the_daemon_the_chain_and_the_rig_geometry() {

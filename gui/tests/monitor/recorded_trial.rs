@@ -9,7 +9,7 @@ use crate::support::{config, expect_label, harness, temp_dir};
 use antenna_monitor::{AppOptions, MonitorApp};
 use egui::accesskit::Role;
 use egui_kittest::kittest::Queryable;
-use host_daemon::daemon::{Daemon, DaemonOptions};
+use host_daemon::service::daemon::{Daemon, DaemonOptions};
 
 #[test]
 fn open_a_recorded_trial_play_and_scrub_it() {

@@ -7,8 +7,8 @@ use std::time::{Duration, Instant};
 
 use antenna_monitor::{AppOptions, MonitorApp};
 use egui_kittest::Harness;
-use host_daemon::config::Config;
-use host_daemon::daemon::{Daemon, DaemonHandle, DaemonOptions};
+use host_daemon::service::config::Config;
+use host_daemon::service::daemon::{Daemon, DaemonHandle, DaemonOptions};
 
 /// The control token the test daemons use (test constant, not the crate's).
 pub const TOKEN: &str = "monitor-test-token";

@@ -1,4 +1,4 @@
-//! `antennad`: the antenna host daemon, a thin shell around [`host_daemon::daemon::Daemon`].
+//! `antennad`: the antenna host daemon, a thin shell around [`host_daemon::service::daemon::Daemon`].
 //!
 //! It polls the segments continuously, streams every poll to TCP clients and takes control
 //! commands (start/stop a trial, move the stage, set the base angle, stop everything). On the
@@ -17,15 +17,15 @@
 //! lines, never the daemon. SIGTERM or SIGINT stop it cleanly (a running trial's file is
 //! finalized); SIGHUP re-reads the configuration file and logs which keys differ from the
 //! running configuration, changing nothing until a restart. Under systemd it reports
-//! `READY=1`, `STATUS=`, `STOPPING=1` and pings the watchdog (`host_daemon::service`).
+//! `READY=1`, `STATUS=`, `STOPPING=1` and pings the watchdog (`host_daemon::service::systemd`).
 
 use anyhow::{Result, bail};
 use clap::Parser;
-use host_daemon::config::Config;
-use host_daemon::config_source::{ConfigSource, changed_keys};
-use host_daemon::daemon::{Daemon, DaemonHandle, DaemonOptions, first_trial_for};
-use host_daemon::service::{self, Watchdog};
-use host_daemon::stdout_lines;
+use host_daemon::service::config::Config;
+use host_daemon::service::config_source::{ConfigSource, changed_keys};
+use host_daemon::service::daemon::{Daemon, DaemonHandle, DaemonOptions, first_trial_for};
+use host_daemon::service::stdout_lines;
+use host_daemon::service::systemd::{self, Watchdog};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -180,7 +180,7 @@ fn run(args: Args) -> Result<()> {
         );
     }
     let mut status = service_status(&daemon);
-    notify("READY=1", service::notify_ready(&status));
+    notify("READY=1", systemd::notify_ready(&status));
     if !args.exit_after_trial {
         info!(
             target: "antennad",
@@ -202,7 +202,7 @@ fn run(args: Args) -> Result<()> {
         let now = service_status(&daemon);
         if now != status {
             status = now;
-            notify("STATUS=", service::notify_status(&status));
+            notify("STATUS=", systemd::notify_status(&status));
         }
         if !stdout_error_logged && let Some(e) = out.error() {
             stdout_error_logged = true;
@@ -214,7 +214,7 @@ fn run(args: Args) -> Result<()> {
         None => {
             notify(
                 "STOPPING=1",
-                service::notify_stopping("stopping: the trial ended"),
+                systemd::notify_stopping("stopping: the trial ended"),
             );
             daemon.wait()?
         }
@@ -222,7 +222,7 @@ fn run(args: Args) -> Result<()> {
             info!(target: "antennad", "{signal} received, stopping");
             notify(
                 "STOPPING=1",
-                service::notify_stopping(&format!("stopping on {signal}")),
+                systemd::notify_stopping(&format!("stopping on {signal}")),
             );
             daemon.shutdown()?
         }

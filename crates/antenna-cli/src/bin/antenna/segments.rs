@@ -10,7 +10,7 @@ use embedded_hal::i2c::I2c;
 use host_daemon::commission::{
     self, ASSIGN_SETTLE, CommissionError, Found, SegmentStatus, ZeroMeasurement,
 };
-use host_daemon::config::Config;
+use host_daemon::service::config::Config;
 use host_daemon::{SegmentFault, SimBus, SimSegment};
 use serde_json::{Value, json};
 
@@ -54,7 +54,7 @@ struct BusArgs {
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// A simulated segment instead of the configured ones (repeat for more; --bus sim only):
-    /// ADDR[:ZERO_COUNTS[:rail]]. At 0x77 it is unassigned (fresh, no address stored);
+    /// ADDR, ADDR:ZERO_COUNTS or ADDR:ZERO_COUNTS:rail. At 0x77 it is unassigned (fresh, no address stored);
     /// ZERO_COUNTS is the count its magnet reads at joint angle zero (default 2048); `rail`
     /// puts its angle sensor on a rail (ADC fault).
     #[arg(long, value_name = "SPEC")]
@@ -158,7 +158,7 @@ fn parse_address(text: &str) -> Result<u8, String> {
     }
 }
 
-/// One `--sim-segment` spec: ADDR[:ZERO_COUNTS[:rail]].
+/// One `--sim-segment` spec: `ADDR[:ZERO_COUNTS[:rail]]`.
 fn sim_segment(spec: &str) -> anyhow::Result<SimSegment> {
     let bad = |why: String| anyhow!("--sim-segment {spec:?}: {why} (ADDR[:ZERO_COUNTS[:rail]])");
     let mut parts = spec.split(':');
@@ -203,7 +203,7 @@ fn load_config(bus: &BusArgs) -> Result<Option<Config>, Failure> {
 enum Opened {
     Sim(SimBus),
     #[cfg(target_os = "linux")]
-    Linux(host_daemon::i2c_bus::LinuxI2cBus),
+    Linux(host_daemon::hardware::i2c_bus::LinuxI2cBus),
 }
 
 fn open_bus(bus: &BusArgs, config: Option<&Config>) -> Result<(Opened, String), Failure> {
@@ -219,7 +219,7 @@ fn open_bus(bus: &BusArgs, config: Option<&Config>) -> Result<(Opened, String), 
     };
     if device == "sim" {
         let mut sim = if bus.sim_segment.is_empty() {
-            host_daemon::sim_rig::sim_bus(config.unwrap_or(&Config::default()))
+            host_daemon::sim::rig::sim_bus(config.unwrap_or(&Config::default()))
         } else {
             SimBus::new(
                 bus.sim_segment
@@ -250,8 +250,8 @@ fn open_hardware(device: &str, config: Option<&Config>) -> Result<(Opened, Strin
         ));
     }
     let addresses = config.map(|c| c.bus.addresses()).unwrap_or_default();
-    let bus =
-        host_daemon::i2c_bus::LinuxI2cBus::open(device, &addresses).map_err(anyhow::Error::new)?;
+    let bus = host_daemon::hardware::i2c_bus::LinuxI2cBus::open(device, &addresses)
+        .map_err(anyhow::Error::new)?;
     Ok((Opened::Linux(bus), device.to_owned()))
 }
 
@@ -281,7 +281,7 @@ pub(crate) fn run(args: &SegmentsArgs) -> Result<(), Failure> {
         #[cfg(target_os = "linux")]
         Opened::Linux(mut bus) => {
             // The segments sample at 1 kHz: two periods apart, every reading is a new one.
-            let mut wait = |_: &mut host_daemon::i2c_bus::LinuxI2cBus| {
+            let mut wait = |_: &mut host_daemon::hardware::i2c_bus::LinuxI2cBus| {
                 std::thread::sleep(Duration::from_millis(2));
             };
             act(&args.action, &context, &mut bus, &mut wait)

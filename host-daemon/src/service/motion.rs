@@ -1,16 +1,16 @@
 //! The motion thread, the one loop that moves the rig (the daemon's, and the jitter bench's
-//! through [`crate::sim_rig::run_sim_trial`]): it samples the stage and the base at their own
-//! rates on the daemon's clock, homes the stage ([`crate::homing`]) before any move, carries
+//! through [`crate::sim::rig::run_sim_trial`]): it samples the stage and the base at their own
+//! rates on the daemon's clock, homes the stage ([`crate::hardware::homing`]) before any move, carries
 //! out motion commands at once (a `stop_all` ahead of anything queued before it), runs a
-//! trial's script ([`crate::trial_script`]) and reports the stage and the servo vanishing and
+//! trial's script ([`crate::service::trial_script`]) and reports the stage and the servo vanishing and
 //! coming back. A script ends early, with the reason, when the stage loses its home (a power
 //! cycle) or stays vanished for [`STAGE_LOST_AFTER`] with moves left.
 
-use crate::acquisition::{AcquisitionEvent, EventSender};
-use crate::clock::{Schedule, TrialClock};
-use crate::config::TrialConfig;
-use crate::rig::{DaemonRig, RigError};
-use crate::trial_script::{MoveCounts, STAGE_LOST_AFTER, Script, ScriptEnds};
+use crate::service::acquisition::{AcquisitionEvent, EventSender};
+use crate::service::clock::{Schedule, TrialClock};
+use crate::service::config::TrialConfig;
+use crate::service::rig::{DaemonRig, RigError};
+use crate::service::trial_script::{MoveCounts, STAGE_LOST_AFTER, Script, ScriptEnds};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender};
@@ -352,7 +352,7 @@ fn check_availability(rig: &DaemonRig, status: &RigStatus, m: &mut Motion<'_>, n
                     "stage unavailable: {} vanished; polling and recording go on without stage \
                      samples, reopening it every {} ms",
                     rig.stage_description(),
-                    crate::rig::REOPEN_INTERVAL.as_millis()
+                    crate::service::rig::REOPEN_INTERVAL.as_millis()
                 )
             },
         );
@@ -370,7 +370,7 @@ fn check_availability(rig: &DaemonRig, status: &RigStatus, m: &mut Motion<'_>, n
                     "servo unavailable: {} vanished; polling and recording go on without base \
                      samples, reopening it every {} ms",
                     rig.servo_description(),
-                    crate::rig::REOPEN_INTERVAL.as_millis()
+                    crate::service::rig::REOPEN_INTERVAL.as_millis()
                 )
             },
         );

@@ -14,7 +14,7 @@
 //! ([`LinuxI2cError`]).
 //!
 //! ```
-//! use host_daemon::i2c_bus::LinuxI2cBus;
+//! use host_daemon::hardware::i2c_bus::LinuxI2cBus;
 //!
 //! let error = LinuxI2cBus::open("/dev/i2c-250", &[0x20]).unwrap_err();
 //! assert!(error.to_string().starts_with("`bus.device` = \"/dev/i2c-250\": cannot open"));
@@ -90,7 +90,7 @@ impl LinuxI2cBus {
 ///
 /// ```
 /// use embedded_hal::i2c::{Error, ErrorKind, NoAcknowledgeSource};
-/// use host_daemon::i2c_bus::LinuxI2cError;
+/// use host_daemon::hardware::i2c_bus::LinuxI2cError;
 ///
 /// // EREMOTEIO (121): a missing acknowledge on drivers that say so.
 /// let error = LinuxI2cError::from_errno(121);

@@ -10,16 +10,16 @@
 //! wall, Coulomb friction that sticks and slips (`mu` of `[sim.wall]`), snaps followed
 //! downhill, a segment's touch switches closing where its link touches the wall.
 
-use crate::acquisition::{
+use crate::hardware::poll::{Poller, SegmentHealth};
+use crate::service::acquisition::{
     AcquisitionEvent, PollReport, PollSettings, Shared, event_channel, spawn_poller,
 };
-use crate::clock::TrialClock;
-use crate::config::{Config, TrialConfig};
-use crate::motion::{MotionCommand, MotionShared, RigStatus, spawn_motion};
-use crate::poll::{Poller, SegmentHealth};
-use crate::rig::DaemonRig;
-use crate::sim_bus::{SimBus, SimSegment};
-use crate::trial_script::ScriptEnds;
+use crate::service::clock::TrialClock;
+use crate::service::config::{Config, TrialConfig};
+use crate::service::motion::{MotionCommand, MotionShared, RigStatus, spawn_motion};
+use crate::service::rig::DaemonRig;
+use crate::service::trial_script::ScriptEnds;
+use crate::sim::bus::{SimBus, SimSegment};
 pub use antenna_sim_physics::{AntennaSpec, FlatWallSpec, SimPhysics, SimState};
 use anyhow::{Context, Result, anyhow};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -133,7 +133,7 @@ pub struct TrialSummary {
 }
 
 /// Runs `trial` on the simulated rig of `config`: the polling thread and the daemon's own
-/// motion thread (`crate::motion`, homing the simulated stage first, as antennad does) on
+/// motion thread (`crate::service::motion`, homing the simulated stage first, as antennad does) on
 /// one clock, every event handed to `on_event` on this thread as it arrives. Ends when the
 /// duration has passed (the trial's, or `options.duration`; zero: when its moves are done)
 /// or `stop` is set. The stage, servo and bus of `config` are simulated whatever it says.

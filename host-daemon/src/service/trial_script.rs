@@ -2,9 +2,9 @@
 //! followed by its pause, waiting (not failing) while the stage is being homed or has briefly
 //! vanished; and how a script's end is told to whoever waits for it ([`ScriptEnds`]).
 
-use crate::config::TrialConfig;
-use crate::motion::Notes;
-use crate::rig::{DaemonRig, RigError};
+use crate::service::config::TrialConfig;
+use crate::service::motion::Notes;
+use crate::service::rig::{DaemonRig, RigError};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;

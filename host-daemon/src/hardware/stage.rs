@@ -1,11 +1,11 @@
 //! The linear stage: the [`Stage`] trait every stage driver implements (the Velmex VXM in
-//! [`crate::vxm`], the in-memory [`crate::FakeStage`]), and [`LimitedStage`], the wrapper the
+//! [`crate::hardware::vxm`], the in-memory [`crate::FakeStage`]), and [`LimitedStage`], the wrapper the
 //! daemon drives it through, which converts millimetres to steps, enforces the soft limits
 //! whatever it is told and, by typestate, refuses to move a stage that is not online and
 //! homed.
 //!
 //! ```
-//! use host_daemon::stage::HomingDirection;
+//! use host_daemon::hardware::stage::HomingDirection;
 //! use host_daemon::{FakeStage, LimitedStage, StageError, StageGeometry};
 //! use std::time::Duration;
 //!

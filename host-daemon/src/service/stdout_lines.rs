@@ -9,7 +9,7 @@
 //! standard output.
 //!
 //! ```
-//! use host_daemon::stdout_lines::LineSink;
+//! use host_daemon::service::stdout_lines::LineSink;
 //! use std::time::Duration;
 //!
 //! let (sink, written) = LineSink::to_buffer(16);

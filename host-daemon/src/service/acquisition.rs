@@ -5,7 +5,7 @@
 //!   (`start + k * period`, [`Schedule`]), reads every segment through the [`Poller`]
 //!   (PEC-checked 3-byte reads), stamps the poll with the time since the trial started and
 //!   sends it. After the reads it makes at most one housekeeping register read, round-robin,
-//!   so every poll costs the bus the same (`crate::bus_budget`): in each cycle of
+//!   so every poll costs the bus the same (`crate::hardware::bus_budget`): in each cycle of
 //!   `counter_check_every` polls (at least one more than there are segments) the first polls
 //!   read one segment's sample counter each, and a counter that has not moved marks the
 //!   segment stale ([`PollRecord::stale_mask`]); in the others, every
@@ -13,9 +13,9 @@
 //!   ([`AcquisitionEvent::Firmware`]: each segment's status every few seconds). A NACK, a PEC
 //!   error, a bus error or a stale counter is recorded in the segment's health and the poll
 //!   goes on. After every poll the thread beats its [`PollHeartbeat`], which the daemon's
-//!   watchdog reads ([`crate::watchdog`]): a poll stuck in the I2C driver is seen from
+//!   watchdog reads ([`crate::service::watchdog`]): a poll stuck in the I2C driver is seen from
 //!   outside.
-//! - **Motion**: the motion thread (`crate::motion`, the daemon's one motion loop) samples
+//! - **Motion**: the motion thread (`crate::service::motion`, the daemon's one motion loop) samples
 //!   the stage position and the base angle at their own rates under the same clock and sends
 //!   them into the same stream.
 //! - **The stream** ([`EventSender`]): a bounded channel written with `try_send`. A full
@@ -23,9 +23,9 @@
 //!   ([`EventSender::dropped`]); size the queue so that never happens (the main loop
 //!   forwards events to the recorder and the TCP server, which have their own queues).
 
-use crate::clock::{Schedule, TrialClock};
-use crate::poll::{CounterCheck, PollError, Poller, SegmentHealth, SegmentReading};
-use crate::watchdog::PollHeartbeat;
+use crate::hardware::poll::{CounterCheck, PollError, Poller, SegmentHealth, SegmentReading};
+use crate::service::clock::{Schedule, TrialClock};
+use crate::service::watchdog::PollHeartbeat;
 use antenna_protocol::StatusFlags;
 use embedded_hal::i2c::I2c;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -238,9 +238,10 @@ where
     std::thread::Builder::new()
         .name("antennad-poll".to_owned())
         .spawn(move || {
-            crate::realtime::minimize_timer_slack();
+            crate::hardware::realtime::minimize_timer_slack();
             if settings.realtime_priority > 0 {
-                let text = match crate::realtime::request_fifo(settings.realtime_priority) {
+                let text = match crate::hardware::realtime::request_fifo(settings.realtime_priority)
+                {
                     Ok(()) => format!(
                         "polling thread on SCHED_FIFO priority {}",
                         settings.realtime_priority

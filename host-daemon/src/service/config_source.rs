@@ -7,7 +7,7 @@
 //! default `data` stays relative to the working directory (the README's first command).
 //!
 //! ```
-//! use host_daemon::config_source::ConfigSource;
+//! use host_daemon::service::config_source::ConfigSource;
 //! use std::path::{Path, PathBuf};
 //!
 //! let dir = std::env::temp_dir().join(format!("config-source-doc-{}", std::process::id()));
@@ -22,7 +22,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use crate::config::{Config, ConfigError};
+use crate::service::config::{Config, ConfigError};
 use std::fmt;
 use std::path::{Path, PathBuf};
 

@@ -35,14 +35,14 @@
 //! sync interval), its messages' log times are Unix-epoch nanoseconds, its metadata keeps the
 //! configuration without the token ([`Config::to_recorded_toml`]) and the rig. Free space
 //! under the data directory is checked before a trial and every second during one
-//! ([`crate::free_space`]): below `recording.min_free_mb` a trial is refused, or ends with the
+//! ([`crate::service::free_space`]): below `recording.min_free_mb` a trial is refused, or ends with the
 //! reason recorded; polling and streaming go on. Every file ends with `trial ended: <why>`.
 //!
 //! # Example
 //!
 //! ```no_run
-//! use host_daemon::config::Config;
-//! use host_daemon::daemon::{Daemon, DaemonOptions};
+//! use host_daemon::service::config::Config;
+//! use host_daemon::service::daemon::{Daemon, DaemonOptions};
 //!
 //! let mut config = Config::default();
 //! config.server.listen = "127.0.0.1:0".to_owned();
@@ -55,23 +55,25 @@
 //! # Ok::<(), anyhow::Error>(())
 //! ```
 
-use crate::acquisition::{
+use crate::hardware::poll::{PollError, Poller, SegmentHealth};
+use crate::hardware::vxm::VxmKill;
+use crate::net::{ControlHandler, ControlToken, ServerLog, ServerOptions, StreamServer};
+use crate::service::acquisition::{
     AcquisitionEvent, EventSender, FirmwareReading, HealthChange, PollRecord, PollSettings, Shared,
     event_channel, spawn_watched_poller,
 };
-use crate::clock::TrialClock;
-use crate::config::{Config, SimFaultKind};
-use crate::free_space::{FreeSpace, StatvfsFreeSpace};
-use crate::motion::{MotionCommand, MotionShared, MoveTarget, Reply, RigStatus, spawn_motion};
-use crate::net::{ControlHandler, ControlToken, ServerLog, ServerOptions, StreamServer};
-use crate::poll::{PollError, Poller, SegmentHealth};
-use crate::rig::DaemonRig;
-use crate::samples::{record_sample, stream_sample};
-use crate::service::Watchdog;
-use crate::sim_rig::{SimState, sense, sim_bus};
-use crate::trial_script::ScriptEnds;
-use crate::vxm::VxmKill;
-use crate::watchdog::{PollHeartbeat, PollWatchdog, WatchdogEvent, stall_bound};
+use crate::service::clock::TrialClock;
+use crate::service::config::{Config, SimFaultKind};
+use crate::service::free_space::{FreeSpace, StatvfsFreeSpace};
+use crate::service::motion::{
+    MotionCommand, MotionShared, MoveTarget, Reply, RigStatus, spawn_motion,
+};
+use crate::service::rig::DaemonRig;
+use crate::service::samples::{record_sample, stream_sample};
+use crate::service::systemd::Watchdog;
+use crate::service::trial_script::ScriptEnds;
+use crate::service::watchdog::{PollHeartbeat, PollWatchdog, WatchdogEvent, stall_bound};
+use crate::sim::rig::{SimState, sense, sim_bus};
 use crate::{SegmentFault, SimBus};
 use antenna_data::record::{
     LogMessage, RecordCounts, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
@@ -114,13 +116,13 @@ pub struct DaemonOptions {
     pub record: bool,
     /// Start the TCP server on `server.listen`.
     pub serve: bool,
-    /// Print sample lines to stdout during a trial ([`crate::stdout_lines::stdout`]: a
+    /// Print sample lines to stdout during a trial ([`crate::service::stdout_lines::stdout`]: a
     /// closed or stalled stdout costs lines, never the daemon). The log goes to `tracing`
     /// either way (target `antennad`), and is kept ([`DaemonHandle::log_lines`]).
     pub echo: bool,
     /// Sample lines printed per second during a trial (with `echo`).
     pub print_hz: f64,
-    /// Ping the service manager's watchdog from the hub thread (see [`crate::service`]).
+    /// Ping the service manager's watchdog from the hub thread (see [`crate::service::systemd`]).
     pub watchdog: Option<Watchdog>,
     /// Capacity of the acquisition event queue.
     pub queue: usize,
@@ -312,7 +314,7 @@ impl Log {
     /// A sample line (or the table's header): data, for stdout.
     fn sample(&self, text: String) {
         if self.echo {
-            crate::stdout_lines::stdout().line(text.as_str());
+            crate::service::stdout_lines::stdout().line(text.as_str());
         }
         self.keep(text);
     }
@@ -507,7 +509,7 @@ type PollJoin = Box<dyn FnOnce(Duration) -> Result<Option<PollTotals>> + Send>;
 
 /// A [`PollJoin`] for the polling thread `handle`.
 fn bounded_join<I: Send + 'static>(
-    handle: JoinHandle<crate::acquisition::PollReport<I>>,
+    handle: JoinHandle<crate::service::acquisition::PollReport<I>>,
 ) -> PollJoin {
     Box::new(move |bound: Duration| {
         let deadline = Instant::now() + bound;
@@ -885,8 +887,11 @@ fn bus_load(config: &Config) -> String {
     let bus = &config.bus;
     match bus.checked_speed_hz() {
         Some(speed_hz) => {
-            let budget =
-                crate::bus_budget::BusBudget::new(bus.segments.len(), bus.poll_hz, speed_hz);
+            let budget = crate::hardware::bus_budget::BusBudget::new(
+                bus.segments.len(),
+                bus.poll_hz,
+                speed_hz,
+            );
             format!(
                 "{} bit times a poll, {:.0} % of the period at bus.speed_hz = {speed_hz}",
                 budget.bit_times_per_poll(),
@@ -935,12 +940,12 @@ fn hardware_poller(
     events: &EventSender,
     (stop, heartbeat): (&Arc<AtomicBool>, &Arc<PollHeartbeat>),
 ) -> Result<(PollJoin, String)> {
-    let bus = crate::i2c_bus::LinuxI2cBus::open(&config.bus.device, addresses)?;
+    let bus = crate::hardware::i2c_bus::LinuxI2cBus::open(&config.bus.device, addresses)?;
     let handle = spawn_watched_poller(
         Poller::new(bus, addresses),
         clock,
         settings,
-        |_: &mut crate::i2c_bus::LinuxI2cBus, _| {},
+        |_: &mut crate::hardware::i2c_bus::LinuxI2cBus, _| {},
         events.clone(),
         Arc::clone(stop),
         Arc::clone(heartbeat),

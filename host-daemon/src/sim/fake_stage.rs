@@ -1,7 +1,7 @@
 //! An in-memory stage that moves at its set speed in simulated time: the stage of the
 //! simulated rig and of tests that need no serial port.
 
-use crate::stage::{HomingDirection, Stage};
+use crate::hardware::stage::{HomingDirection, Stage};
 use std::time::Duration;
 
 /// What the fake stage refuses, mirroring the real one's failures.
@@ -262,7 +262,7 @@ impl Stage for FakeStage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stage::{LimitedStage, StageError, StageGeometry};
+    use crate::hardware::stage::{LimitedStage, StageError, StageGeometry};
 
     #[test]
     fn homing_runs_to_the_limit_switch_and_zeroes_there_unless_killed_first() {

@@ -1,7 +1,7 @@
 //! An in-memory servo that slews toward its target at a set rate in simulated time: the base
 //! servo of the simulated rig and of tests that need no serial port.
 
-use crate::servo::Servo;
+use crate::hardware::servo::Servo;
 use std::time::Duration;
 
 /// An angle the fake servo cannot reach.

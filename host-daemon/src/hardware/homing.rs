@@ -7,7 +7,7 @@
 //! → `Homed` (moves allowed) — or `Failed` (timed out, killed, stopped away from zero), which
 //! stays until [`HomingStage::retry`]. [`HomingStage::lose_home`] goes back to `Unhomed`.
 
-use crate::stage::{Homed, HomingDirection, LimitedStage, Online, Stage, StageError};
+use crate::hardware::stage::{Homed, HomingDirection, LimitedStage, Online, Stage, StageError};
 use std::time::{Duration, Instant};
 
 /// How a stage homes (`[stage]`'s `homing_*` keys).
@@ -255,7 +255,7 @@ fn online<S: Stage>(mode: Mode<S>) -> LimitedStage<S, Online> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stage::StageGeometry;
+    use crate::hardware::stage::StageGeometry;
     use crate::{FakeStage, Stage};
 
     fn stage(away_steps: u32) -> HomingStage<FakeStage> {

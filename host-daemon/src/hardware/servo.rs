@@ -1,4 +1,4 @@
-//! The base servo: the [`Servo`] trait (the Pololu Maestro in [`crate::maestro`], the
+//! The base servo: the [`Servo`] trait (the Pololu Maestro in [`crate::hardware::maestro`], the
 //! in-memory [`crate::FakeServo`]) and the linear pulse-to-angle [`PulseCalibration`].
 
 /// A hobby servo positioned by angle, radians.

@@ -19,7 +19,7 @@
 //! promise that it fits.
 //!
 //! ```
-//! use host_daemon::bus_budget::BusBudget;
+//! use host_daemon::hardware::bus_budget::BusBudget;
 //!
 //! // Nine segments at 1 kHz do not fit a 100 kHz bus...
 //! let error = BusBudget::new(9, 1000.0, 100_000).check().unwrap_err();

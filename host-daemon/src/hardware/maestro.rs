@@ -7,7 +7,7 @@
 //! | set target `t` on channel `c` | `0x84, c, t & 0x7F, (t >> 7) & 0x7F` | none |
 //! | get position of channel `c` | `0x90, c` | two bytes, low first |
 
-use crate::servo::{PulseCalibration, Servo};
+use crate::hardware::servo::{PulseCalibration, Servo};
 use std::io::{self, Read, Write};
 use std::time::{Duration, Instant};
 

@@ -9,7 +9,7 @@
 //! starts and once when polls resume, with the deadlines missed meanwhile.
 //!
 //! ```
-//! use host_daemon::watchdog::{PollHeartbeat, PollWatchdog, WatchdogEvent};
+//! use host_daemon::service::watchdog::{PollHeartbeat, PollWatchdog, WatchdogEvent};
 //! use std::sync::Arc;
 //! use std::time::Duration;
 //!

@@ -11,17 +11,17 @@
 //!
 //! The stage is homed against its limit switch before its first move ([`HomingStage`]), on
 //! the simulated rig too, and again after the controller shows signs of a power cycle (the
-//! VXM echoing a command, see [`crate::vxm`]); until then every move is refused with
+//! VXM echoing a command, see [`crate::hardware::vxm`]); until then every move is refused with
 //! [`RigError::NotHomed`] and no stage position is sampled.
 
-use crate::acquisition::Shared;
-use crate::config::Config;
-use crate::homing::{HomingEvent, HomingSettings, HomingStage, HomingState};
-use crate::maestro::{Maestro, MaestroConfig, MaestroError};
-use crate::servo::Servo;
-use crate::sim_rig::{SimPhysics, SimState};
-use crate::stage::{LimitedStage, StageError};
-use crate::vxm::{Vxm, VxmError, VxmKill};
+use crate::hardware::homing::{HomingEvent, HomingSettings, HomingStage, HomingState};
+use crate::hardware::maestro::{Maestro, MaestroConfig, MaestroError};
+use crate::hardware::servo::Servo;
+use crate::hardware::stage::{LimitedStage, StageError};
+use crate::hardware::vxm::{Vxm, VxmError, VxmKill};
+use crate::service::acquisition::Shared;
+use crate::service::config::Config;
+use crate::sim::rig::{SimPhysics, SimState};
 use crate::{FakeServo, FakeStage};
 use serialport::SerialPort;
 use std::time::{Duration, Instant};
@@ -152,7 +152,7 @@ impl<E> From<RigError> for Fail<E> {
 /// The homed stage, or the rig's reason to refuse a move.
 fn homed<S: crate::Stage>(
     stage: &mut HomingStage<S>,
-) -> Result<&mut LimitedStage<S, crate::stage::Homed>, RigError> {
+) -> Result<&mut LimitedStage<S, crate::hardware::stage::Homed>, RigError> {
     stage.homed().map_err(|state| match state {
         HomingState::Failed(why) => RigError::HomingFailed(why),
         HomingState::Homing => RigError::NotHomed("homing under way".to_owned()),
@@ -182,7 +182,7 @@ pub struct DaemonRig {
     last_base_rad: f64,
     /// Why the stage lost its home since the motion thread last asked.
     home_lost: Option<String>,
-    homing_toward: crate::stage::HomingDirection,
+    homing_toward: crate::hardware::stage::HomingDirection,
 }
 
 impl std::fmt::Debug for DaemonRig {
@@ -223,7 +223,7 @@ impl DaemonRig {
             toward: config.stage.homing_direction,
             speed_steps_per_s: (config.stage.homing_speed_mm_per_s * config.stage.steps_per_mm)
                 .round()
-                .clamp(1.0, f64::from(crate::vxm::MAX_SPEED_STEPS_PER_S))
+                .clamp(1.0, f64::from(crate::hardware::vxm::MAX_SPEED_STEPS_PER_S))
                 as u32,
             timeout: Duration::from_secs_f64(config.stage.homing_timeout_s),
         };
@@ -278,7 +278,7 @@ impl DaemonRig {
             }
         };
         let physics = match physics {
-            Some(state) => Some((crate::sim_rig::sim_physics(config)?, state)),
+            Some(state) => Some((crate::sim::rig::sim_physics(config)?, state)),
             None => None,
         };
         let mut rig = Self {
@@ -361,8 +361,8 @@ impl DaemonRig {
             }
         };
         let toward = match self.homing_toward {
-            crate::stage::HomingDirection::Negative => "negative",
-            crate::stage::HomingDirection::Positive => "positive",
+            crate::hardware::stage::HomingDirection::Negative => "negative",
+            crate::hardware::stage::HomingDirection::Positive => "positive",
         };
         Ok(event.map(|event| match event {
             HomingEvent::Started => format!(

@@ -1,7 +1,7 @@
 //! A Pololu Maestro as its serial port sees it (compact protocol: set target, get position).
 
 use super::{Device, Runner};
-use crate::maestro::MAESTRO_CHANNELS;
+use crate::hardware::maestro::MAESTRO_CHANNELS;
 use serialport::SerialPort;
 use std::sync::MutexGuard;
 

@@ -4,7 +4,7 @@
 //!
 //! A bus error is sorted by its [`ErrorKind`]: a missing acknowledge of the address (or of
 //! unknown source, which is how Linux drivers that answer `EREMOTEIO` report it, see
-//! [`crate::i2c_bus`]) is a [`PollError::Nack`]; anything else a [`PollError::Bus`]. Both
+//! [`crate::hardware::i2c_bus`]) is a [`PollError::Nack`]; anything else a [`PollError::Bus`]. Both
 //! are counted per segment in its [`SegmentHealth`].
 
 use antenna_protocol::{ProtocolError, Register, SampleWord, StatusFlags, pec};

@@ -35,7 +35,7 @@
 //! only ever writes `K`, from any thread: a `stop_all` does not wait behind a query that is
 //! waiting for its answer on the driver's handle.
 
-use crate::stage::{HomingDirection, Stage};
+use crate::hardware::stage::{HomingDirection, Stage};
 use serialport::{DataBits, FlowControl, Parity, SerialPort, StopBits};
 use std::io::{self, Read, Write};
 use std::sync::{Arc, Mutex, PoisonError};

@@ -3,7 +3,7 @@
 //! late one wake-up is.
 //!
 //! ```
-//! use host_daemon::clock::{Schedule, TrialClock};
+//! use host_daemon::service::clock::{Schedule, TrialClock};
 //! use std::time::Duration;
 //!
 //! let clock = TrialClock::start();

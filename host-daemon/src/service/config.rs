@@ -7,7 +7,7 @@
 //! and, where it is known, the line and column:
 //!
 //! ```
-//! use host_daemon::config::Config;
+//! use host_daemon::service::config::Config;
 //!
 //! let error = Config::from_toml_str("[bus]\npoll_hz = -5\n", "rig.toml").unwrap_err();
 //! assert_eq!(error.key, "bus.poll_hz");
@@ -98,7 +98,7 @@ pub struct BusConfig {
     pub poll_hz: f64,
     /// The bus clock, hertz, as the board sets it (the device tree; antennad does not change
     /// it): a poll rate the bus cannot carry is refused, with the arithmetic
-    /// ([`crate::bus_budget`]). Left out: 100 kHz (standard mode) for a real device; the
+    /// ([`crate::hardware::bus_budget`]). Left out: 100 kHz (standard mode) for a real device; the
     /// simulated bus moves no bits and is treated as unlimited unless this is given (then it
     /// is checked as a real bus would be, to try a hardware configuration on the simulator).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -171,7 +171,7 @@ impl BusConfig {
         match self.speed_hz {
             Some(speed_hz) => Some(speed_hz),
             None if self.is_sim() => None,
-            None => Some(crate::bus_budget::DEFAULT_HARDWARE_SPEED_HZ),
+            None => Some(crate::hardware::bus_budget::DEFAULT_HARDWARE_SPEED_HZ),
         }
     }
 
@@ -246,7 +246,7 @@ pub struct StageConfig {
     pub homing_timeout_s: f64,
 }
 
-pub use crate::stage::HomingDirection;
+pub use crate::hardware::stage::HomingDirection;
 
 impl Default for StageConfig {
     fn default() -> Self {
@@ -657,7 +657,9 @@ impl Config {
     }
 
     /// The stage's scale and soft limits.
-    pub fn stage_geometry(&self) -> Result<crate::StageGeometry, crate::stage::GeometryError> {
+    pub fn stage_geometry(
+        &self,
+    ) -> Result<crate::StageGeometry, crate::hardware::stage::GeometryError> {
         crate::StageGeometry::new(
             self.stage.steps_per_mm,
             self.stage.min_mm,
@@ -668,7 +670,7 @@ impl Config {
     /// The servo's pulse calibration.
     pub fn pulse_calibration(
         &self,
-    ) -> Result<crate::PulseCalibration, crate::servo::CalibrationError> {
+    ) -> Result<crate::PulseCalibration, crate::hardware::servo::CalibrationError> {
         crate::PulseCalibration::new(
             self.servo.angle_a_deg.to_radians(),
             self.servo.pulse_a_us,
@@ -702,8 +704,12 @@ impl Config {
             return fail("bus.counter_check_every", "must be at least 1".to_owned());
         }
         if let Some(speed_hz) = bus.checked_speed_hz()
-            && let Err(why) =
-                crate::bus_budget::BusBudget::new(bus.segments.len(), bus.poll_hz, speed_hz).check()
+            && let Err(why) = crate::hardware::bus_budget::BusBudget::new(
+                bus.segments.len(),
+                bus.poll_hz,
+                speed_hz,
+            )
+            .check()
         {
             // Named by the key the file gave (the rate when the speed was left out).
             let key = if bus.speed_hz.is_some() {
@@ -756,8 +762,8 @@ impl Config {
         }
         if let Err(e) = self.stage_geometry() {
             let key = match e {
-                crate::stage::GeometryError::StepsPerMm(_) => "stage.steps_per_mm",
-                crate::stage::GeometryError::Limits { .. } => "stage.max_mm",
+                crate::hardware::stage::GeometryError::StepsPerMm(_) => "stage.steps_per_mm",
+                crate::hardware::stage::GeometryError::Limits { .. } => "stage.max_mm",
             };
             return fail(key, e.to_string());
         }
