@@ -194,6 +194,27 @@ impl std::fmt::Debug for DaemonRig {
     }
 }
 
+/// A stage move: by a distance from where the stage is, or to a position from home.
+#[derive(Clone, Copy)]
+enum StageMove {
+    By(f64),
+    To(f64),
+}
+
+impl StageMove {
+    fn start<S: crate::Stage>(
+        self,
+        stage: &mut LimitedStage<S, crate::hardware::stage::Homed>,
+        speed_mm_per_s: f64,
+    ) -> Result<(), StageError<S::Error>> {
+        stage.set_speed_mm_per_s(speed_mm_per_s)?;
+        match self {
+            Self::By(distance_mm) => stage.start_relative_mm(distance_mm),
+            Self::To(position_mm) => stage.start_absolute_mm(position_mm),
+        }
+    }
+}
+
 fn stage_error<E: core::error::Error>(e: StageError<E>) -> String {
     match e {
         StageError::Device(e) => format!("stage: {e}"),
@@ -502,22 +523,7 @@ impl DaemonRig {
         speed_mm_per_s: f64,
         now: Duration,
     ) -> Result<(), RigError> {
-        self.advance(now)?;
-        match &mut self.stage {
-            StageDevice::Sim(stage) => {
-                let s = homed(stage)?;
-                s.set_speed_mm_per_s(speed_mm_per_s)
-                    .and_then(|()| s.start_relative_mm(distance_mm))
-                    .map_err(|e| RigError::Refused(stage_error(e)))
-            }
-            StageDevice::Vxm { stage, link, kill } => {
-                Self::with_vxm(stage, link, kill, &mut self.home_lost, |s| {
-                    let s = homed(s)?;
-                    s.set_speed_mm_per_s(speed_mm_per_s)?;
-                    Ok(s.start_relative_mm(distance_mm)?)
-                })
-            }
-        }
+        self.start_stage_move(StageMove::By(distance_mm), speed_mm_per_s, now)
     }
 
     /// Starts a stage move to `position_mm` from home; refused beyond the soft limits.
@@ -527,19 +533,24 @@ impl DaemonRig {
         speed_mm_per_s: f64,
         now: Duration,
     ) -> Result<(), RigError> {
+        self.start_stage_move(StageMove::To(position_mm), speed_mm_per_s, now)
+    }
+
+    /// Starts `to` at `speed_mm_per_s` on a homed stage, simulated or the VXM.
+    fn start_stage_move(
+        &mut self,
+        to: StageMove,
+        speed_mm_per_s: f64,
+        now: Duration,
+    ) -> Result<(), RigError> {
         self.advance(now)?;
         match &mut self.stage {
-            StageDevice::Sim(stage) => {
-                let s = homed(stage)?;
-                s.set_speed_mm_per_s(speed_mm_per_s)
-                    .and_then(|()| s.start_absolute_mm(position_mm))
-                    .map_err(|e| RigError::Refused(stage_error(e)))
-            }
+            StageDevice::Sim(stage) => to
+                .start(homed(stage)?, speed_mm_per_s)
+                .map_err(|e| RigError::Refused(stage_error(e))),
             StageDevice::Vxm { stage, link, kill } => {
                 Self::with_vxm(stage, link, kill, &mut self.home_lost, |s| {
-                    let s = homed(s)?;
-                    s.set_speed_mm_per_s(speed_mm_per_s)?;
-                    Ok(s.start_absolute_mm(position_mm)?)
+                    Ok(to.start(homed(s)?, speed_mm_per_s)?)
                 })
             }
         }
