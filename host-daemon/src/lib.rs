@@ -15,7 +15,8 @@
 //! - [`service`]: the daemon (configuration, hub, polling thread and watchdog, the motion loop
 //!   and trial script, systemd);
 //! - [`net`]: the TCP server (token, throttle, admission);
-//! - [`commission`]: `antenna segments` (scan, assign, zero, status) on any bus.
+//! - the segments' bus itself (the Linux bus, the simulated bus, commissioning) is the
+//!   `antenna-bus` crate, shared with the `antenna` command.
 //!
 //! # Example
 //!
@@ -32,7 +33,6 @@
 //! assert!((Calibration::default().angle_rad(word.angle_counts()) - 0.5).abs() < 0.002);
 //! ```
 
-pub mod commission;
 pub mod hardware;
 pub mod net;
 pub mod service;

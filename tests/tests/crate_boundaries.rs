@@ -1,7 +1,8 @@
 //! The crates' boundaries, as the workspace's manifests state them: `antenna-cli` and
 //! `antenna-monitor` read recordings and the stream through `antenna-data` and never depend
 //! on the daemon (`host-daemon`), except for their tests; `antenna-data` depends on none of
-//! the daemon, the CLI or the monitor.
+//! the daemon, the CLI or the monitor; `antenna-bus` (the segments' bus and commissioning,
+//! which `antenna segments` shares with the daemon) depends on none of them either.
 #![allow(clippy::unwrap_used)]
 
 use std::path::Path;
@@ -46,5 +47,14 @@ fn the_cli_and_the_monitor_do_not_depend_on_the_daemon() {
     let deps = normal_dependencies("crates/antenna-data/Cargo.toml");
     for other in ["host-daemon", "antenna-cli", "antenna-monitor", "sim-core"] {
         assert!(!deps.iter().any(|d| d == other), "antenna-data: {deps:?}");
+    }
+    let deps = normal_dependencies("crates/antenna-bus/Cargo.toml");
+    for other in [
+        "host-daemon",
+        "antenna-cli",
+        "antenna-monitor",
+        "antenna-data",
+    ] {
+        assert!(!deps.iter().any(|d| d == other), "antenna-bus: {deps:?}");
     }
 }

@@ -3,7 +3,7 @@
 //! physics on sim-core ([`rig`]), the fake stage and servo, and pseudo-terminal emulators of
 //! the VXM and the Maestro ([`emulator`]).
 
-pub(crate) mod bus;
+pub(crate) use antenna_bus::sim_bus as bus;
 pub mod emulator;
 pub(crate) mod fake_servo;
 pub(crate) mod fake_stage;

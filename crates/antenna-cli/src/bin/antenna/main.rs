@@ -10,6 +10,7 @@
 //! stdout); 3 the solver broke down numerically.
 
 mod segments;
+mod segments_config;
 mod study;
 mod sweep;
 

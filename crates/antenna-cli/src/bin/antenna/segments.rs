@@ -1,19 +1,19 @@
 //! `antenna segments scan | assign | zero | status`: commissioning the segments over the
-//! daemon's bus, through host-daemon's `commission` module.
+//! daemon's bus, through `antenna-bus`'s `commission` module.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use antenna_bus::commission::{
+    self, ASSIGN_SETTLE, CommissionError, Found, SegmentStatus, ZeroMeasurement,
+};
+use antenna_bus::{SegmentFault, SimBus, SimSegment};
 use anyhow::{Context as _, anyhow};
 use clap::{Args, Subcommand};
 use embedded_hal::i2c::I2c;
-use host_daemon::commission::{
-    self, ASSIGN_SETTLE, CommissionError, Found, SegmentStatus, ZeroMeasurement,
-};
-use host_daemon::service::config::Config;
-use host_daemon::{SegmentFault, SimBus, SimSegment};
 use serde_json::{Value, json};
 
+use crate::segments_config::BusConfig as Config;
 use crate::{Failure, bail_input, print_json};
 
 /// Commission the segments: find them, give them addresses, measure their zeros, read
@@ -195,7 +195,7 @@ fn sim_segment(spec: &str) -> anyhow::Result<SimSegment> {
 fn load_config(bus: &BusArgs) -> Result<Option<Config>, Failure> {
     match &bus.config {
         None => Ok(None),
-        Some(path) => Ok(Some(Config::from_file(path).map_err(anyhow::Error::new)?)),
+        Some(path) => Ok(Some(Config::from_file(path).map_err(Failure::BadInput)?)),
     }
 }
 
@@ -203,13 +203,13 @@ fn load_config(bus: &BusArgs) -> Result<Option<Config>, Failure> {
 enum Opened {
     Sim(SimBus),
     #[cfg(target_os = "linux")]
-    Linux(host_daemon::hardware::i2c_bus::LinuxI2cBus),
+    Linux(antenna_bus::linux_i2c::LinuxI2cBus),
 }
 
 fn open_bus(bus: &BusArgs, config: Option<&Config>) -> Result<(Opened, String), Failure> {
     let device = match (&bus.bus, config) {
         (Some(device), _) => device.clone(),
-        (None, Some(config)) => config.bus.device.clone(),
+        (None, Some(config)) => config.device.clone(),
         (None, None) => {
             return bail_input(
                 "no bus: give --bus sim, --bus /dev/i2c-N, or --config with [bus] device"
@@ -219,7 +219,21 @@ fn open_bus(bus: &BusArgs, config: Option<&Config>) -> Result<(Opened, String), 
     };
     if device == "sim" {
         let mut sim = if bus.sim_segment.is_empty() {
-            host_daemon::sim::rig::sim_bus(config.unwrap_or(&Config::default()))
+            let built_in;
+            let config = match config {
+                Some(config) => config,
+                None => {
+                    built_in = Config::built_in()?;
+                    &built_in
+                }
+            };
+            SimBus::new(
+                config
+                    .segments
+                    .iter()
+                    .map(|s| SimSegment::new(s.address, s.calibration()))
+                    .collect(),
+            )
         } else {
             SimBus::new(
                 bus.sim_segment
@@ -249,8 +263,8 @@ fn open_hardware(device: &str, config: Option<&Config>) -> Result<(Opened, Strin
             "--bus {device:?}: must be `sim` or a device such as /dev/i2c-1"
         ));
     }
-    let addresses = config.map(|c| c.bus.addresses()).unwrap_or_default();
-    let bus = host_daemon::hardware::i2c_bus::LinuxI2cBus::open(device, &addresses)
+    let addresses = config.map(|c| c.addresses()).unwrap_or_default();
+    let bus = antenna_bus::linux_i2c::LinuxI2cBus::open(device, &addresses)
         .map_err(anyhow::Error::new)?;
     Ok((Opened::Linux(bus), device.to_owned()))
 }
@@ -281,7 +295,7 @@ pub(crate) fn run(args: &SegmentsArgs) -> Result<(), Failure> {
         #[cfg(target_os = "linux")]
         Opened::Linux(mut bus) => {
             // The segments sample at 1 kHz: two periods apart, every reading is a new one.
-            let mut wait = |_: &mut host_daemon::hardware::i2c_bus::LinuxI2cBus| {
+            let mut wait = |_: &mut antenna_bus::linux_i2c::LinuxI2cBus| {
                 std::thread::sleep(Duration::from_millis(2));
             };
             act(&args.action, &context, &mut bus, &mut wait)
@@ -303,7 +317,7 @@ impl Ctx<'_> {
             return Ok(given.to_vec());
         }
         match self.config {
-            Some(config) => Ok(config.bus.addresses()),
+            Some(config) => Ok(config.addresses()),
             None => bail_input(
                 "no segments: name their addresses or give --config with [[bus.segments]]"
                     .to_owned(),
@@ -313,7 +327,7 @@ impl Ctx<'_> {
 
     fn configured(&self, address: u8) -> bool {
         self.config
-            .is_some_and(|c| c.bus.segments.iter().any(|s| s.address == address))
+            .is_some_and(|c| c.segments.iter().any(|s| s.address == address))
     }
 }
 
@@ -446,7 +460,7 @@ fn scan<I: I2c>(args: &ScanArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), Failu
     let found = commission::scan(bus, args.from..=args.to).map_err(|e| bus_failure(ctx, e))?;
     let missing: Vec<u8> = ctx
         .config
-        .map(|c| c.bus.addresses())
+        .map(|c| c.addresses())
         .unwrap_or_default()
         .into_iter()
         .filter(|a| (args.from..=args.to).contains(a) && !found.iter().any(|f| f.address == *a))
@@ -601,8 +615,7 @@ fn zero<I: I2c>(
         .map_err(|e| bus_failure(ctx, e))?;
     let previous = |address: u8| {
         ctx.config.and_then(|c| {
-            c.bus
-                .segments
+            c.segments
                 .iter()
                 .find(|s| s.address == address)
                 .map(|s| s.zero_counts)
@@ -670,9 +683,24 @@ fn zero<I: I2c>(
         set_zero_counts(&mut document, &measured)
             .with_context(|| format!("{}: [[bus.segments]]", input.display()))?;
         let text = document.to_string();
-        Config::from_toml_str(&text, &output.display().to_string())
-            .map_err(anyhow::Error::new)
+        let written = Config::from_toml_str(&text, &output.display().to_string())
             .context("the written configuration does not read back")?;
+        for m in &measured {
+            let back = written
+                .segments
+                .iter()
+                .find(|s| s.address == m.address)
+                .map(|s| s.zero_counts);
+            if back != Some(m.zero_counts) {
+                return Err(Failure::NoSuccess(Some(anyhow!(
+                    "{}: the written copy reads zero_counts {back:?} for {:#04x}, measured {}; \
+                     nothing written",
+                    output.display(),
+                    m.address,
+                    m.zero_counts
+                ))));
+            }
+        }
         std::fs::write(output, text)
             .with_context(|| format!("{}: cannot write", output.display()))?;
         if !ctx.json {

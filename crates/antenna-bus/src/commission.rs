@@ -15,8 +15,8 @@
 //!
 //! ```
 //! use antenna_protocol::{Calibration, DEFAULT_ADDRESS};
-//! use host_daemon::commission::{self, ASSIGNABLE};
-//! use host_daemon::{SimBus, SimSegment};
+//! use antenna_bus::commission::{self, ASSIGNABLE};
+//! use antenna_bus::{SimBus, SimSegment};
 //! use std::time::Duration;
 //!
 //! let mut bus = SimBus::new(vec![SimSegment::unassigned(Calibration::default())]);
@@ -28,7 +28,7 @@
 //! let moved = commission::assign(&mut bus, DEFAULT_ADDRESS, 0x21, Duration::ZERO)?;
 //! assert_eq!(moved.address, 0x21);
 //! assert!(!moved.flags.address_not_set());
-//! # Ok::<(), host_daemon::commission::CommissionError>(())
+//! # Ok::<(), antenna_bus::commission::CommissionError>(())
 //! ```
 
 use antenna_protocol::{
