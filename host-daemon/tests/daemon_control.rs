@@ -36,8 +36,18 @@ fn config(dir: &std::path::Path) -> Config {
     config
 }
 
+/// Starts antennad and waits until its (simulated) stage is homed: before that a move is
+/// refused for homing under way, which a loaded machine can make last.
 fn start(config: Config) -> (DaemonHandle, Client) {
     let daemon = Daemon::start(config, DaemonOptions::default()).unwrap();
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    while !daemon.log_lines().iter().any(|l| l.contains("stage homed")) {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the stage never homed"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
     let mut client = Client::connect(daemon.local_addr().unwrap());
     assert!(matches!(client.next_message(), StreamMessage::Hello { .. }));
     (daemon, client)

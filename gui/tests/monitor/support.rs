@@ -30,9 +30,19 @@ pub fn config(dir: &std::path::Path) -> Config {
     config
 }
 
-/// Starts antennad (no trial: polling and streaming run, the stage waits for commands).
+/// Starts antennad (no trial: polling and streaming run, the stage waits for commands) and
+/// waits until its stage is homed, so a move command is not refused for homing under way.
 pub fn start_daemon(config: Config) -> DaemonHandle {
-    Daemon::start(config, DaemonOptions::default()).unwrap()
+    let daemon = Daemon::start(config, DaemonOptions::default()).unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    while !daemon.log_lines().iter().any(|l| l.contains("stage homed")) {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the stage never homed"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    daemon
 }
 
 /// The monitor connected to `daemon` (token as given), in a 1280 x 800 harness.
