@@ -109,6 +109,9 @@ impl QuasiStatic {
                 } else {
                     self.settings.max_iterations
                 },
+                // A snap's step (proximal) keeps its whole budget: its flow stops where
+                // its solves fail.
+                stall_stop: proximal.is_none(),
             };
             // A bound relaxed by a fixed point of an earlier round does not carry over: this
             // round solves Coulomb's law again (and records its own relaxations).
