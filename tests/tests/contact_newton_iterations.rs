@@ -69,7 +69,9 @@ fn sweep_4_2_1(links: usize, duration_s: f64) -> Sweep {
 /// two mode sets for its whole budget of 60 iterations before the fixed point on the normal
 /// forces found the answer: 80-95 Newton iterations at each of those steps, 1,282 at the
 /// first, 12.2 per step on average over these 6 s. A solve that stops making progress now
-/// stops early: 8.5 per step, 407 at the worst.
+/// stops early (8.5 per step, 407 at the worst), and the repair of a stall tries the
+/// sliding contacts stuck, which settles the two ends of a link flat on the wall in one
+/// mode (6.8 per step, 431 at the worst).
 #[test]
 fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
     let mut sweep = sweep_4_2_1(150, 6.0);
@@ -88,6 +90,6 @@ fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
     let mean = total as f64 / iterations.len() as f64;
     let worst = iterations.iter().copied().max().unwrap();
     eprintln!("N = 150, 600 steps: {total} Newton iterations, mean {mean:.2}, worst {worst}");
-    assert!(mean <= 10.0, "mean {mean:.2} Newton iterations per step");
+    assert!(mean <= 8.0, "mean {mean:.2} Newton iterations per step");
     assert!(worst <= 600, "a step took {worst} Newton iterations");
 }

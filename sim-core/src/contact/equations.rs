@@ -118,9 +118,11 @@ pub(crate) struct Equations {
     pub link_work_nm: Vec<f64>,
     /// Modes forced by a repair of a stalled solve ([`super::ssn`]): a coordinate that is
     /// never held on its bounds (its row stays the balance), and a pair whose normal row is
-    /// never active (its forces go to zero). Empty: no mode is forced.
+    /// never active (its forces go to zero), and a touching pair that sticks (its slip
+    /// held at zero, its shear force free). Empty: no mode is forced.
     pub force_free: Vec<bool>,
     pub force_inactive: Vec<bool>,
+    pub force_stuck: Vec<bool>,
     /// Keep the modes (coordinates held, pairs' normal and tangent modes) as they are
     /// instead of updating them (tests of the Jacobian on a given piece).
     #[cfg(test)]
@@ -361,7 +363,13 @@ impl Equations {
                 Slip::Forward if y <= -bound + margin => Slip::Forward,
                 Slip::Backward | Slip::Forward => free_mode(y, bound),
             };
-            let slip = if frozen { pair.slip } else { slip };
+            let slip = if frozen {
+                pair.slip
+            } else if pair.normal_active && self.force_stuck.get(idx) == Some(&true) {
+                Slip::Stuck
+            } else {
+                slip
+            };
             pair.slip = slip;
             self.phi[row_t] = match slip {
                 Slip::Stuck => pair.slip_m,

@@ -10,11 +10,13 @@
 //! best merit stops halving (two wrong mode sets taking turns, which the non-monotone
 //! search allows, or steps shrunk to nothing) stops after a few iterations at its best
 //! point instead of spending its budget. A solve that stalls within a micrometre of an
-//! answer tries the other mode of each joint on a stop and each pressed contact in turn
-//! ([`Ssn::repair`]): a wrong mode there makes the Newton matrix singular. A solve that
+//! answer tries the other mode of each joint on a stop, each pressed contact and each
+//! sliding one in turn ([`Ssn::repair`]): a wrong mode there makes the Newton matrix
+//! singular. A solve that
 //! does not converge is reported; the caller refines the step.
 
-use super::equations::{Equations, StepProblem};
+use super::equations::{Equations, StepProblem, bound_of};
+use super::feature::Slip;
 use super::newton_system::NewtonSystem;
 use super::pair::Pair;
 use nalgebra::{DMatrix, Vector2};
@@ -77,6 +79,8 @@ enum Part {
     Coordinate(usize),
     /// A pair whose normal row is active.
     Pair(usize),
+    /// A touching pair that slides.
+    Stick(usize),
 }
 
 /// The first damping tried after a failure, and the limits of the damping.
@@ -99,6 +103,7 @@ impl Ssn {
         self.eq.load(x, pairs);
         self.eq.force_free.clear();
         self.eq.force_inactive.clear();
+        self.eq.force_stuck.clear();
         let mut outcome = SsnOutcome {
             converged: false,
             iterations: 0,
@@ -125,11 +130,14 @@ impl Ssn {
     /// let go, makes the active piece's equations singular (more touching contacts than
     /// free joints can satisfy: a link across two nearly collinear vertices of a digitized
     /// wall, two joints on one edge with the joint between them on its stop) and Newton's
-    /// method stalls at their least-squares compromise, nanometres inside the wall. Each
-    /// such part in turn is given the other mode (the joint free, the contact let go) and
-    /// the piece solved; an answer is kept only where the modes it settles in are its own
-    /// (the plain equations hold there to the tolerance). Otherwise the stalled point
-    /// stands.
+    /// method stalls at their least-squares compromise, nanometres inside the wall. A
+    /// contact sliding at the edge of its friction cone with next to no slip may be one of
+    /// two on a link lying flat on a wall, whose slips are the same and whose shear forces
+    /// are determined only summed: they take opposite slide modes, and each mode set's
+    /// Newton step leads into the other. Each such part in turn is given the other mode
+    /// (the joint free, the contact let go, the sliding contact stuck) and the piece
+    /// solved; an answer is kept only where the modes it settles in are its own (the plain
+    /// equations hold there to the tolerance). Otherwise the stalled point stands.
     fn repair(
         &mut self,
         p: &StepProblem<'_>,
@@ -155,6 +163,19 @@ impl Ssn {
                 .total_cmp(&pairs[b].normal_force_n.abs())
         });
         parts.extend(pressed.into_iter().map(Part::Pair));
+        // The pressed contacts that slide with friction: sliding at the edge of the cone
+        // with next to no slip, a pair of contacts on one link flat on a wall can take
+        // opposite slide modes (their slips are the same, their shear forces only summed
+        // are determined), and each mode set's Newton step leads into the other.
+        parts.extend(
+            (0..c)
+                .filter(|&k| {
+                    pairs[k].normal_active
+                        && pairs[k].slip != Slip::Stuck
+                        && bound_of(&pairs[k]).0 > 0.0
+                })
+                .map(Part::Stick),
+        );
         if parts.is_empty() {
             return;
         }
@@ -168,8 +189,11 @@ impl Ssn {
             self.eq.force_free.resize(m, false);
             self.eq.force_inactive.clear();
             self.eq.force_inactive.resize(c, false);
+            self.eq.force_stuck.clear();
+            self.eq.force_stuck.resize(c, false);
             match part {
                 Part::Coordinate(a) => self.eq.force_free[a] = true,
+                Part::Stick(k) => self.eq.force_stuck[k] = true,
                 Part::Pair(k) => {
                     self.eq.force_inactive[k] = true;
                     self.eq.z[m + k] = 0.0;
@@ -179,6 +203,7 @@ impl Ssn {
             self.descend(p, x_start, pairs, REPAIR_ITERATIONS, outcome);
             self.eq.force_free.clear();
             self.eq.force_inactive.clear();
+            self.eq.force_stuck.clear();
             if outcome.residual_m.is_nan() || outcome.residual_m > p.tolerance_m {
                 continue;
             }
