@@ -12,8 +12,7 @@
 //! point instead of spending its budget. A solve that stalls within a micrometre of an
 //! answer tries the other mode of each joint on a stop, each pressed contact and each
 //! sliding one in turn ([`Ssn::repair`]): a wrong mode there makes the Newton matrix
-//! singular. A solve that
-//! does not converge is reported; the caller refines the step.
+//! singular. A solve that does not converge is reported; the caller refines the step.
 
 use super::equations::{Equations, StepProblem, bound_of};
 use super::feature::Slip;
@@ -54,9 +53,10 @@ const NONMONOTONE_MEMORY: usize = 6;
 /// acceptable residual, has stalled (it cycles between modes, or creeps at tiny steps) and
 /// stops at its best point. Chosen by the stress soak (seed 4221, 2,000 sweeps): 14
 /// finished 1,872 with a Newton p99 of 44 per step; 12 finished 1,869 (p99 39), 24 1,862
-/// (p99 61), and no stop (the whole budget of 60) 1,847-1,854 (p99 116; BENCHMARKS.md).
-/// Over the CI sample, 230 of some 26,000 plain solves converged after such a stall of 12
-/// or more iterations, and 3,835 did not converge at all.
+/// (p99 61), and no stop (the whole budget of 60) 1,847-1,854 (p99 116); with the repair
+/// trying sliding contacts stuck, 14 finished 1,871 (p99 41; BENCHMARKS.md, "Contact
+/// stress soak"). Over the CI sample, 230 of some 26,000 plain solves converged after
+/// such a stall of 12 or more iterations, and 3,835 did not converge at all.
 const STALL_ITERATIONS: usize = 14;
 
 /// The factor by which the best merit must fall to count as progress.
