@@ -54,6 +54,17 @@ impl QuasiStatic {
             if geo.valid && self.pair_on_real_wall(&old.key, &geo.point_m, geo.gap_m) {
                 carry(&mut c, old);
                 out.push(c);
+            } else if matches!(old.key.kind, PairKind::Link { .. })
+                && old.normal_force_n > 0.0
+                && self.valid_at_start(old)
+            {
+                // A loaded corner on a link whose foot the probe (the last posture carried
+                // with the base) puts past the link's end, but which is on the link where
+                // the last step left it: a stuck contact does not move with the base, and
+                // the link may well keep resting on the corner (a tip hooked on a convex
+                // corner). It stays a pair; the solve drops it if its foot leaves the link.
+                carry(&mut c, old);
+                out.push(c);
             } else if let Some(next) = out
                 .iter_mut()
                 .filter(|c| c.key.piece == old.key.piece && c.normal_force_n == 0.0)
@@ -85,6 +96,20 @@ impl QuasiStatic {
         self.hand_point_pairs_to_stand_ins(&self.start, &self.beta, &mut out);
         self.drop_links_doubling_loaded_joints(&mut out);
         Ok(out)
+    }
+
+    /// Whether `old`'s feature is on its link where the last step left the chain.
+    fn valid_at_start(&self, old: &Pair) -> bool {
+        let mut geo = old.geo;
+        evaluate(
+            &self.chain,
+            &self.pieces.walls[old.key.piece],
+            &self.start,
+            &self.beta,
+            &old.key,
+            &mut geo,
+        );
+        geo.valid
     }
 
     /// The pairs of `posture` (hair angles `beta`) with a gap below `within_m`.

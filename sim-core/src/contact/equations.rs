@@ -84,6 +84,18 @@ pub(crate) const HAND_STIFFNESS: f64 = 1e3;
 /// The hysteresis of the contact modes, as a length (times `c` it is a force).
 const HYSTERESIS_M: f64 = 1e-11;
 
+/// A mode a repair of a stalled solve forces on one part of the step's equations
+/// ([`super::ssn`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Forced {
+    /// A coordinate that is never held on its bounds (its row stays the balance).
+    Free(usize),
+    /// A pair whose normal row is never active (its forces go to zero).
+    LetGo(usize),
+    /// A touching pair that sticks (its slip held at zero, its shear force free).
+    Stuck(usize),
+}
+
 /// The step's equations at the current unknowns, and their scratch space (reused from step
 /// to step).
 #[derive(Debug, Default)]
@@ -116,13 +128,9 @@ pub(crate) struct Equations {
     pub link_force_n: Vec<Vector2<f64>>,
     pub link_moment_nm: Vec<f64>,
     pub link_work_nm: Vec<f64>,
-    /// Modes forced by a repair of a stalled solve ([`super::ssn`]): a coordinate that is
-    /// never held on its bounds (its row stays the balance), and a pair whose normal row is
-    /// never active (its forces go to zero), and a touching pair that sticks (its slip
-    /// held at zero, its shear force free). Empty: no mode is forced.
-    pub force_free: Vec<bool>,
-    pub force_inactive: Vec<bool>,
-    pub force_stuck: Vec<bool>,
+    /// The mode forced by a repair of a stalled solve ([`super::ssn`]); `None`: no mode
+    /// is forced.
+    pub forced: Option<Forced>,
     /// Keep the modes (coordinates held, pairs' normal and tangent modes) as they are
     /// instead of updating them (tests of the Jacobian on a given piece).
     #[cfg(test)]
@@ -306,7 +314,7 @@ impl Equations {
             // joint "held" far from its stop, 1e8 N on a link) and stall there. A
             // coordinate inside its range is balanced (`L r / s`) until a step reaches
             // the stop.
-            self.held[a] = if self.force_free.get(a) == Some(&true) {
+            self.held[a] = if self.forced == Some(Forced::Free(a)) {
                 None
             } else if y <= self.lo[a] && self.z[a] <= self.lo[a] {
                 Some(self.lo[a])
@@ -334,7 +342,7 @@ impl Equations {
             let frozen = self.frozen_modes;
             #[cfg(not(test))]
             let frozen = false;
-            if self.force_inactive.get(idx) == Some(&true) {
+            if self.forced == Some(Forced::LetGo(idx)) {
                 pair.normal_active = false;
             } else if !frozen {
                 pair.normal_active = if pair.normal_active {
@@ -365,7 +373,7 @@ impl Equations {
             };
             let slip = if frozen {
                 pair.slip
-            } else if pair.normal_active && self.force_stuck.get(idx) == Some(&true) {
+            } else if pair.normal_active && self.forced == Some(Forced::Stuck(idx)) {
                 Slip::Stuck
             } else {
                 slip

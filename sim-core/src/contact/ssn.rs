@@ -14,7 +14,7 @@
 //! sliding one in turn ([`Ssn::repair`]): a wrong mode there makes the Newton matrix
 //! singular. A solve that does not converge is reported; the caller refines the step.
 
-use super::equations::{Equations, StepProblem, bound_of};
+use super::equations::{Equations, Forced, StepProblem, bound_of};
 use super::feature::Slip;
 use super::newton_system::NewtonSystem;
 use super::pair::Pair;
@@ -72,17 +72,6 @@ const REPAIR_BELOW_M: f64 = 1e-6;
 /// Newton iterations of each repair.
 const REPAIR_ITERATIONS: usize = 20;
 
-/// A part of the step's equations whose mode a repair flips.
-#[derive(Clone, Copy, Debug)]
-enum Part {
-    /// A coordinate held on a bound.
-    Coordinate(usize),
-    /// A pair whose normal row is active.
-    Pair(usize),
-    /// A touching pair that slides.
-    Stick(usize),
-}
-
 /// The first damping tried after a failure, and the limits of the damping.
 const MIN_DAMPING: f64 = 1e-8;
 const MAX_DAMPING: f64 = 1e4;
@@ -101,9 +90,7 @@ impl Ssn {
     pub fn solve(&mut self, p: &StepProblem<'_>, x: &mut [f64], pairs: &mut [Pair]) -> SsnOutcome {
         self.eq.prepare(p);
         self.eq.load(x, pairs);
-        self.eq.force_free.clear();
-        self.eq.force_inactive.clear();
-        self.eq.force_stuck.clear();
+        self.eq.forced = None;
         let mut outcome = SsnOutcome {
             converged: false,
             iterations: 0,
@@ -147,9 +134,9 @@ impl Ssn {
     ) {
         let m = x_start.len();
         let c = pairs.len();
-        let mut parts: Vec<Part> = (0..m)
+        let mut parts: Vec<Forced> = (0..m)
             .filter(|&a| self.eq.held[a].is_some())
-            .map(Part::Coordinate)
+            .map(Forced::Free)
             .collect();
         // The pressed contacts, those with the least normal force first (the likeliest to
         // let go).
@@ -162,7 +149,7 @@ impl Ssn {
                 .abs()
                 .total_cmp(&pairs[b].normal_force_n.abs())
         });
-        parts.extend(pressed.into_iter().map(Part::Pair));
+        parts.extend(pressed.into_iter().map(Forced::LetGo));
         // The pressed contacts that slide with friction: sliding at the edge of the cone
         // with next to no slip, a pair of contacts on one link flat on a wall can take
         // opposite slide modes (their slips are the same, their shear forces only summed
@@ -174,7 +161,7 @@ impl Ssn {
                         && pairs[k].slip != Slip::Stuck
                         && bound_of(&pairs[k]).0 > 0.0
                 })
-                .map(Part::Stick),
+                .map(Forced::Stuck),
         );
         if parts.is_empty() {
             return;
@@ -185,25 +172,13 @@ impl Ssn {
         for part in parts {
             self.eq.z.clone_from(&z_stalled);
             pairs.copy_from_slice(&pairs_stalled);
-            self.eq.force_free.clear();
-            self.eq.force_free.resize(m, false);
-            self.eq.force_inactive.clear();
-            self.eq.force_inactive.resize(c, false);
-            self.eq.force_stuck.clear();
-            self.eq.force_stuck.resize(c, false);
-            match part {
-                Part::Coordinate(a) => self.eq.force_free[a] = true,
-                Part::Stick(k) => self.eq.force_stuck[k] = true,
-                Part::Pair(k) => {
-                    self.eq.force_inactive[k] = true;
-                    self.eq.z[m + k] = 0.0;
-                    self.eq.z[m + c + k] = 0.0;
-                }
+            if let Forced::LetGo(k) = part {
+                self.eq.z[m + k] = 0.0;
+                self.eq.z[m + c + k] = 0.0;
             }
+            self.eq.forced = Some(part);
             self.descend(p, x_start, pairs, REPAIR_ITERATIONS, outcome);
-            self.eq.force_free.clear();
-            self.eq.force_inactive.clear();
-            self.eq.force_stuck.clear();
+            self.eq.forced = None;
             if outcome.residual_m.is_nan() || outcome.residual_m > p.tolerance_m {
                 continue;
             }
@@ -254,15 +229,19 @@ impl Ssn {
         let mut best_residual_m = outcome.residual_m;
         let mut progress_at = 0_usize;
         let mut stalled = false;
-        self.z_best.clone_from(&self.eq.z);
-        self.pairs_best.clear();
-        self.pairs_best.extend_from_slice(pairs);
+        // The stop can fire only while the best residual is above the acceptable one: the
+        // best point is kept only until then.
+        let can_stall = |best_residual_m: f64| {
+            p.stall_stop && (best_residual_m > p.acceptable_m || best_residual_m.is_nan())
+        };
+        if can_stall(best_residual_m) {
+            self.z_best.clone_from(&self.eq.z);
+            self.pairs_best.clear();
+            self.pairs_best.extend_from_slice(pairs);
+        }
         while (outcome.residual_m > p.tolerance_m || outcome.residual_m.is_nan()) && spent < budget
         {
-            if p.stall_stop
-                && (best_residual_m > p.acceptable_m || best_residual_m.is_nan())
-                && spent - progress_at >= STALL_ITERATIONS
-            {
+            if can_stall(best_residual_m) && spent - progress_at >= STALL_ITERATIONS {
                 stalled = true;
                 break;
             }
@@ -333,9 +312,11 @@ impl Ssn {
                 }
                 best_merit = merit;
                 best_residual_m = outcome.residual_m;
-                self.z_best.clone_from(&self.eq.z);
-                self.pairs_best.clear();
-                self.pairs_best.extend_from_slice(pairs);
+                if can_stall(best_residual_m) {
+                    self.z_best.clone_from(&self.eq.z);
+                    self.pairs_best.clear();
+                    self.pairs_best.extend_from_slice(pairs);
+                }
             }
             if (0..n).any(|a| (self.eq.z[a] - x_start[a]).abs() > p.max_departure_rad) {
                 break;
