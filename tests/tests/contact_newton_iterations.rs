@@ -71,7 +71,9 @@ fn sweep_4_2_1(links: usize, duration_s: f64) -> Sweep {
 /// first, 12.2 per step on average over these 6 s. A solve that stops making progress now
 /// stops early (8.5 per step, 407 at the worst), and the repair of a stall tries the
 /// sliding contacts stuck, which settles the two ends of a link flat on the wall in one
-/// mode (6.8 per step, 431 at the worst).
+/// mode (6.8 per step, 431 at the worst). A solve's first Newton step keeps the contacts
+/// pressed in the last step pressed, where the last posture carried with the base would
+/// have let them go for that step (2.0 per step, 92 at the worst).
 #[test]
 fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
     let mut sweep = sweep_4_2_1(150, 6.0);
@@ -90,8 +92,8 @@ fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
     let mean = total as f64 / iterations.len() as f64;
     let worst = iterations.iter().copied().max().unwrap();
     eprintln!("N = 150, 600 steps: {total} Newton iterations, mean {mean:.2}, worst {worst}");
-    assert!(mean <= 8.0, "mean {mean:.2} Newton iterations per step");
-    assert!(worst <= 600, "a step took {worst} Newton iterations");
+    assert!(mean <= 3.0, "mean {mean:.2} Newton iterations per step");
+    assert!(worst <= 200, "a step took {worst} Newton iterations");
 }
 
 /// Soak case 4221:628 (`ANTENNA_STRESS_REPLAY=soak:4221:628`): a 72-link antenna of the
@@ -102,7 +104,9 @@ fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
 /// solved without it swung the antenna off the wall, was refused as a jump and halved six
 /// times, every step: 64 substeps and about 400 Newton iterations a step, 78,560 in all.
 /// A loaded corner pair that is on its link where the last step left it now stays a pair:
-/// 461 Newton iterations in all.
+/// 461 Newton iterations in all, 267 of them in the first step (the release of the
+/// placement's pin, where the first Newton step let the corner go). With the pressed
+/// contacts kept pressed in a solve's first Newton step, 200 in all, at most 6 a step.
 #[test]
 fn a_tip_hooked_on_a_convex_corner_keeps_its_corner_at_full_steps() {
     use antenna_tests::stress::{Case, Outcome, Sample, run_case};
@@ -126,8 +130,6 @@ fn a_tip_hooked_on_a_convex_corner_keeps_its_corner_at_full_steps() {
         record.steps
     );
     assert_eq!(record.steps, 195);
-    // The first step, where the antenna lets go of the placement's pin, still refines
-    // (267 iterations); every later one takes one or two.
-    assert!(worst <= 300, "a step took {worst} Newton iterations");
-    assert!(total <= 1_000, "{total} Newton iterations");
+    assert!(worst <= 40, "a step took {worst} Newton iterations");
+    assert!(total <= 600, "{total} Newton iterations");
 }

@@ -54,11 +54,20 @@ const KNOWN_CI_FAILURES: &[(u64, &str)] = &[(
 )];
 
 /// Soak sweeps that once failed, fixed since, with what failed: each must still finish.
-const SOAK_REGRESSIONS: &[(u64, &str)] = &[(
-    383,
-    "uncertified at step 405: on a step whose friction was let go, a pair handed over to a \
-     point's stand-in kept its friction (9 mN of shear where none was allowed)",
-)];
+const SOAK_REGRESSIONS: &[(u64, &str)] = &[
+    (
+        383,
+        "uncertified at step 405: on a step whose friction was let go, a pair handed over to a \
+         point's stand-in kept its friction (9 mN of shear where none was allowed)",
+    ),
+    (
+        748,
+        "uncertified at step 42: a contact grazing a sinusoid's crest (N = -1.1e-9 N, pressed \
+         within the modes' hysteresis) slid with a shear of 3.3e-10 N in its own direction, a \
+         force far inside the certificate's force tolerance, whose sign the check \
+         held against the slip",
+    ),
+];
 
 /// The soak's default seed.
 const SOAK_SEED: u64 = 4_221;

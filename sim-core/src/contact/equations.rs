@@ -135,6 +135,9 @@ pub(crate) struct Equations {
     /// instead of updating them (tests of the Jacobian on a given piece).
     #[cfg(test)]
     pub frozen_modes: bool,
+    /// Keep the pressed pairs pressed, and the stuck ones among them stuck, in the next
+    /// evaluation (a solve's first: the modes the last step ended in, see [`super::ssn`]).
+    pub keep_pressed: bool,
 }
 
 impl Equations {
@@ -344,7 +347,7 @@ impl Equations {
             let frozen = false;
             if self.forced == Some(Forced::LetGo(idx)) {
                 pair.normal_active = false;
-            } else if !frozen {
+            } else if !frozen && (!self.keep_pressed || !pair.normal_active) {
                 pair.normal_active = if pair.normal_active {
                     y_normal > -hyst
                 } else {
@@ -371,7 +374,8 @@ impl Equations {
                 Slip::Forward if y <= -bound + margin => Slip::Forward,
                 Slip::Backward | Slip::Forward => free_mode(y, bound),
             };
-            let slip = if frozen {
+            let keep_slip = self.keep_pressed && pair.normal_active && pair.slip == Slip::Stuck;
+            let slip = if frozen || keep_slip {
                 pair.slip
             } else if pair.normal_active && self.forced == Some(Forced::Stuck(idx)) {
                 Slip::Stuck

@@ -1,6 +1,13 @@
 //! The semismooth Newton method on a step's equations ([`super::equations`]), with the
 //! exact Newton system of [`super::newton_system`].
 //!
+//! The first Newton step keeps the contacts the last step ended pressed pressed (and a
+//! stuck one stuck): read at the start, the last posture carried with the base lifts them
+//! off their walls by the base's displacement. A sliding one's mode is read at the start (a
+//! contact that may stick or slide takes the branch its first step points to, and a kept
+//! slide would carry a tip off a corner where friction holds it). Convergence is always
+//! judged with the modes read at the point.
+//!
 //! Globalization: a non-monotone backtracking line search on `|Phi|^2 / 2` (Grippo,
 //! Lampariello and Lucidi: a step is accepted against the largest merit of the last few
 //! iterations, so that the modes can settle where a constraint is degenerate), a cap on the
@@ -91,6 +98,12 @@ impl Ssn {
         self.eq.prepare(p);
         self.eq.load(x, pairs);
         self.eq.forced = None;
+        // The first Newton step keeps the pairs pressed in the last step pressed: the last
+        // posture carried with the base lifts a pressed contact off its wall by the base's
+        // displacement, and the mode read there would let it go for one step, a step a
+        // soft antenna's free posture makes huge (the line search then takes it in
+        // slivers, and the modes take turns).
+        self.eq.keep_pressed = true;
         let mut outcome = SsnOutcome {
             converged: false,
             iterations: 0,
@@ -210,6 +223,13 @@ impl Ssn {
         let m = x_start.len();
         let n = p.chain.n();
         let mut merit = self.eq.evaluate(p, pairs);
+        if self.eq.keep_pressed {
+            self.eq.keep_pressed = false;
+            if self.eq.residual_m() <= p.tolerance_m {
+                // Converged only with the kept modes: judged with its own.
+                merit = self.eq.evaluate(p, pairs);
+            }
+        }
         outcome.residual_m = self.eq.residual_m();
         let mut damping = 0.0_f64;
         let mut recent = [merit; NONMONOTONE_MEMORY];
