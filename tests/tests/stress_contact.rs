@@ -67,6 +67,13 @@ const SOAK_REGRESSIONS: &[(u64, &str)] = &[
          force far inside the certificate's force tolerance, whose sign the check \
          held against the slip",
     ),
+    (
+        1229,
+        "a hair tip held by friction on a polyline corner: friction locked one step, and the \
+         next failed with the quick solve with friction and again without friction \
+         (\"friction still locks the antenna\"); that step is now taken again with friction in \
+         full before it fails",
+    ),
 ];
 
 /// The soak's default seed.

@@ -353,7 +353,9 @@ impl QuasiStatic {
         }
         let dense_before = self.ssn.system.dense_solves;
         // Where friction locked the antenna in the last step, one plain solve with friction
-        // is tried before friction is dropped again.
+        // is tried before friction is dropped again (and where the step fails without
+        // friction too, it is taken with friction in full, below).
+        let locked_from = self.friction_locked.then(|| self.saved_state());
         let mut result = if self.friction_locked {
             self.friction_locked = false;
             self.quick_attempt = true;
@@ -394,6 +396,16 @@ impl QuasiStatic {
             } else {
                 Err(first)
             };
+        }
+        if result.is_err()
+            && let Some(saved) = locked_from
+        {
+            // Friction locked the last step, and neither the quick solve with friction nor
+            // the step without it went through: the step is taken again from its start with
+            // friction, in full (substeps, the fixed point, snaps), before it fails.
+            self.restore_state(saved);
+            self.friction_locked = false;
+            result = self.advance(base_m, self.settings.max_step_iterations, &mut report);
         }
         report.dense_solves = self.ssn.system.dense_solves - dense_before;
         if let Err(e) = result {
