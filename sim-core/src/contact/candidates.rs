@@ -13,7 +13,7 @@
 use nalgebra::Vector2;
 
 use super::ContactError;
-use super::geometry::{FOOT_TOLERANCE, chain_point, evaluate};
+use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
 use super::posture::Posture;
 use super::quasistatic::{QuasiStatic, theta_of};
@@ -42,21 +42,13 @@ impl QuasiStatic {
             // A contact that is no longer within the margin stays a pair while it can be
             // measured (the solve lets it go if it must).
             let mut c = self.fresh_pair(old.key);
-            let mut geo = c.geo;
-            evaluate(
-                &self.chain,
-                &self.pieces.walls[old.key.piece],
-                &self.probe,
-                &self.beta,
-                &old.key,
-                &mut geo,
-            );
+            let geo = self.geometry_in(&self.probe, &old.key, c.geo);
             if geo.valid && self.pair_on_real_wall(&old.key, &geo.point_m, geo.gap_m) {
                 carry(&mut c, old);
                 out.push(c);
             } else if matches!(old.key.kind, PairKind::Link { .. })
                 && old.normal_force_n > 0.0
-                && self.valid_at_start(old)
+                && self.geometry_in(&self.start, &old.key, old.geo).valid
             {
                 // A loaded corner on a link whose foot the probe (the last posture carried
                 // with the base) puts past the link's end, but which is on the link where
@@ -98,18 +90,18 @@ impl QuasiStatic {
         Ok(out)
     }
 
-    /// Whether `old`'s feature is on its link where the last step left the chain.
-    fn valid_at_start(&self, old: &Pair) -> bool {
-        let mut geo = old.geo;
+    /// `key`'s geometry in `posture` (with the current hair angles), evaluated over `geo`
+    /// (what a pair that cannot be measured keeps).
+    fn geometry_in(&self, posture: &Posture, key: &PairKey, mut geo: PairGeometry) -> PairGeometry {
         evaluate(
             &self.chain,
-            &self.pieces.walls[old.key.piece],
-            &self.start,
+            &self.pieces.walls[key.piece],
+            posture,
             &self.beta,
-            &old.key,
+            key,
             &mut geo,
         );
-        geo.valid
+        geo
     }
 
     /// The pairs of `posture` (hair angles `beta`) with a gap below `within_m`.
