@@ -61,6 +61,20 @@ const SOAK_REGRESSIONS: &[(u64, &str)] = &[
          point's stand-in kept its friction (9 mN of shear where none was allowed)",
     ),
     (
+        176,
+        "step 212: a corner standing for joint 16 (link 16 resting on it at the joint) whose \
+         foot slid past the link's end was dropped without handing its force back to the joint's \
+         own pair, and the joint swung into the wall (\"the downhill path did not come to \
+         rest\")",
+    ),
+    (
+        755,
+        "step 526: a hair tip pressed onto the lip of a step, on the line of the lip's edge, \
+         slid past the corner, let go, and came back to the corner as a point pair whose \
+         normal turns at 1 / gap (\"the downhill path did not come to rest\"); it is now \
+         handed to the line of the corner's other edge, and kept on that line along its edge",
+    ),
+    (
         748,
         "uncertified at step 42: a contact grazing a sinusoid's crest (N = -1.1e-9 N, pressed \
          within the modes' hysteresis) slid with a shear of 3.3e-10 N in its own direction, a \
@@ -73,6 +87,11 @@ const SOAK_REGRESSIONS: &[(u64, &str)] = &[
          next failed with the quick solve with friction and again without friction \
          (\"friction still locks the antenna\"); that step is now taken again with friction in \
          full before it fails",
+    ),
+    (
+        1393,
+        "placement (tip-on-wall S, a corner at the tip): as soak 176, a corner standing for a \
+         joint dropped without handing its force back",
     ),
 ];
 

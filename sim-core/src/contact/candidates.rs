@@ -23,6 +23,11 @@ use crate::{FeatureContact, WallPoint};
 /// (the nearest).
 const NEAREST: usize = 3;
 
+/// A loaded corner pair that stood for a joint and ends a solve with its foot this far (as
+/// a fraction of the link) or less past the link's end hands its force back to the joint's
+/// point pair ([`QuasiStatic::drop_stale_pairs`]).
+const HAND_BACK_FRACTION: f64 = 1e-2;
+
 impl QuasiStatic {
     /// The pairs of a step to the base at `goal` (see the module docs).
     pub(super) fn candidates(&self, goal: Vector2<f64>) -> Result<Vec<Pair>, ContactError> {
@@ -85,7 +90,7 @@ impl QuasiStatic {
         // decided where the last step left the chain: the probe posture is only a guess,
         // and a guess that puts a link on the corner at a loaded joint that the solution
         // then leaves beside it makes a step whose equations miss what touches.
-        self.hand_point_pairs_to_stand_ins(&self.start, &self.beta, &mut out);
+        self.hand_point_pairs_to_stand_ins(&self.start, &self.beta, &mut out, &[]);
         self.drop_links_doubling_loaded_joints(&mut out);
         Ok(out)
     }
@@ -318,11 +323,14 @@ impl QuasiStatic {
     /// a convex corner); a stand-in that is not yet a pair starts from the point pair's
     /// forces and friction state. Whether a pair carrying force was replaced (the step must
     /// then be solved again).
+    /// A stand-in in `refused` (one that handed its force back in this (sub)step, see
+    /// [`Self::drop_stale_pairs`]) is not taken again: the point pair stands.
     pub(super) fn hand_point_pairs_to_stand_ins(
         &self,
         posture: &Posture,
         beta: &[f64],
         pairs: &mut Vec<Pair>,
+        refused: &[PairKey],
     ) -> bool {
         let mut changed = false;
         let mut i = 0;
@@ -336,7 +344,9 @@ impl QuasiStatic {
                 }
                 _ => [None, None],
             };
-            if stand_ins.iter().all(Option::is_none) {
+            if stand_ins.iter().all(Option::is_none)
+                || stand_ins.iter().flatten().any(|k| refused.contains(k))
+            {
                 i += 1;
                 continue;
             }
@@ -413,9 +423,10 @@ impl QuasiStatic {
         x: &[f64],
         hair_links: &[usize],
         pairs: &mut Vec<Pair>,
+        refused: &[PairKey],
     ) -> bool {
         let beta = self.beta_of(x, hair_links);
-        self.hand_point_pairs_to_stand_ins(&self.probe, &beta, pairs)
+        self.hand_point_pairs_to_stand_ins(&self.probe, &beta, pairs, refused)
     }
 
     /// A fresh pair `key`: its material point where it touches (or comes nearest) at the
@@ -478,10 +489,39 @@ impl QuasiStatic {
     /// foot has left its link, or whose cone no longer holds the link's normal) and the
     /// corner-edge pairs that no longer stand for their point ([`CornerEdgeState`]); whether
     /// one of them was active (the step must then be solved again).
-    pub(super) fn drop_stale_pairs(&self, pairs: &mut Vec<Pair>) -> bool {
+    ///
+    /// A loaded corner-edge pair whose point the solution puts past its corner on the
+    /// edge's line ([`CornerEdgeState::PastCorner`]) is handed, with its force, to the line
+    /// of the corner's other edge: a point whose motion carries it around the corner (a
+    /// hair tip on a circle about its joint, pressed onto the lip of a step) comes to rest
+    /// on the other edge within nanometres of the corner, where a point pair's normal turns
+    /// at `1 / gap` and Newton's method stalls. Past the other edge's corner too, the point
+    /// is clear of both edges and the pair lets go.
+    ///
+    /// A loaded corner pair standing for a joint ([`Self::joint_corner_pairs`]) whose foot
+    /// the solution puts just past the link's end at the joint, where the joint's other
+    /// link does not rest on the corner either, hands its force back to the joint's point
+    /// pair: the joint slid off the corner onto the edge beside it, and dropped without a
+    /// hand-over the joint would lose its contact for the next solve (and swing into the
+    /// wall).
+    ///
+    /// Each pair hands over at most once in a (sub)step: `handed_over` records them, and a
+    /// point pair is not handed to a stand-in recorded there
+    /// ([`Self::hand_point_pairs_to_stand_ins`]).
+    pub(super) fn drop_stale_pairs(
+        &self,
+        pairs: &mut Vec<Pair>,
+        handed_over: &mut Vec<PairKey>,
+    ) -> bool {
         let before = pairs.len();
         let mut active = false;
         let mut handed: Vec<Pair> = Vec::new();
+        // The corners that links rest on at the solution.
+        let resting: Vec<PairKey> = pairs
+            .iter()
+            .filter(|c| c.geo.valid && matches!(c.key.kind, PairKind::Link { .. }))
+            .map(|c| c.key)
+            .collect();
         pairs.retain(|c| {
             let state = self.corner_edge_state(c);
             let keep = c.geo.valid
@@ -489,12 +529,53 @@ impl QuasiStatic {
                 && state == CornerEdgeState::OnCorner;
             if !keep && c.is_loaded() {
                 active = true;
-                if state == CornerEdgeState::Left
-                    && let Some(point) = c.key.chain_point()
-                {
-                    let mut h = self.fresh_pair(PairKey::point(point, c.key.piece));
-                    carry(&mut h, c);
-                    handed.push(h);
+                match (state, c.key.kind) {
+                    (CornerEdgeState::Left, _) => {
+                        if let Some(point) = c.key.chain_point() {
+                            let mut h = self.fresh_pair(PairKey::point(point, c.key.piece));
+                            carry(&mut h, c);
+                            handed.push(h);
+                        }
+                    }
+                    (
+                        CornerEdgeState::PastCorner,
+                        PairKind::CornerEdge {
+                            point,
+                            feature,
+                            after,
+                        },
+                    ) => {
+                        let other = PairKey::corner_edge(point, feature, !after, c.key.piece);
+                        if !handed_over.contains(&other) && !handed_over.contains(&c.key) {
+                            handed_over.push(c.key);
+                            let mut h = self.fresh_pair(other);
+                            carry(&mut h, c);
+                            handed.push(h);
+                        }
+                    }
+                    (_, PairKind::Link { link, feature }) => {
+                        // A corner that stood for a joint and slid past the link's end at
+                        // it, where the joint's other link does not rest on it: the joint's
+                        // own pair takes the force back, and does not hand it to the corner
+                        // again in this (sub)step.
+                        let (end, other) = if c.geo.s < 0.5 {
+                            (link - 1, link - 1)
+                        } else {
+                            (link, link + 1)
+                        };
+                        let at_end = (c.geo.s - if c.geo.s < 0.5 { 0.0 } else { 1.0 }).abs()
+                            <= HAND_BACK_FRACTION;
+                        let other_rests =
+                            resting.contains(&PairKey::link(other, feature, c.key.piece));
+                        if at_end && end >= 1 && !other_rests && !handed_over.contains(&c.key) {
+                            handed_over.push(c.key);
+                            let point = PairKey::point(ChainPoint::Vertex(end), c.key.piece);
+                            let mut h = self.fresh_pair(point);
+                            carry(&mut h, c);
+                            handed.push(h);
+                        }
+                    }
+                    _ => {}
                 }
             }
             keep
@@ -516,13 +597,26 @@ impl QuasiStatic {
             .shape
             .corner_m(feature)
             .is_some_and(|corner| (c.geo.point_m - corner).norm() <= CORNER_CAPTURE_M);
-        if !near {
-            return CornerEdgeState::Left;
-        }
         let tol = self
             .settings
             .penetration_tolerance_m
             .max(self.settings.acceptable_m);
+        if !near {
+            // Along its own edge, the edge's line is the wall: the pair stands (a point pair
+            // would restart the next round at the corner, where its normal turns at
+            // `1 / gap`). Past the edge's other end, or lifted off where the piece is
+            // nearer than the line, the point's own pair takes over.
+            let at_piece = piece.signed_distance(&c.geo.point_m);
+            let on_own_edge = at_piece.curvature_per_m == 0.0
+                && at_piece.normal.dot(&c.geo.normal) > 1.0 - 1e-12
+                && (at_piece.gap_m - c.geo.gap_m).abs() <= tol
+                && self.on_real_wall(c.key.piece, &c.geo.point_m, c.geo.gap_m);
+            return if on_own_edge && std::env::var("NO_OWN").is_err() {
+                CornerEdgeState::OnCorner
+            } else {
+                CornerEdgeState::Left
+            };
+        }
         if c.is_loaded() && piece.signed_distance(&c.geo.point_m).gap_m > tol {
             CornerEdgeState::PastCorner
         } else {

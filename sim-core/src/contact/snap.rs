@@ -10,6 +10,10 @@ use super::ContactError;
 use super::quasistatic::QuasiStatic;
 use super::report::StepReport;
 
+/// A pseudo-time step that changes no joint angle by more than this, radians, has come to
+/// rest: a plain solve from there ends the snap.
+const REST_RAD: f64 = 1e-7;
+
 impl QuasiStatic {
     /// Follows a vanished branch downhill at the base position `goal`: implicit steps of the
     /// friction-aware gradient flow (proximal solves, the proximal weight `gamma` halved
@@ -24,6 +28,8 @@ impl QuasiStatic {
         report.snapped = true;
         self.secant = None;
         let mut gamma = 1.0;
+        // The posture before the last accepted pseudo-time step.
+        let mut x_before_last: Option<Vec<f64>> = None;
         for _ in 0..self.settings.max_snap_steps {
             if report.iterations > budget {
                 break;
@@ -33,15 +39,27 @@ impl QuasiStatic {
             let r = self.attempt(goal, Some((gamma, &x_prev)), report);
             match r {
                 Ok(accepted) => {
-                    let moved = accepted
-                        .x
-                        .iter()
-                        .zip(&x_prev)
-                        .take(self.chain.n())
-                        .fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
+                    let n = self.chain.n();
+                    let distance = |to: &[f64]| {
+                        accepted
+                            .x
+                            .iter()
+                            .zip(to)
+                            .take(n)
+                            .fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()))
+                    };
+                    let moved = distance(&x_prev);
+                    // Back where the step before this one started: two pseudo-time steps
+                    // taking turns about a rest point that a stalled solve accepted within
+                    // the acceptable residual (a contact touching with no force), which
+                    // the flow would otherwise circle for its whole budget.
+                    let circling = x_before_last
+                        .as_deref()
+                        .is_some_and(|x| distance(x) < REST_RAD);
                     report.note_residual(accepted.residual_m, &self.settings);
                     self.commit(goal, accepted);
-                    if (moved < 1e-7 || gamma < 1e-6)
+                    x_before_last = Some(x_prev);
+                    if (moved < REST_RAD || circling || gamma < 1e-6)
                         && let Ok(plain) = self.attempt(goal, None, report)
                     {
                         report.note_residual(plain.residual_m, &self.settings);

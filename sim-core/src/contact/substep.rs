@@ -48,6 +48,7 @@ impl QuasiStatic {
         self.probe.update(&self.chain, goal, &self.theta);
         let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
         let mut anchoring = super::anchoring::AnchorRounds::default();
+        let mut handed_over = Vec::new();
         for _round in 0..ROUNDS {
             let mut hair_links: Vec<usize> =
                 pairs.iter().filter_map(|c| c.key.hair_link()).collect();
@@ -137,9 +138,14 @@ impl QuasiStatic {
             }
             // Pairs that are no longer what touches (a feature's foot past its link's end)
             // let go, and any point now inside a wall joins: the step is solved again.
-            let mut changed = self.drop_stale_pairs(&mut pairs);
+            let mut changed = self.drop_stale_pairs(&mut pairs, &mut handed_over);
             self.probe_at(&x, goal);
-            changed |= self.hand_point_pairs_to_stand_ins_at_probe(&x, &hair_links, &mut pairs);
+            changed |= self.hand_point_pairs_to_stand_ins_at_probe(
+                &x,
+                &hair_links,
+                &mut pairs,
+                &handed_over,
+            );
             let missed = self.missed_pairs(&x, &hair_links, &pairs);
             changed |= !missed.is_empty();
             pairs.extend(missed);
