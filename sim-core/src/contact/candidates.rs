@@ -23,6 +23,14 @@ use crate::{FeatureContact, WallPoint};
 /// (the nearest).
 const NEAREST: usize = 3;
 
+/// A feature poking through a link's line by `d` is inside the link only where the link's
+/// point there is at least this fraction of `d` inside the wall. A corner turning by at
+/// most 85 degrees, pushed `d` through a link whose normal lies at the edge of its cone,
+/// leaves the link's point `d cos(85 deg) = 0.087 d` inside (soak 176); a crest across a
+/// steep tip link, out of the link's reach, leaves it on the wall (soak 258: `d` = 6 cm,
+/// the tip resting on the wall).
+const THROUGH_LINE_DEPTH_FRACTION: f64 = 0.02;
+
 /// A loaded corner pair that stood for a joint and ends a solve with its foot this far (as
 /// a fraction of the link) or less past the link's end hands its force back to the joint's
 /// point pair ([`QuasiStatic::drop_stale_pairs`]).
@@ -183,7 +191,17 @@ impl QuasiStatic {
                     &mut features,
                 );
                 for fc in &features {
-                    if fc.supported && fc.s >= -foot_tolerance && fc.s <= 1.0 + foot_tolerance {
+                    // A feature that pokes through the link's line where the link itself is
+                    // not that deep in the wall (a crest across a steep link, beyond the
+                    // link's reach) is not what the link touches.
+                    let through_line_only = fc.gap_m < -self.settings.penetration_tolerance_m
+                        && piece.signed_distance(&fc.point_m).gap_m
+                            > THROUGH_LINE_DEPTH_FRACTION * fc.gap_m;
+                    if fc.supported
+                        && !through_line_only
+                        && fc.s >= -foot_tolerance
+                        && fc.s <= 1.0 + foot_tolerance
+                    {
                         near.push((fc.gap_m, PairKey::link(link, fc.feature, w)));
                     }
                 }
