@@ -88,6 +88,13 @@ const SOAK_REGRESSIONS: &[(u64, &str)] = &[
          held against the slip",
     ),
     (
+        1093,
+        "step 158: a link pressed flat on a digitized wall's edge, resting on the edge's \
+         corner, ended its solves 1e-7 outside the corner's normal cone, lost the corner, and \
+         took turns between the corner and its joint on the wall beyond (\"the downhill path \
+         did not come to rest\")",
+    ),
+    (
         1229,
         "a hair tip held by friction on a polyline corner: friction locked one step, and the \
          next failed with the quick solve with friction and again without friction \
