@@ -193,10 +193,13 @@ impl QuasiStatic {
                 for fc in &features {
                     // A feature that pokes through the link's line where the link itself is
                     // not that deep in the wall (a crest across a steep link, beyond the
-                    // link's reach) is not what the link touches.
+                    // link's reach), or just past the link's end (the line run on past a
+                    // bent joint cuts into a corner that rests on the joint's other link),
+                    // is not what the link touches.
                     let through_line_only = fc.gap_m < -self.settings.penetration_tolerance_m
-                        && piece.signed_distance(&fc.point_m).gap_m
-                            > THROUGH_LINE_DEPTH_FRACTION * fc.gap_m;
+                        && (!(0.0..=1.0).contains(&fc.s)
+                            || piece.signed_distance(&fc.point_m).gap_m
+                                > THROUGH_LINE_DEPTH_FRACTION * fc.gap_m);
                     if fc.supported
                         && !through_line_only
                         && fc.s >= -foot_tolerance
@@ -263,7 +266,12 @@ impl QuasiStatic {
                         } else {
                             (fc.s - joint_end).abs() <= FOOT_TOLERANCE && fc.s <= 1.0 + past_end
                         };
-                        fc.supported && on_link
+                        // Past the link's end, the link's line run on past the bent joint
+                        // cuts into a corner that rests on the joint's other link: that is
+                        // no contact of this link.
+                        let beside = (0.0..=1.0).contains(&fc.s)
+                            || fc.gap_m >= -self.settings.penetration_tolerance_m;
+                        fc.supported && on_link && beside
                     })
                     .map(|_| PairKey::link(link, feature, piece))
             };
