@@ -654,11 +654,12 @@ impl QuasiStatic {
 /// Where a corner-edge pair's point is after a solve.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum CornerEdgeState {
-    /// Within [`CORNER_CAPTURE_M`] of the corner and on the wall (or not loaded): the pair
-    /// stands.
+    /// Within [`CORNER_CAPTURE_M`] of the corner and on the wall (or not loaded), or on
+    /// the edge's own stretch of wall (where the edge's line is the wall): the pair stands.
     OnCorner,
-    /// Farther from the corner (along its edge, or lifted off): the point's own pair
-    /// takes over, with the force.
+    /// Farther from the corner and off its own edge (past the edge's other end, or lifted
+    /// off where the piece is nearer than the edge's line): the point's own pair takes
+    /// over, with the force. Along its own edge the pair stands ([`Self::OnCorner`]).
     Left,
     /// Loaded while off the wall beside the corner: pressed onto the edge's line where it
     /// runs on past the corner through free space, where no wall holds it. A point cannot
@@ -670,9 +671,10 @@ enum CornerEdgeState {
 }
 
 /// How near a convex corner (metres) a chain point counts as on it: its point pair is then
-/// replaced by a corner-edge pair ([`PairKind::CornerEdge`]), which hands back when the
-/// point is farther. The radius only has to catch a solve that stopped short of the
-/// corner (a point sliding onto it).
+/// replaced by a corner-edge pair ([`PairKind::CornerEdge`]), which stands while the point
+/// is on the corner or on the edge's own stretch of wall and hands back when it leaves
+/// them ([`CornerEdgeState`]). The radius only has to catch a solve that stopped short of
+/// the corner (a point sliding onto it).
 pub(crate) const CORNER_CAPTURE_M: f64 = 1e-6;
 
 /// Whether pair `c` is a corner-edge pair of the same chain point and piece as the point
