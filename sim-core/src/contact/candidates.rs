@@ -637,7 +637,7 @@ impl QuasiStatic {
                 && at_piece.normal.dot(&c.geo.normal) > 1.0 - 1e-12
                 && (at_piece.gap_m - c.geo.gap_m).abs() <= tol
                 && self.on_real_wall(c.key.piece, &c.geo.point_m, c.geo.gap_m);
-            return if on_own_edge && std::env::var("NO_OWN").is_err() {
+            return if on_own_edge {
                 CornerEdgeState::OnCorner
             } else {
                 CornerEdgeState::Left
