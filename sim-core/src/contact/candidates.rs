@@ -196,9 +196,10 @@ impl QuasiStatic {
                     // link's reach), or just past the link's end (the line run on past a
                     // bent joint cuts into a corner that rests on the joint's other link),
                     // is not what the link touches.
-                    let through_line_only = fc.gap_m < -self.settings.penetration_tolerance_m
-                        && (!(0.0..=1.0).contains(&fc.s)
-                            || piece.signed_distance(&fc.point_m).gap_m
+                    let tol = self.settings.penetration_tolerance_m;
+                    let through_line_only = past_end_through_line(fc, tol)
+                        || (fc.gap_m < -tol
+                            && piece.signed_distance(&fc.point_m).gap_m
                                 > THROUGH_LINE_DEPTH_FRACTION * fc.gap_m);
                     if fc.supported
                         && !through_line_only
@@ -266,12 +267,9 @@ impl QuasiStatic {
                         } else {
                             (fc.s - joint_end).abs() <= FOOT_TOLERANCE && fc.s <= 1.0 + past_end
                         };
-                        // Past the link's end, the link's line run on past the bent joint
-                        // cuts into a corner that rests on the joint's other link: that is
-                        // no contact of this link.
-                        let beside = (0.0..=1.0).contains(&fc.s)
-                            || fc.gap_m >= -self.settings.penetration_tolerance_m;
-                        fc.supported && on_link && beside
+                        fc.supported
+                            && on_link
+                            && !past_end_through_line(fc, self.settings.penetration_tolerance_m)
                     })
                     .map(|_| PairKey::link(link, feature, piece))
             };
@@ -584,13 +582,14 @@ impl QuasiStatic {
                         // it, where the joint's other link does not rest on it: the joint's
                         // own pair takes the force back, and does not hand it to the corner
                         // again in this (sub)step.
-                        let (end, other) = if c.geo.s < 0.5 {
-                            (link - 1, link - 1)
+                        // The joint at the end the foot is nearer, its other link, and
+                        // that end's fraction along this link.
+                        let (end, other, end_s) = if c.geo.s < 0.5 {
+                            (link - 1, link - 1, 0.0)
                         } else {
-                            (link, link + 1)
+                            (link, link + 1, 1.0)
                         };
-                        let at_end = (c.geo.s - if c.geo.s < 0.5 { 0.0 } else { 1.0 }).abs()
-                            <= HAND_BACK_FRACTION;
+                        let at_end = (c.geo.s - end_s).abs() <= HAND_BACK_FRACTION;
                         let other_rests =
                             resting.contains(&PairKey::link(other, feature, c.key.piece));
                         if at_end && end >= 1 && !other_rests && !handed_over.contains(&c.key) {
@@ -676,6 +675,13 @@ enum CornerEdgeState {
 /// them ([`CornerEdgeState`]). The radius only has to catch a solve that stopped short of
 /// the corner (a point sliding onto it).
 pub(crate) const CORNER_CAPTURE_M: f64 = 1e-6;
+
+/// Whether feature `fc` pokes through its segment's line (by more than `tolerance_m`) past
+/// the segment's end: the line of a link run on past a bent joint cuts into a corner that
+/// rests on the joint's other link, which is no contact of this link.
+fn past_end_through_line(fc: &FeatureContact, tolerance_m: f64) -> bool {
+    fc.gap_m < -tolerance_m && !(0.0..=1.0).contains(&fc.s)
+}
 
 /// Whether pair `c` is a corner-edge pair of the same chain point and piece as the point
 /// pair `key` (which it stands for).
