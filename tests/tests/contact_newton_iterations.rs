@@ -133,3 +133,40 @@ fn a_tip_hooked_on_a_convex_corner_keeps_its_corner_at_full_steps() {
     assert!(worst <= 40, "a step took {worst} Newton iterations");
     assert!(total <= 600, "{total} Newton iterations");
 }
+
+/// Soak case 4221:1903 (`ANTENNA_STRESS_REPLAY=soak:4221:1903`): a 72-link antenna of the
+/// fast-exponential profile with distal hairs whose tip sits wedged in a concave corner of
+/// a digitized trapezoid (mu = 0), pressed on both pieces that meet there. Carried with the
+/// base (the probe that picks a step's pairs), the last posture puts the tip past the end
+/// of the piece behind it, so that piece's pair was dropped for any whole step: the step
+/// solved without it stalled 80 um from an answer (the tip pushed back past the corner
+/// into the dropped piece), was halved twice and solved at quarter steps, every step: 97
+/// of 172 steps took more than 40 Newton iterations (at most 244), 14,906 in all. A
+/// loaded point pair that the last step left pressed on its piece's wall now stays a pair:
+/// at most 3 Newton iterations a step, 212 in all.
+#[test]
+fn a_tip_wedged_in_a_concave_corner_keeps_both_pieces_at_full_steps() {
+    use antenna_tests::stress::{Case, Outcome, Sample, run_case};
+    let case = Case::generate(4_221, 1_903, Sample::Soak).unwrap();
+    assert_eq!(
+        case.links,
+        72,
+        "the soak generator changed: {}",
+        case.replay_line()
+    );
+    let record = run_case(&case, false);
+    assert!(
+        matches!(record.outcome, Outcome::Finished),
+        "{}",
+        record.outcome_line()
+    );
+    let total = record.total_iterations();
+    let worst = record.iterations.iter().copied().max().unwrap();
+    eprintln!(
+        "soak 1903: {} steps, {total} Newton iterations, worst {worst}",
+        record.steps
+    );
+    assert_eq!(record.steps, 172);
+    assert!(worst <= 10, "a step took {worst} Newton iterations");
+    assert!(total <= 400, "{total} Newton iterations");
+}

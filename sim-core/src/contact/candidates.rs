@@ -70,6 +70,16 @@ impl QuasiStatic {
                 // corner). It stays a pair; the solve drops it if its foot leaves the link.
                 carry(&mut c, old);
                 out.push(c);
+            } else if matches!(old.key.kind, PairKind::Point(_))
+                && old.normal_force_n > 0.0
+                && self.pair_on_real_wall(&old.key, &old.geo.point_m, old.geo.gap_m)
+            {
+                // A loaded point that the probe carries off its piece's stretch of wall
+                // but that the last step left pressed on it: a tip wedged in a concave
+                // corner does not move with the base. It stays a pair; the solve lets it
+                // go if it leaves.
+                carry(&mut c, old);
+                out.push(c);
             } else if let Some(next) = out
                 .iter_mut()
                 .filter(|c| c.key.piece == old.key.piece && c.normal_force_n == 0.0)
