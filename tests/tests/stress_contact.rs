@@ -15,7 +15,9 @@
 //!   `ANTENNA_SOAK_SEED` (default below), longer ones, the table, every unfinished sweep.
 //! - `ANTENNA_STRESS_REPLAY=ci:SEED:INDEX[,INDEX...]` (or `soak:...`): reruns those cases
 //!   alone, in this process and without a time limit, and prints what happened (the replay
-//!   lines printed for unfinished sweeps say which).
+//!   lines printed for unfinished sweeps say which). With `ANTENNA_STRESS_TRACE=1` it also
+//!   prints what each step cost and why (Newton iterations, substeps, snaps, jams, the fixed
+//!   point) and counts the steps over 40 iterations by kind: where a Newton p99 comes from.
 //! - `ANTENNA_STRESS_ALL=1`: the CI sample with its known failures too.
 //! - `ANTENNA_STRESS_THREADS`: worker threads (default: every core).
 //! - Each sweep runs in a child process (this binary, running only the main test with
@@ -34,7 +36,7 @@ use antenna_tests::stress::walls::{
 };
 use antenna_tests::stress::{
     CHILD_ENV, ChildCommand, Outcome, RunOptions, SweepRecord, TimeLimit, case_rng, child_main,
-    default_threads, run_cases, run_index, summary_markdown, unfinished_report,
+    default_threads, expensive_by_kind, run_cases, run_index, summary_markdown, unfinished_report,
 };
 use nalgebra::Vector2;
 use sim_core::sweep::Placement;
@@ -124,8 +126,11 @@ fn env_u64(name: &str) -> Option<u64> {
     std::env::var(name).ok().and_then(|v| v.trim().parse().ok())
 }
 
-/// `ANTENNA_STRESS_REPLAY=ci:SEED:I,J,...`: rerun those cases and print them.
+/// `ANTENNA_STRESS_REPLAY=ci:SEED:I,J,...`: rerun those cases and print them (with
+/// `ANTENNA_STRESS_TRACE=1`, what each step cost and why, and the steps over
+/// [`antenna_tests::stress::EXPENSIVE_ITERATIONS`] Newton iterations by kind).
 fn replay(spec: &str) {
+    let trace = std::env::var("ANTENNA_STRESS_TRACE").is_ok_and(|v| v.trim() == "1");
     let mut parts = spec.split(':');
     let sample = parts.next().and_then(Sample::parse).expect("ci or soak");
     let seed: u64 = parts.next().and_then(|s| s.parse().ok()).expect("a seed");
@@ -147,6 +152,12 @@ fn replay(spec: &str) {
             rec.contact_steps,
             rec.relaxed_steps
         );
+        if trace {
+            for cost in &rec.costs {
+                println!("{}", cost.line());
+            }
+            print!("{}", expensive_by_kind(&rec.costs));
+        }
     }
 }
 

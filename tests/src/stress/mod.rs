@@ -17,6 +17,7 @@
 pub mod case;
 pub mod outcome;
 pub mod parallel;
+pub mod step_cost;
 pub mod table;
 pub mod walls;
 pub mod wire;
@@ -27,6 +28,7 @@ pub use parallel::{
     CHILD_ENV, ChildCommand, RunOptions, TimeLimit, child_main, default_threads, run_cases,
     run_in_child, run_index,
 };
+pub use step_cost::{EXPENSIVE_ITERATIONS, StepCost, expensive_by_kind};
 pub use table::{summary_markdown, unfinished_report};
 pub use walls::{Corner, Profile, WallFrame, WallKind, WallSpec};
 

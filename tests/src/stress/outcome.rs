@@ -14,6 +14,7 @@ use sim_core::contact::{ContactError, Jam, QuasiStatic};
 use sim_core::sweep::{Sweep, SweepError};
 
 use super::case::{Case, PlacementKind, Sample};
+use super::step_cost::StepCost;
 use super::walls::WallKind;
 
 /// How a sweep ended.
@@ -206,6 +207,9 @@ pub struct SweepRecord {
     pub relaxations: BTreeMap<String, usize>,
     /// Newton iterations of each solved step.
     pub iterations: Vec<u32>,
+    /// What each solved step cost, and why (kept in this process only: a child's record
+    /// read back by its parent has none).
+    pub costs: Vec<StepCost>,
     /// Steps that snapped.
     pub snaps: usize,
     /// The placement's note (empty if it failed).
@@ -253,6 +257,7 @@ impl SweepRecord {
             relaxed_steps: 0,
             relaxations: BTreeMap::new(),
             iterations: Vec::with_capacity(case.steps()),
+            costs: Vec::with_capacity(case.steps()),
             snaps: 0,
             placement_note: String::new(),
             wall_clock_s: 0.0,
@@ -279,6 +284,7 @@ impl SweepRecord {
             relaxed_steps: 0,
             relaxations: BTreeMap::new(),
             iterations: Vec::new(),
+            costs: Vec::new(),
             snaps: 0,
             placement_note: String::new(),
             wall_clock_s: 0.0,
@@ -454,6 +460,8 @@ fn sweep(case: &Case, rec: &mut SweepRecord, echo: bool) -> Outcome {
         rec.steps += 1;
         rec.iterations
             .push(u32::try_from(step.report.iterations).unwrap_or(u32::MAX));
+        rec.costs
+            .push(StepCost::new(step.step, &step.report, step.contacts.len()));
         rec.contact_steps += usize::from(!step.contacts.is_empty());
         rec.snaps += usize::from(step.report.snapped);
         if step.report.relaxed() {

@@ -216,6 +216,7 @@ impl SweepRecord {
             relaxed_steps: number("relaxed_steps")?,
             relaxations,
             iterations,
+            costs: Vec::new(),
             snaps: number("snaps")?,
             placement_note: one("placement_note").unwrap_or_default(),
             wall_clock_s: one("wall_clock_s")?.parse().ok()?,
