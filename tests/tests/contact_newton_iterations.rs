@@ -109,29 +109,15 @@ fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
 /// contacts kept pressed in a solve's first Newton step, 200 in all, at most 6 a step.
 #[test]
 fn a_tip_hooked_on_a_convex_corner_keeps_its_corner_at_full_steps() {
-    use antenna_tests::stress::{Case, Outcome, Sample, run_case};
-    let case = Case::generate(4_221, 628, Sample::Soak).unwrap();
-    assert_eq!(
-        case.links,
-        72,
-        "the soak generator changed: {}",
-        case.replay_line()
+    soak_case_finishes_within(
+        628,
+        SoakBudget {
+            links: 72,
+            steps: 195,
+            worst: 40,
+            total: 600,
+        },
     );
-    let record = run_case(&case, false);
-    assert!(
-        matches!(record.outcome, Outcome::Finished),
-        "{}",
-        record.outcome_line()
-    );
-    let total = record.total_iterations();
-    let worst = record.iterations.iter().copied().max().unwrap();
-    eprintln!(
-        "soak 628: {} steps, {total} Newton iterations, worst {worst}",
-        record.steps
-    );
-    assert_eq!(record.steps, 195);
-    assert!(worst <= 40, "a step took {worst} Newton iterations");
-    assert!(total <= 600, "{total} Newton iterations");
 }
 
 /// Soak case 4221:1903 (`ANTENNA_STRESS_REPLAY=soak:4221:1903`): a 72-link antenna of the
@@ -146,11 +132,33 @@ fn a_tip_hooked_on_a_convex_corner_keeps_its_corner_at_full_steps() {
 /// at most 3 Newton iterations a step, 212 in all.
 #[test]
 fn a_tip_wedged_in_a_concave_corner_keeps_both_pieces_at_full_steps() {
+    soak_case_finishes_within(
+        1_903,
+        SoakBudget {
+            links: 72,
+            steps: 172,
+            worst: 10,
+            total: 400,
+        },
+    );
+}
+
+/// What a soak case (seed 4221) must stay within: its link count (the generator's), its
+/// steps, the Newton iterations of its worst step and of all its steps.
+struct SoakBudget {
+    links: usize,
+    steps: usize,
+    worst: u32,
+    total: u64,
+}
+
+/// Runs soak case `index` and asserts that it finishes within `budget`.
+fn soak_case_finishes_within(index: u64, budget: SoakBudget) {
     use antenna_tests::stress::{Case, Outcome, Sample, run_case};
-    let case = Case::generate(4_221, 1_903, Sample::Soak).unwrap();
+    let case = Case::generate(4_221, index, Sample::Soak).unwrap();
     assert_eq!(
         case.links,
-        72,
+        budget.links,
         "the soak generator changed: {}",
         case.replay_line()
     );
@@ -163,10 +171,13 @@ fn a_tip_wedged_in_a_concave_corner_keeps_both_pieces_at_full_steps() {
     let total = record.total_iterations();
     let worst = record.iterations.iter().copied().max().unwrap();
     eprintln!(
-        "soak 1903: {} steps, {total} Newton iterations, worst {worst}",
+        "soak {index}: {} steps, {total} Newton iterations, worst {worst}",
         record.steps
     );
-    assert_eq!(record.steps, 172);
-    assert!(worst <= 10, "a step took {worst} Newton iterations");
-    assert!(total <= 400, "{total} Newton iterations");
+    assert_eq!(record.steps, budget.steps);
+    assert!(
+        worst <= budget.worst,
+        "a step took {worst} Newton iterations"
+    );
+    assert!(total <= budget.total, "{total} Newton iterations");
 }
