@@ -59,25 +59,14 @@ impl QuasiStatic {
             if geo.valid && self.pair_on_real_wall(&old.key, &geo.point_m, geo.gap_m) {
                 carry(&mut c, old);
                 out.push(c);
-            } else if matches!(old.key.kind, PairKind::Link { .. })
-                && old.normal_force_n > 0.0
-                && self.geometry_in(&self.start, &old.key, old.geo).valid
-            {
-                // A loaded corner on a link whose foot the probe (the last posture carried
-                // with the base) puts past the link's end, but which is on the link where
-                // the last step left it: a stuck contact does not move with the base, and
-                // the link may well keep resting on the corner (a tip hooked on a convex
-                // corner). It stays a pair; the solve drops it if its foot leaves the link.
-                carry(&mut c, old);
-                out.push(c);
-            } else if matches!(old.key.kind, PairKind::Point(_))
-                && old.normal_force_n > 0.0
-                && self.pair_on_real_wall(&old.key, &old.geo.point_m, old.geo.gap_m)
-            {
-                // A loaded point that the probe carries off its piece's stretch of wall
-                // but that the last step left pressed on it: a tip wedged in a concave
-                // corner does not move with the base. It stays a pair; the solve lets it
-                // go if it leaves.
+            } else if old.normal_force_n > 0.0 && self.touches_where_left(old) {
+                // A loaded pair that the probe (the last posture carried with the base)
+                // takes off what it touches, but that touches it where the last step left
+                // the chain: a stuck contact does not move with the base. A corner whose
+                // foot the probe puts past its link's end may keep resting on the link (a
+                // tip hooked on a convex corner); a point carried off its piece's stretch
+                // of wall may stay pressed on it (a tip wedged in a concave corner). It
+                // stays a pair; the solve lets it go if it leaves.
                 carry(&mut c, old);
                 out.push(c);
             } else if let Some(next) = out
@@ -111,6 +100,18 @@ impl QuasiStatic {
         self.hand_point_pairs_to_stand_ins(&self.start, &self.beta, &mut out, &[]);
         self.drop_links_doubling_loaded_joints(&mut out);
         Ok(out)
+    }
+
+    /// Whether the last step's pair `old` touches what it pairs with where the last step
+    /// left the chain: a link's corner with its foot on the link, a point on its piece's
+    /// own stretch of wall. (A corner-edge pair is decided by its own rule,
+    /// [`CornerEdgeState`].)
+    fn touches_where_left(&self, old: &Pair) -> bool {
+        match old.key.kind {
+            PairKind::Link { .. } => self.geometry_in(&self.start, &old.key, old.geo).valid,
+            PairKind::Point(_) => self.pair_on_real_wall(&old.key, &old.geo.point_m, old.geo.gap_m),
+            PairKind::CornerEdge { .. } => false,
+        }
     }
 
     /// `key`'s geometry in `posture` (with the current hair angles), evaluated over `geo`
