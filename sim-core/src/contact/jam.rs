@@ -41,13 +41,17 @@ pub struct JammedContact {
 use super::ContactError;
 use super::geometry::{PairGeometry, evaluate, generalized};
 use super::pair::{PairKey, PairKind};
-use super::posture::Posture;
+use super::posture::{Posture, perp};
 use super::quasistatic::{QuasiStatic, theta_of};
 use nalgebra::{DMatrix, DVector};
 
 /// A step is a jam when no posture near the last one gets the links out of the walls by
 /// better than this, metres.
 const JAM_DEPTH_M: f64 = 1e-6;
+
+/// The weight of a held tip's distance from the hand against a link's depth in a wall in
+/// the least-penetration search: the hand holds the tip all but rigidly.
+const HAND_WEIGHT: f64 = 1e3;
 
 /// Gauss-Newton iterations of the least-penetration search.
 const SEARCH_ITERATIONS: usize = 60;
@@ -84,9 +88,17 @@ impl QuasiStatic {
         let mut x: Vec<f64> = self.theta[1..].to_vec();
         let mut posture = Posture::default();
         let beta = self.beta.clone();
+        // A hand holding the tip carries it with the base: the tip stays where the hand
+        // holds it now, moved by the base's displacement.
+        let hand_m = self.hand_offset_m.map(|_| {
+            posture.update(&self.chain, self.base_m, &self.theta);
+            posture.end_m[n] + (goal - self.base_m)
+        });
         let measure = |sim: &Self, posture: &mut Posture, x: &[f64]| -> (f64, f64, usize) {
             posture.update(&sim.chain, goal, &theta_of(&sim.theta, x));
-            let mut sum = 0.0;
+            let mut sum = hand_m.map_or(0.0, |h| {
+                0.5 * (HAND_WEIGHT * (posture.end_m[n] - h)).norm_squared()
+            });
             let (mut deepest, mut link) = (0.0_f64, 0);
             for key in point_keys(sim.touching(posture, &beta, 0.0)) {
                 if key.hair_link().is_some() {
@@ -143,6 +155,20 @@ impl QuasiStatic {
                     atr[i] += row[i] * geo.gap_m;
                     for j in 0..n {
                         ata[(i, j)] += row[i] * row[j];
+                    }
+                }
+            }
+            if let Some(h) = hand_m {
+                let miss = posture.end_m[n] - h;
+                for axis in 0..2 {
+                    for (i, r) in row.iter_mut().enumerate() {
+                        *r = HAND_WEIGHT * perp(posture.end_m[n] - posture.end_m[i])[axis];
+                    }
+                    for i in 0..n {
+                        atr[i] += row[i] * HAND_WEIGHT * miss[axis];
+                        for j in 0..n {
+                            ata[(i, j)] += row[i] * row[j];
+                        }
                     }
                 }
             }
@@ -218,8 +244,13 @@ impl QuasiStatic {
             })
             .collect();
         let description = format!(
-            "no posture near the last one keeps link {link} out of the walls (it stays {:.3} mm \
-             inside); {}; pinned by {}",
+            "no posture near the last one{} keeps link {link} out of the walls (it stays {:.3} \
+             mm inside); {}; pinned by {}",
+            if self.hand_offset_m.is_some() {
+                " with the tip where the hand holds it"
+            } else {
+                ""
+            },
             depth_m * 1e3,
             if stops.is_empty() {
                 "no joint on a stop".to_owned()

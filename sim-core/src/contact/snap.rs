@@ -14,11 +14,15 @@ use super::report::StepReport;
 /// rest: a plain solve from there ends the snap.
 const REST_RAD: f64 = 1e-7;
 
+/// A pseudo-time step whose proximal solve took at most this many Newton iterations is
+/// followed by a longer one (`gamma` halved); a harder one keeps `gamma`.
+const EASY_ITERATIONS: usize = 40;
+
 impl QuasiStatic {
     /// Follows a vanished branch downhill at the base position `goal`: implicit steps of the
     /// friction-aware gradient flow (proximal solves, the proximal weight `gamma` halved
-    /// after each success and quadrupled after each failure), until a plain solve from the
-    /// posture reached converges without a jump.
+    /// after each success that took at most [`EASY_ITERATIONS`] and quadrupled after each
+    /// failure), until a plain solve from the posture reached converges without a jump.
     pub(super) fn follow_snap(
         &mut self,
         goal: Vector2<f64>,
@@ -36,7 +40,9 @@ impl QuasiStatic {
             }
             report.snap_steps += 1;
             let x_prev = self.coordinates();
+            let spent_before = report.iterations;
             let r = self.attempt(goal, Some((gamma, &x_prev)), report);
+            let easy = report.iterations - spent_before <= EASY_ITERATIONS;
             match r {
                 Ok(accepted) => {
                     let n = self.chain.n();
@@ -59,14 +65,18 @@ impl QuasiStatic {
                     report.note_residual(accepted.residual_m, &self.settings);
                     self.commit(goal, accepted);
                     x_before_last = Some(x_prev);
-                    if (moved < REST_RAD || circling || gamma < 1e-6)
-                        && let Ok(plain) = self.attempt(goal, None, report)
-                    {
+                    let resting = moved < REST_RAD || circling || gamma < 1e-6;
+                    if resting && let Ok(plain) = self.attempt(goal, None, report) {
                         report.note_residual(plain.residual_m, &self.settings);
                         self.commit(goal, plain);
                         return Ok(());
                     }
-                    gamma = (gamma * 0.5).max(1e-8);
+                    // A solve that came easily takes a longer pseudo-time step next; one
+                    // that was hard keeps its step, rather than fail at a longer one, unless
+                    // the flow came to rest where no plain solve converges.
+                    if easy || resting {
+                        gamma = (gamma * 0.5).max(1e-8);
+                    }
                 }
                 Err(_) => {
                     gamma *= 4.0;
