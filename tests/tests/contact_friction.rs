@@ -140,3 +140,32 @@ fn a_two_joint_chain_stuck_at_its_tip_matches_its_statics() {
     );
     assert!((tip - c.point_m).norm() < 1e-12);
 }
+
+#[test]
+fn settings_replaced_between_steps_are_checked_and_then_used() {
+    let mut sim = pressed(0.3);
+    let bad = ContactSettings {
+        tolerance_m: -1.0,
+        ..ContactSettings::default()
+    };
+    let refused = sim.set_settings(bad).unwrap_err();
+    assert!(refused.to_string().contains("tolerance_m"), "{refused}");
+    assert_eq!(*sim.settings(), ContactSettings::default());
+    // A joint may change by at most 2 mrad a step: the same step is taken in more substeps.
+    let fine = ContactSettings {
+        jump_rad: 2e-3,
+        ..ContactSettings::default()
+    };
+    let step_m = Vector2::new(0.0, 0.001);
+    let mut sim_default = pressed(0.3);
+    let whole = sim_default.step_to(step_m).unwrap();
+    sim.set_settings(fine).unwrap();
+    assert_eq!(*sim.settings(), fine);
+    let refined = sim.step_to(step_m).unwrap();
+    assert!(
+        refined.substeps > whole.substeps,
+        "{} substeps with jump_rad = 2e-3, {} with the default",
+        refined.substeps,
+        whole.substeps
+    );
+}

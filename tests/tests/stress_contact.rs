@@ -291,6 +291,21 @@ fn a_held_antenna_that_jams_on_its_way_onto_the_wall_is_refused_with_the_jam() {
     }
 }
 
+/// A 150-link antenna held by its tip on a fine sinusoid (crests of 1.2 mm radius, half a
+/// link) and let go springs onto the wall in a long snap: the placement's settle has ten
+/// steps' budget and says what it took (soak 975 ran out of one step's 10,000 Newton
+/// iterations: "the downhill path did not come to rest").
+#[test]
+fn a_long_antenna_let_go_on_a_fine_sinusoid_snaps_to_rest_within_the_placement_budget() {
+    let case = Case::generate(SOAK_SEED, 975, Sample::Soak).unwrap();
+    let sweep = sim_core::sweep::Sweep::new(case.scene).unwrap();
+    let note = sweep.placement_note();
+    assert!(
+        note.contains("so it was held by the tip and brought") && note.contains("snapped to rest"),
+        "{note}"
+    );
+}
+
 /// Corners of drawn polylines (not the ones placed on a posture): every one turns 5-85 deg,
 /// and over a sample both convex and concave corners reach both ends of the range; some
 /// edges are shorter than a link.

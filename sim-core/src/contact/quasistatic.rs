@@ -200,6 +200,17 @@ impl QuasiStatic {
         &self.settings
     }
 
+    /// Replaces the settings for the steps to come.
+    ///
+    /// # Errors
+    /// [`ContactError::BadSetting`] naming the first setting out of range (the settings are
+    /// then unchanged).
+    pub fn set_settings(&mut self, settings: ContactSettings) -> Result<(), ContactError> {
+        settings.validate()?;
+        self.settings = settings;
+        Ok(())
+    }
+
     /// The contacts after the last step, ordered by link then kind.
     pub fn contacts(&self) -> Vec<Contact> {
         let mut out = Vec::with_capacity(self.pairs.len());

@@ -5,7 +5,7 @@
 use nalgebra::Vector2;
 
 use super::{SweepError, SweepScene};
-use crate::contact::{ContactError, QuasiStatic, StepReport};
+use crate::contact::{ContactError, ContactSettings, QuasiStatic, StepReport};
 use crate::{EquilibriumProblem, InitialGuess, SolveOptions, Wall, solve_equilibrium};
 
 /// How the antenna starts.
@@ -440,19 +440,39 @@ fn motion_direction(scene: &SweepScene) -> Vector2<f64> {
 }
 
 /// Settles the placed posture (a step of length zero).
+/// A placement's settle may follow a long snap (a held antenna let go springs onto the
+/// wall): it gets this many times the Newton iterations and snap steps of a sweep's step.
+const SETTLE_BUDGET_FACTOR: usize = 10;
+
+/// Settles the antenna where it is, with [`SETTLE_BUDGET_FACTOR`] times the step's budget.
 fn settle(sim: &mut QuasiStatic) -> Result<StepReport, SweepError> {
-    sim.settle().map_err(|source| SweepError::Step {
+    let as_step = |source| SweepError::Step {
         step: 0,
         t_s: 0.0,
         source,
+    };
+    let step = *sim.settings();
+    sim.set_settings(ContactSettings {
+        max_step_iterations: step
+            .max_step_iterations
+            .saturating_mul(SETTLE_BUDGET_FACTOR),
+        max_snap_steps: step.max_snap_steps.saturating_mul(SETTLE_BUDGET_FACTOR),
+        ..step
     })
+    .map_err(as_step)?;
+    let settled = sim.settle();
+    sim.set_settings(step).map_err(as_step)?;
+    settled.map_err(as_step)
 }
 
-fn snapped(report: &StepReport) -> &'static str {
+fn snapped(report: &StepReport) -> String {
     if report.snapped {
-        " (it snapped to rest)"
+        format!(
+            " (it snapped to rest: {} Newton iterations, {} pseudo-time steps)",
+            report.iterations, report.snap_steps
+        )
     } else {
-        ""
+        String::new()
     }
 }
 
