@@ -291,6 +291,28 @@ fn a_held_antenna_that_jams_on_its_way_onto_the_wall_is_refused_with_the_jam() {
     }
 }
 
+/// A hair tip wedged in a concave corner, its hair unable to fold out of it, jams the
+/// antenna (soak 1666: N = 4, distal hairs, a polyline with 78 deg corners, step 38); the
+/// jam names the hair tip. The search for a posture out of the walls used to move the joints
+/// only and leave hair tips out, found the links clear, and the stalled step was reported
+/// as "the downhill path did not come to rest".
+#[test]
+fn a_hair_tip_wedged_in_a_concave_corner_jams_the_antenna() {
+    let record = run_index(SOAK_SEED, 1666, Sample::Soak, false);
+    let Outcome::Jammed {
+        step, description, ..
+    } = &record.outcome
+    else {
+        panic!("soak:{SOAK_SEED}:1666: {}", record.outcome_line());
+    };
+    assert_eq!(*step, 38);
+    assert!(
+        description.contains("keeps the hair tip of link 1 out of the walls")
+            && description.contains("pinned by the hair tip of link 1 against wall 0"),
+        "{description}"
+    );
+}
+
 /// A 150-link antenna held by its tip on a fine sinusoid (crests of 1.2 mm radius, half a
 /// link) and let go springs onto the wall in a long snap: the placement's settle has ten
 /// steps' budget and says what it took (soak 975 ran out of one step's 10,000 Newton

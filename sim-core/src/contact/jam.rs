@@ -45,6 +45,8 @@ use super::posture::{Posture, perp};
 use super::quasistatic::{QuasiStatic, theta_of};
 use nalgebra::{DMatrix, DVector};
 
+use crate::{Hair, JointLimit};
+
 /// A step is a jam when no posture near the last one gets the links out of the walls by
 /// better than this, metres.
 const JAM_DEPTH_M: f64 = 1e-6;
@@ -71,123 +73,142 @@ impl QuasiStatic {
         if !matches!(error, ContactError::NoConvergence { .. }) {
             return error;
         }
-        let (depth, link) = self.least_penetration(goal);
+        let (depth, deepest) = self.least_penetration(goal);
         if depth > JAM_DEPTH_M {
-            ContactError::Jammed(Box::new(self.jam(goal, depth, link)))
+            ContactError::Jammed(Box::new(self.jam(goal, depth, &deepest)))
         } else {
             error
         }
     }
 
-    /// The least penetration (metres) of the links into the walls a projected Gauss-Newton
-    /// search reaches from the current posture with the base at `goal`, and the link that
-    /// stays deepest.
-    fn least_penetration(&mut self, goal: Vector2<f64>) -> (f64, usize) {
+    /// The least penetration (metres) of the links and hair tips into the walls a projected
+    /// Gauss-Newton search over the joint angles and the hair angles reaches from the current
+    /// posture with the base at `goal`, and what stays deepest ("link 3", "the hair tip of
+    /// link 3").
+    fn least_penetration(&mut self, goal: Vector2<f64>) -> (f64, String) {
         let n = self.chain.n();
-        let limits = self.chain.joint_limits().to_vec();
+        // The coordinates: the joints `1..=n`, then the hair angle of each link with a hair.
+        let hair_links: Vec<usize> = (0..=n)
+            .filter(|&l| self.chain.hairs().get(l).is_some_and(Option::is_some))
+            .collect();
+        let size = n + hair_links.len();
+        let mut limits: Vec<JointLimit> = self.chain.joint_limits()[1..].to_vec();
+        limits.extend(
+            hair_links
+                .iter()
+                .filter_map(|&l| self.chain.hairs()[l].as_ref().map(Hair::fold_limit)),
+        );
         let mut x: Vec<f64> = self.theta[1..].to_vec();
+        x.extend(hair_links.iter().map(|&l| self.beta[l]));
         let mut posture = Posture::default();
-        let beta = self.beta.clone();
+        let mut beta = self.beta.clone();
         // A hand holding the tip carries it with the base: the tip stays where the hand
         // holds it now, moved by the base's displacement.
         let hand_m = self.hand_offset_m.map(|_| {
             posture.update(&self.chain, self.base_m, &self.theta);
             posture.end_m[n] + (goal - self.base_m)
         });
-        let measure = |sim: &Self, posture: &mut Posture, x: &[f64]| -> (f64, f64, usize) {
-            posture.update(&sim.chain, goal, &theta_of(&sim.theta, x));
-            let mut sum = hand_m.map_or(0.0, |h| {
-                0.5 * (HAND_WEIGHT * (posture.end_m[n] - h)).norm_squared()
-            });
-            let (mut deepest, mut link) = (0.0_f64, 0);
-            for key in point_keys(sim.touching(posture, &beta, 0.0)) {
-                if key.hair_link().is_some() {
-                    continue;
-                }
+        // The penetrating pairs at `x`: each one's gap and geometry.
+        let penetrating = |sim: &Self,
+                           posture: &mut Posture,
+                           beta: &mut Vec<f64>,
+                           x: &[f64],
+                           out: &mut Vec<(PairKey, PairGeometry)>| {
+            posture.update(&sim.chain, goal, &theta_of(&sim.theta, &x[..n]));
+            for (k, &l) in hair_links.iter().enumerate() {
+                beta[l] = x[n + k];
+            }
+            out.clear();
+            for key in point_keys(sim.touching(posture, beta, 0.0)) {
                 let mut geo = PairGeometry::at(key.link, 1.0, Vector2::zeros());
                 evaluate(
                     &sim.chain,
                     &sim.pieces.walls[key.piece],
                     posture,
-                    &beta,
+                    beta,
                     &key,
                     &mut geo,
                 );
-                if geo.gap_m < 0.0 {
-                    sum += 0.5 * geo.gap_m * geo.gap_m;
-                    if -geo.gap_m > deepest {
-                        deepest = -geo.gap_m;
-                        link = key.link;
-                    }
+                if geo.gap_m < 0.0 && geo.gap_m.is_finite() {
+                    out.push((key, geo));
                 }
             }
-            (sum, deepest, link)
         };
-        let (mut merit, mut deepest, mut link) = measure(self, &mut posture, &x);
+        let mut pairs = Vec::new();
+        let mut measure = |sim: &Self, posture: &mut Posture, beta: &mut Vec<f64>, x: &[f64]| {
+            penetrating(sim, posture, beta, x, &mut pairs);
+            let mut sum = hand_m.map_or(0.0, |h| {
+                0.5 * (HAND_WEIGHT * (posture.end_m[n] - h)).norm_squared()
+            });
+            let (mut deepest, mut what) = (0.0_f64, None);
+            for (key, geo) in &pairs {
+                sum += 0.5 * geo.gap_m * geo.gap_m;
+                if -geo.gap_m > deepest {
+                    deepest = -geo.gap_m;
+                    what = Some(*key);
+                }
+            }
+            (sum, deepest, what)
+        };
+        let (mut merit, mut deepest, mut link) = measure(self, &mut posture, &mut beta, &x);
         let mut damping = 1e-6;
-        let mut row = vec![0.0; n];
+        let mut row = vec![0.0; size];
+        let mut at_x = Vec::new();
         for _ in 0..SEARCH_ITERATIONS {
             if deepest <= JAM_DEPTH_M * 1e-3 {
                 break;
             }
             // The penetrating pairs' gradients at the current posture.
-            posture.update(&self.chain, goal, &theta_of(&self.theta, &x));
-            let mut ata = DMatrix::<f64>::zeros(n, n);
-            let mut atr = DVector::<f64>::zeros(n);
-            for key in point_keys(self.touching(&posture, &beta, 0.0)) {
-                if key.hair_link().is_some() {
-                    continue;
-                }
-                let mut geo = PairGeometry::at(key.link, 1.0, Vector2::zeros());
-                evaluate(
-                    &self.chain,
-                    &self.pieces.walls[key.piece],
-                    &posture,
-                    &beta,
-                    &key,
-                    &mut geo,
-                );
-                if geo.gap_m >= 0.0 || !geo.gap_m.is_finite() {
-                    continue;
-                }
-                generalized(&posture, &geo, geo.normal, &mut row);
-                for i in 0..n {
-                    atr[i] += row[i] * geo.gap_m;
-                    for j in 0..n {
+            penetrating(self, &mut posture, &mut beta, &x, &mut at_x);
+            let mut ata = DMatrix::<f64>::zeros(size, size);
+            let mut atr = DVector::<f64>::zeros(size);
+            let mut add = |row: &[f64], residual: f64| {
+                for i in 0..size {
+                    atr[i] += row[i] * residual;
+                    for j in 0..size {
                         ata[(i, j)] += row[i] * row[j];
                     }
                 }
+            };
+            for (key, geo) in &at_x {
+                row.fill(0.0);
+                let hair_entry = generalized(&posture, geo, geo.normal, &mut row[..n]);
+                if let Some(k) = key
+                    .hair_link()
+                    .and_then(|l| hair_links.iter().position(|&h| h == l))
+                {
+                    row[n + k] = hair_entry;
+                }
+                add(&row, geo.gap_m);
             }
             if let Some(h) = hand_m {
                 let miss = posture.end_m[n] - h;
                 for axis in 0..2 {
-                    for (i, r) in row.iter_mut().enumerate() {
+                    row.fill(0.0);
+                    for (i, r) in row[..n].iter_mut().enumerate() {
                         *r = HAND_WEIGHT * perp(posture.end_m[n] - posture.end_m[i])[axis];
                     }
-                    for i in 0..n {
-                        atr[i] += row[i] * HAND_WEIGHT * miss[axis];
-                        for j in 0..n {
-                            ata[(i, j)] += row[i] * row[j];
-                        }
-                    }
+                    add(&row, HAND_WEIGHT * miss[axis]);
                 }
             }
             // Joints on a stop that the step would push further are held.
-            let scale = (0..n).fold(0.0_f64, |a, i| a.max(ata[(i, i)])).max(1e-12);
+            let scale = (0..size)
+                .fold(0.0_f64, |a, i| a.max(ata[(i, i)]))
+                .max(1e-12);
             let mut improved = false;
             for _ in 0..12 {
                 let mut m = ata.clone();
-                for i in 0..n {
+                for i in 0..size {
                     m[(i, i)] += damping * scale;
                 }
                 let Some(dx) = m.lu().solve(&(-&atr)) else {
                     damping *= 10.0;
                     continue;
                 };
-                let trial: Vec<f64> = (0..n)
-                    .map(|i| (x[i] + dx[i]).clamp(limits[i + 1].cw_rad, limits[i + 1].ccw_rad))
+                let trial: Vec<f64> = (0..size)
+                    .map(|i| (x[i] + dx[i]).clamp(limits[i].cw_rad, limits[i].ccw_rad))
                     .collect();
-                let (m2, d2, l2) = measure(self, &mut posture, &trial);
+                let (m2, d2, l2) = measure(self, &mut posture, &mut beta, &trial);
                 if m2 < merit {
                     x = trial;
                     (merit, deepest, link) = (m2, d2, l2);
@@ -201,12 +222,19 @@ impl QuasiStatic {
                 break;
             }
         }
-        (deepest, link)
+        let what = link.map_or_else(
+            || "no link".to_owned(),
+            |key| match key.hair_link() {
+                Some(l) => format!("the hair tip of link {l}"),
+                None => format!("link {}", key.link),
+            },
+        );
+        (deepest, what)
     }
 
-    /// The jam at the current state, for a step to `goal` that leaves link `link` at least
-    /// `depth_m` inside a wall.
-    fn jam(&self, goal: Vector2<f64>, depth_m: f64, link: usize) -> Jam {
+    /// The jam at the current state, for a step to `goal` that leaves `deepest` (a link or a
+    /// hair tip, in words) at least `depth_m` inside a wall.
+    fn jam(&self, goal: Vector2<f64>, depth_m: f64, deepest: &str) -> Jam {
         let contacts: Vec<JammedContact> = self
             .contacts()
             .iter()
@@ -244,7 +272,7 @@ impl QuasiStatic {
             })
             .collect();
         let description = format!(
-            "no posture near the last one{} keeps link {link} out of the walls (it stays {:.3} \
+            "no posture near the last one{} keeps {deepest} out of the walls (it stays {:.3} \
              mm inside); {}; pinned by {}",
             if self.hand_offset_m.is_some() {
                 " with the tip where the hand holds it"
