@@ -8,7 +8,12 @@ use super::{SweepError, SweepScene};
 use crate::contact::{ContactError, ContactSettings, QuasiStatic, StepReport};
 use crate::{EquilibriumProblem, InitialGuess, SolveOptions, Wall, solve_equilibrium};
 
-/// How the antenna starts.
+/// How the antenna starts. Every placement ends by letting the antenna settle where it was
+/// put, which may be a long snap (a held antenna let go springing onto the wall): that
+/// settle has ten times a sweep step's `max_step_iterations` and `max_snap_steps`
+/// ([`crate::contact::ContactSettings`]), and the placement's note says what a snap took.
+/// A held antenna that cannot be brought onto the wall is refused with the jam in words
+/// (the contacts, the joints on their stops).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Placement {
     /// The rest posture at the start position, as it is (it must be clear of the walls).
