@@ -107,6 +107,14 @@ const SOAK_REGRESSIONS: &[(u64, &str)] = &[
          (\"the downhill path did not come to rest\")",
     ),
     (
+        1747,
+        "step 128: a frictionless snap (N = 36, distal hairs, a sinusoid) whose failing proximal \
+         solves each went on to the fixed point on the normal forces, which without friction \
+         solves the same problem again: 240-500 Newton iterations a failed pseudo-time step, \
+         and the downhill path ran out of its budget (\"the downhill path did not come to \
+         rest\")",
+    ),
+    (
         1393,
         "placement (tip-on-wall S, a corner at the tip): as soak 176, a corner standing for a \
          joint dropped without handing its force back",

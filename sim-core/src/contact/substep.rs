@@ -1,6 +1,6 @@
-//! One (sub)step: the pairs that take part, the semismooth Newton solve (or the fixed point
-//! on the normal forces where it fails), pairs missed or let go re-solved, hairs anchored
-//! or let go, and the jump test.
+//! One (sub)step: the pairs that take part, the semismooth Newton solve (or, where it fails
+//! with friction, the fixed point on the normal forces), pairs missed or let go re-solved,
+//! hairs anchored or let go, and the jump test.
 
 use nalgebra::Vector2;
 
@@ -124,6 +124,15 @@ impl QuasiStatic {
             let mut outcome = self.ssn.solve(&problem, &mut x, &mut pairs);
             report.iterations += outcome.iterations;
             if !outcome.converged && self.quick_attempt {
+                return Err(Reject::NoConvergence);
+            }
+            // Without friction the fixed point's Tresca problems are this very problem:
+            // it would only solve it again (up to hundreds of iterations per attempt in a
+            // frictionless snap, soak 1747), so the attempt fails here.
+            let frictional = pairs
+                .iter()
+                .any(|p| !p.frictionless && p.law.shear_bound(1.0).0 > 0.0);
+            if !outcome.converged && !frictional {
                 return Err(Reject::NoConvergence);
             }
             if !outcome.converged {
