@@ -219,6 +219,12 @@ impl Pair {
         self.normal_active || self.normal_force_n != 0.0
     }
 
+    /// Whether the pair can carry shear at all: not where friction is dropped for the step
+    /// or the surface has none (mu = 0, an anchor that holds no shear).
+    pub fn has_friction(&self) -> bool {
+        !self.frictionless && self.law.shear_bound(1.0).0 > 0.0
+    }
+
     /// The force the wall exerts on the chain, ground frame, newtons.
     pub fn force_n(&self) -> Vector2<f64> {
         self.geo.normal * self.normal_force_n + self.geo.tangent * self.shear_force_n

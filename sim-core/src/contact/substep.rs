@@ -126,13 +126,10 @@ impl QuasiStatic {
             if !outcome.converged && self.quick_attempt {
                 return Err(Reject::NoConvergence);
             }
-            // Without friction the fixed point's Tresca problems are this very problem:
-            // it would only solve it again (up to hundreds of iterations per attempt in a
-            // frictionless snap, soak 1747), so the attempt fails here.
-            let frictional = pairs
-                .iter()
-                .any(|p| !p.frictionless && p.law.shear_bound(1.0).0 > 0.0);
-            if !outcome.converged && !frictional {
+            if !outcome.converged && !pairs.iter().any(super::pair::Pair::has_friction) {
+                // Without friction the fixed point's Tresca problems are this very problem:
+                // it would only solve it again (up to hundreds of iterations per attempt in
+                // a frictionless snap, soak 1747), so the attempt fails here.
                 return Err(Reject::NoConvergence);
             }
             if !outcome.converged {

@@ -444,12 +444,12 @@ fn motion_direction(scene: &SweepScene) -> Vector2<f64> {
     }
 }
 
-/// Settles the placed posture (a step of length zero).
 /// A placement's settle may follow a long snap (a held antenna let go springs onto the
 /// wall): it gets this many times the Newton iterations and snap steps of a sweep's step.
 const SETTLE_BUDGET_FACTOR: usize = 10;
 
-/// Settles the antenna where it is, with [`SETTLE_BUDGET_FACTOR`] times the step's budget.
+/// Settles the placed posture (a step of length zero), with [`SETTLE_BUDGET_FACTOR`] times
+/// the step's budget.
 fn settle(sim: &mut QuasiStatic) -> Result<StepReport, SweepError> {
     let as_step = |source| SweepError::Step {
         step: 0,

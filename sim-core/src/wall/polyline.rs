@@ -583,8 +583,12 @@ impl Polyline {
             return;
         }
         let (p0, p1) = (lerp(a_m, b_m, s0), lerp(a_m, b_m, s1));
-        let near = self.edges_within_reach(&p0, &p1, gaps_m).count();
-        if near <= LEAF_EDGES || depth >= MAX_HALVINGS {
+        // (The scan stops at the first edge past the leaf's size.)
+        let few = self
+            .edges_within_reach(&p0, &p1, gaps_m)
+            .nth(LEAF_EDGES)
+            .is_none();
+        if few || depth >= MAX_HALVINGS {
             self.equidistance_candidates(a_m, b_m, (s0, s1), gaps_m, consider);
             return;
         }
@@ -612,7 +616,7 @@ impl Polyline {
         p1: &Vector2<f64>,
         gaps_m: [f64; 2],
     ) -> impl Iterator<Item = usize> + '_ {
-        let (lo_m, hi_m) = self.reach_box(p0, p1, gaps_m);
+        let (lo_m, hi_m) = reach_box(p0, p1, gaps_m);
         (0..self.tangents.len()).filter(move |&i| {
             let (lo, hi) = self.range_m(i);
             if lo.is_infinite() || hi.is_infinite() {
@@ -622,20 +626,6 @@ impl Polyline {
             let (e_lo, e_hi) = (v.inf(&w), v.sup(&w));
             e_lo.x <= hi_m.x && e_hi.x >= lo_m.x && e_lo.y <= hi_m.y && e_hi.y >= lo_m.y
         })
-    }
-
-    /// The box around `p0 -> p1` grown by its reach (see [`Self::edges_within_reach`]).
-    fn reach_box(
-        &self,
-        p0: &Vector2<f64>,
-        p1: &Vector2<f64>,
-        gaps_m: [f64; 2],
-    ) -> (Vector2<f64>, Vector2<f64>) {
-        let reach_m = 0.5 * (gaps_m[0].abs() + gaps_m[1].abs() + (p1 - p0).norm());
-        (
-            p0.inf(p1).add_scalar(-reach_m),
-            p0.sup(p1).add_scalar(reach_m),
-        )
     }
 
     /// Passes to `consider` the parameters `s` in `s0..=s1` of `a -> b` (its stretch
@@ -654,7 +644,7 @@ impl Polyline {
         let edges = self.tangents.len();
         let interior = 1..edges;
         let (p0, p1) = (lerp(a_m, b_m, s0), lerp(a_m, b_m, s1));
-        let (lo_m, hi_m) = self.reach_box(&p0, &p1, gaps_m);
+        let (lo_m, hi_m) = reach_box(&p0, &p1, gaps_m);
         let inside =
             |v: &Vector2<f64>| v.x >= lo_m.x && v.x <= hi_m.x && v.y >= lo_m.y && v.y <= hi_m.y;
         let near_corner = |k: &usize| inside(&self.vertices_m[*k]);
@@ -955,6 +945,19 @@ pub(crate) fn for_roots(qa: f64, qb: f64, qc: f64, f: &mut impl FnMut(f64)) {
     } else {
         f(0.0);
     }
+}
+
+/// The box around `p0 -> p1` grown by its reach (see [`Polyline::edges_within_reach`]).
+fn reach_box(
+    p0: &Vector2<f64>,
+    p1: &Vector2<f64>,
+    gaps_m: [f64; 2],
+) -> (Vector2<f64>, Vector2<f64>) {
+    let reach_m = 0.5 * (gaps_m[0].abs() + gaps_m[1].abs() + (p1 - p0).norm());
+    (
+        p0.inf(p1).add_scalar(-reach_m),
+        p0.sup(p1).add_scalar(reach_m),
+    )
 }
 
 #[cfg(test)]
