@@ -14,7 +14,6 @@ use super::equations::StepProblem;
 use super::pair::Pair;
 use super::report::StepReport;
 use super::ssn::{Ssn, SsnOutcome};
-use nalgebra::Vector2;
 
 /// Fixed-point iterations on the normal forces before a step is given up.
 const TRESCA_ITERATIONS: usize = 30;
@@ -34,16 +33,21 @@ pub(crate) fn solve_by_fixed_point(
         c.tresca_n = Some(c.normal_force_n.max(0.0));
         c.relaxed_bound_n = None;
     }
-    let mut outcome = SsnOutcome {
-        converged: false,
-        iterations: 0,
-        residual_m: f64::INFINITY,
-        hand_force_n: Vector2::zeros(),
-        repaired: false,
-    };
-    for _ in 0..TRESCA_ITERATIONS {
+    let mut outcome = SsnOutcome::not_converged();
+    for round in 0..TRESCA_ITERATIONS {
         outcome = ssn.solve(problem, x, pairs);
         report.iterations += outcome.iterations;
+        if !outcome.converged && round == 0 {
+            // The first Tresca problem does not solve either: the iteration tells nothing of
+            // normal forces that keep growing, so nothing is called jammed (a failed solve's
+            // drift was, before: soak 1982, 150 links on a digitized wall, whose whole steps
+            // then failed at 60 Newton iterations where their halves took 3 each). The
+            // caller refines the step.
+            for c in pairs.iter_mut() {
+                c.tresca_n = None;
+            }
+            return outcome;
+        }
         if !outcome.converged {
             break;
         }
