@@ -143,6 +143,29 @@ fn a_tip_wedged_in_a_concave_corner_keeps_both_pieces_at_full_steps() {
     );
 }
 
+/// Soak case 4221:1102 (`ANTENNA_STRESS_REPLAY=soak:4221:1102`): a 150-link antenna of the
+/// fast-reciprocal profile placed with its tip on a polyline wall (mu = 1) and swept along
+/// it. With the tip stuck, the Newton matrix of a step is nearly singular (the step would
+/// turn the joints by some 2,000 rad): the plain solve and then the fixed point's first
+/// Tresca solve each crept at steps cut to 1e-4 of themselves for 14 iterations, the
+/// fixed point called the tip jammed from that failed solve's drift, and every step was
+/// taken in two to five substeps, each with friction dropped at the tip: 61 of 146 steps
+/// over 40 Newton iterations, 10,022 in all, and every step relaxed. A solve now stops
+/// after 4 such steps, and a fixed point whose first Tresca problem does not solve calls
+/// nothing jammed: 356 Newton iterations in all, one step over 40, no jam.
+#[test]
+fn a_stuck_tip_on_a_150_link_antenna_neither_creeps_nor_jams() {
+    soak_case_finishes_within(
+        1_102,
+        SoakBudget {
+            links: 150,
+            steps: 146,
+            worst: 250,
+            total: 600,
+        },
+    );
+}
+
 /// What a soak case (seed 4221) must stay within: its link count (the generator's), its
 /// steps, the Newton iterations of its worst step and of all its steps.
 struct SoakBudget {
