@@ -82,10 +82,10 @@ const NONMONOTONE_MEMORY: usize = 6;
 /// A plain solve whose best merit has not halved for this many iterations has stalled (it
 /// cycles between modes, or creeps at tiny steps) and stops at its best point (until
 /// 2026-11, only above the acceptable residual). Chosen by the stress soak (seed 4221,
-/// 2,000 sweeps): 14 finished 1,872 with a Newton p99 of 44 per step; 12 finished 1,869 (p99 39), 24 1,862
-/// (p99 61), and no stop (the whole budget of 60) 1,847-1,854 (p99 116); with the repair
-/// trying sliding contacts stuck, 14 finished 1,871 (p99 41; BENCHMARKS.md, "Contact
-/// stress soak"). Over the CI sample, 230 of some 26,000 plain solves converged after
+/// 2,000 sweeps): 14 finished 1,872 with a Newton p99 of 44 per step; 12 finished 1,869
+/// (p99 39), 24 1,862 (p99 61), and no stop (the whole budget of 60) 1,847-1,854 (p99
+/// 116); with the repair trying sliding contacts stuck, 14 finished 1,871 (p99 41;
+/// BENCHMARKS.md, "Contact stress soak"). Over the CI sample, 230 of some 26,000 plain solves converged after
 /// such a stall of 12 or more iterations, and 3,835 did not converge at all.
 const STALL_ITERATIONS: usize = 14;
 
@@ -581,7 +581,9 @@ mod tests {
             "theta {} vs {theta_star}",
             x[0]
         );
-        // A carries the spring's torque; B is let go, clear of the tip.
+        // A carries the spring's torque; B is let go, clear of the tip, and the next repair
+        // tries letting B go first.
+        assert_eq!(ssn.last_repair, Some(RepairedPart::LetGo(pairs[1].key)));
         assert!(pairs[0].normal_active);
         assert!((pairs[0].normal_force_n - force_n).abs() < 1e-9 * force_n.max(1.0));
         assert!(!pairs[1].normal_active);
