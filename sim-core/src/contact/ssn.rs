@@ -85,8 +85,9 @@ const NONMONOTONE_MEMORY: usize = 6;
 /// 2,000 sweeps): 14 finished 1,872 with a Newton p99 of 44 per step; 12 finished 1,869
 /// (p99 39), 24 1,862 (p99 61), and no stop (the whole budget of 60) 1,847-1,854 (p99
 /// 116); with the repair trying sliding contacts stuck, 14 finished 1,871 (p99 41;
-/// BENCHMARKS.md, "Contact stress soak"). Over the CI sample, 230 of some 26,000 plain solves converged after
-/// such a stall of 12 or more iterations, and 3,835 did not converge at all.
+/// BENCHMARKS.md, "Contact stress soak"). Over the CI sample, 230 of some 26,000 plain
+/// solves converged after such a stall of 12 or more iterations, and 3,835 did not converge
+/// at all.
 const STALL_ITERATIONS: usize = 14;
 
 /// A plain solve whose last this many accepted steps were all along a Newton step so large
@@ -163,13 +164,8 @@ impl Ssn {
         // soft antenna's free posture makes huge (the line search then takes it in
         // slivers, and the modes take turns).
         self.eq.keep_pressed = true;
-        let mut outcome = SsnOutcome {
-            converged: false,
-            iterations: 0,
-            residual_m: 0.0,
-            hand_force_n: Vector2::zeros(),
-            repaired: false,
-        };
+        // `descend` reads the residual at the start.
+        let mut outcome = SsnOutcome::not_converged();
         self.descend(p, x, pairs, p.max_iterations, &mut outcome);
         // A solve stalled within the acceptable residual is accepted (and reported) as it
         // stands: a repair there seldom reached the tolerance (over the soak's 150-link
@@ -267,8 +263,7 @@ impl Ssn {
                 .iter()
                 .position(|&q| RepairedPart::of(q, pairs) == last)
         {
-            let part = parts.remove(i);
-            parts.insert(0, part);
+            parts[..=i].rotate_right(1);
         }
         let z_stalled = self.eq.z.clone();
         let pairs_stalled = pairs.to_vec();
