@@ -166,6 +166,45 @@ fn a_stuck_tip_on_a_150_link_antenna_neither_creeps_nor_jams() {
     );
 }
 
+/// Soak case 4221:1590 (`ANTENNA_STRESS_REPLAY=soak:4221:1590`): a 72-link antenna on a
+/// digitized wall (mu = 1), one of whose corners slides across a joint. The corner's pair
+/// on the distal link ended each solve with its foot just past the link's start; the pair
+/// of the proximal link, which rests on the same corner, started the next round unloaded,
+/// and the solve found no way from one link to the other: whole and half steps failed,
+/// quarters passed, 143 of 188 steps over 40 Newton iterations, 19,878 in all. The proximal
+/// pair now takes the force over: 9 steps over 40, 4,190 in all.
+#[test]
+fn a_corner_crossing_a_joint_hands_its_force_to_the_other_link() {
+    soak_case_finishes_within(
+        1_590,
+        SoakBudget {
+            links: 72,
+            steps: 188,
+            worst: 250,
+            total: 6_000,
+        },
+    );
+}
+
+/// Soak case 4221:426 (`ANTENNA_STRESS_REPLAY=soak:4221:426`): a 150-link antenna of the
+/// logarithmic profile swept along a digitized trapezoid (mu = 0.3). A contact whose slip
+/// reversed flipped straight from one friction limit to the other (T = +B, then -B, then
+/// +B), and Newton's method cycled between them for dozens of iterations a step: 25 of 144
+/// steps over 40, up to 362, 4,181 in all. A reversing slip now passes through sticking:
+/// one step over 40 (65), 843 in all.
+#[test]
+fn a_slip_that_reverses_passes_through_sticking() {
+    soak_case_finishes_within(
+        426,
+        SoakBudget {
+            links: 150,
+            steps: 144,
+            worst: 120,
+            total: 1_300,
+        },
+    );
+}
+
 /// What a soak case (seed 4221) must stay within: its link count (the generator's), its
 /// steps, the Newton iterations of its worst step and of all its steps.
 struct SoakBudget {

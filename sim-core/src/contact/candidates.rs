@@ -551,6 +551,8 @@ impl QuasiStatic {
         let before = pairs.len();
         let mut active = false;
         let mut handed: Vec<Pair> = Vec::new();
+        // Unloaded pairs of the other link at a joint that take over a corner's force.
+        let mut taken_over: Vec<(PairKey, Pair)> = Vec::new();
         // The corners that links rest on at the solution.
         let resting: Vec<PairKey> = pairs
             .iter()
@@ -603,7 +605,12 @@ impl QuasiStatic {
                         let at_end = (c.geo.s - end_s).abs() <= HAND_BACK_FRACTION;
                         let other_rests =
                             resting.contains(&PairKey::link(other, feature, c.key.piece));
-                        if at_end && end >= 1 && !other_rests && !handed_over.contains(&c.key) {
+                        if other_rests {
+                            // The joint's other link rests on the corner: its pair takes
+                            // the force over (started unloaded, the solve found no way
+                            // from one link to the other, soak 1590).
+                            taken_over.push((PairKey::link(other, feature, c.key.piece), *c));
+                        } else if at_end && end >= 1 && !handed_over.contains(&c.key) {
                             handed_over.push(c.key);
                             let point = PairKey::point(ChainPoint::Vertex(end), c.key.piece);
                             let mut h = self.fresh_pair(point);
@@ -616,6 +623,11 @@ impl QuasiStatic {
             }
             keep
         });
+        for (key, old) in &taken_over {
+            if let Some(p) = pairs.iter_mut().find(|p| p.key == *key && !p.is_loaded()) {
+                carry(p, old);
+            }
+        }
         let changed = active && pairs.len() < before;
         handed.retain(|h| !pairs.iter().any(|c| c.key == h.key));
         pairs.extend(handed);

@@ -372,6 +372,11 @@ impl Equations {
                 Slip::Stuck => Slip::Stuck,
                 Slip::Backward if y >= bound - margin => Slip::Backward,
                 Slip::Forward if y <= -bound + margin => Slip::Forward,
+                // A slip that reverses passes through sticking: flipped straight from one
+                // friction limit to the other, Newton's method cycles between the two
+                // (soak 426: +-B on one contact for dozens of iterations a step). Without
+                // friction both limits are zero and the flip is harmless.
+                Slip::Backward | Slip::Forward if bound > 0.0 => Slip::Stuck,
                 Slip::Backward | Slip::Forward => free_mode(y, bound),
             };
             let keep_slip = self.keep_pressed && pair.normal_active && pair.slip == Slip::Stuck;
