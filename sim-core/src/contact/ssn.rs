@@ -358,7 +358,8 @@ impl Ssn {
         // non-monotone search lets it take turns between two wrong mode sets) or creeping
         // at tiny steps: it stops there, at its best point, rather than spend its budget
         // (the caller falls back to the fixed point or refines the step). A problem without
-        // `stall_stop` (a snap's step) keeps its whole budget.
+        // `stall_stop` (a snap's step) keeps its whole budget above the acceptable residual
+        // (within it, it stops where it stands: below).
         let mut best_merit = if merit.is_finite() {
             merit
         } else {

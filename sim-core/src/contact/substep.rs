@@ -110,8 +110,8 @@ impl QuasiStatic {
                 } else {
                     self.settings.max_iterations
                 },
-                // A snap's step (proximal) keeps its whole budget: its flow stops where
-                // its solves fail.
+                // A snap's step (proximal) keeps its whole budget above the acceptable
+                // residual: its flow stops where its solves fail.
                 stall_stop: proximal.is_none(),
             };
             // A bound relaxed by a fixed point of an earlier round does not carry over: this
