@@ -241,6 +241,52 @@ fn a_chain_lying_along_a_wall_lets_go_at_the_ends_of_its_run_first() {
     );
 }
 
+/// Soak case 4221:1261 (`ANTENNA_STRESS_REPLAY=soak:4221:1261`): 4 links placed with the
+/// tip on a convex corner of a digitized trapezoid, pressed on the edge past it. The tip
+/// link's pair with the corner alone holds the tip's force normal to the link: a plain solve
+/// slid the corner past the tip along the link's line, and the placement's settle stopped
+/// after 100,000 Newton iterations ("the downhill path did not come to rest"). The tip
+/// against the edge's line now stands beside the link's pair: 498 iterations to settle,
+/// 11,368 over the sweep's steps.
+#[test]
+fn a_tip_on_a_convex_corner_pressed_on_the_edge_past_it_settles_and_sweeps() {
+    soak_case_finishes_within(
+        1_261,
+        SoakBudget {
+            links: 4,
+            steps: 586,
+            worst: 6_000,
+            total: 16_000,
+        },
+    );
+}
+
+/// Soak case 4221:329 (`ANTENNA_STRESS_REPLAY=soak:4221:329`): 36 links let go on a
+/// polyline after the hand brought them onto it. Every pseudo-time step of the settle's
+/// snap was hard (over 40 Newton iterations), so it kept its tiny step (`gamma` = 5e5) and
+/// crept 3 micro-radians per step: 101,159 iterations over 2,187 steps (127,000 for the
+/// whole placement, the hand's approach included). After six hard steps in a row the next
+/// is longer: 5,332 (31,449 in all).
+#[test]
+fn a_snap_whose_every_step_is_hard_still_lengthens_its_steps() {
+    use antenna_tests::stress::{Case, Sample};
+    let case = Case::generate(4_221, 329, Sample::Soak).unwrap();
+    assert_eq!(
+        case.links,
+        36,
+        "the soak generator changed: {}",
+        case.replay_line()
+    );
+    let sweep = Sweep::new(case.scene.clone()).unwrap();
+    let placement = &sweep.placed().unwrap().report;
+    eprintln!(
+        "soak 329: placement {} Newton iterations, {} pseudo-time steps",
+        placement.iterations, placement.snap_steps
+    );
+    assert!(placement.snapped, "{}", sweep.placement_note());
+    assert!(placement.iterations <= 40_000, "{}", sweep.placement_note());
+}
+
 /// What a soak case (seed 4221) must stay within: its link count (the generator's), its
 /// steps, the Newton iterations of its worst step and of all its steps.
 struct SoakBudget {

@@ -306,8 +306,19 @@ impl QuasiStatic {
         wall_point: &WallPoint,
         x_m: &Vector2<f64>,
     ) -> [Option<PairKey>; 2] {
-        let links = self.joint_corner_pairs(posture, point, piece, wall_point);
+        let mut links = self.joint_corner_pairs(posture, point, piece, wall_point);
         if links.iter().any(Option::is_some) {
+            // The tip has no second link to span the corner's cone with the tip link: the
+            // tip against the line of the corner's edge it lies on stands beside the tip
+            // link's pair. Alone, the tip link's pair holds the tip's force normal to the
+            // link, and a tip resting on the corner that needs more than that (pressed on
+            // the edge past it) was never an equilibrium of a plain solve: the solve slid
+            // the corner past the tip along the link's line, and the snap's flow came to
+            // rest where no plain solve converged (soak 1261, 4 links on a digitized
+            // trapezoid: its placement's settle stopped after 100,000 Newton iterations).
+            if point == ChainPoint::Vertex(self.chain.n()) && links[1].is_none() {
+                links[1] = self.corner_point_pairs(point, piece, wall_point, x_m)[0];
+            }
             return links;
         }
         self.corner_point_pairs(point, piece, wall_point, x_m)

@@ -68,6 +68,10 @@ pub(crate) struct BorderedSystem {
     /// `b`, `k` entries.
     pub rhs_w: Vec<f64>,
     // Scratch.
+    /// Per column of `P`, one past its last nonzero entry (0: the column is zero).
+    p_len: Vec<usize>,
+    /// Per row of `Q`, one past its last nonzero entry (0: the row is zero).
+    q_len: Vec<usize>,
     free: Vec<bool>,
     pivots: Vec<f64>,
     coupling: Vec<f64>,
@@ -126,6 +130,7 @@ impl BorderedSystem {
     pub fn solve(&mut self, x: &mut [f64], w: &mut [f64]) -> Option<SolveStats> {
         let mut stats = SolveStats::default();
         self.truncated = false;
+        self.measure_supports();
         if self.structured(x, w) {
             stats.relative_residual = self.relative_residual(x, w);
             if stats.relative_residual.is_finite() && stats.relative_residual > RESIDUAL_TOLERANCE {
@@ -163,6 +168,22 @@ impl BorderedSystem {
         stats.truncated = self.truncated;
         stats.border_residual = self.border_residual;
         stats.relative_residual.is_finite().then_some(stats)
+    }
+
+    /// Where the columns of `P` and the rows of `Q` end ([`Self::p_len`], [`Self::q_len`]).
+    /// A point force on link `L` touches only the joints `m <= L`, and the angle of a hair
+    /// not in contact (most of a long antenna's hairs) none: the products below skip the
+    /// zeros (the same sums, term for term; over soak 1911, 150 links with distal hairs,
+    /// 40 of some 45 border unknowns on average were such hair angles).
+    fn measure_supports(&mut self) {
+        let (n, k) = (self.n, self.k);
+        let end = |v: &[f64]| v.iter().rposition(|e| *e != 0.0).map_or(0, |i| i + 1);
+        self.p_len.clear();
+        self.p_len
+            .extend((0..k).map(|c| end(&self.p[c * n..(c + 1) * n])));
+        self.q_len.clear();
+        self.q_len
+            .extend((0..k).map(|r| end(&self.q[r * n..(r + 1) * n])));
     }
 
     /// The structured solve (factorization included); false when a pivot vanishes or the
@@ -247,6 +268,9 @@ impl BorderedSystem {
         reset(&mut self.y, n * k);
         self.y.copy_from_slice(&self.p);
         for c in 0..k {
+            if self.p_len[c] == 0 {
+                continue;
+            }
             solve_masked(
                 &self.pivots,
                 &self.coupling,
@@ -259,18 +283,23 @@ impl BorderedSystem {
             self.schur = DMatrix::zeros(k, k);
         }
         for i in 0..k {
-            let row = &self.q[i * n..(i + 1) * n];
+            let len = self.q_len[i];
+            let row = &self.q[i * n..i * n + len];
             let mut rhs = self.schur_rhs[i];
-            for j in 0..n {
+            for j in 0..len {
                 if self.free[j] {
                     rhs -= row[j] * self.y0[j];
                 }
             }
             self.schur_rhs[i] = rhs;
             for c in 0..k {
-                let col = &self.y[c * n..(c + 1) * n];
+                if len == 0 || self.p_len[c] == 0 {
+                    self.schur[(i, c)] = self.r[i * k + c];
+                    continue;
+                }
+                let col = &self.y[c * n..c * n + len];
                 let mut sum = 0.0;
-                for j in 0..n {
+                for j in 0..len {
                     sum += row[j] * col[j];
                 }
                 self.schur[(i, c)] = self.r[i * k + c] - sum;
@@ -289,7 +318,9 @@ impl BorderedSystem {
                 None => {
                     let mut v = self.y0[j];
                     for c in 0..k {
-                        v -= self.y[c * n + j] * w[c];
+                        if self.p_len[c] > 0 {
+                            v -= self.y[c * n + j] * w[c];
+                        }
                     }
                     v
                 }
@@ -314,9 +345,11 @@ impl BorderedSystem {
             let mut v = sx[i] - self.rhs_x[i];
             let mut size = sx[i].abs() + self.rhs_x[i].abs();
             for c in 0..k {
-                let t = self.p[c * n + i] * w[c];
-                v += t;
-                size += t.abs();
+                if i < self.p_len[c] {
+                    let t = self.p[c * n + i] * w[c];
+                    v += t;
+                    size += t.abs();
+                }
             }
             self.res_x[i] = v;
             scale = scale.max(size);
@@ -330,10 +363,10 @@ impl BorderedSystem {
         let rhs_scale = self.rhs_w.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
         let mut border = 0.0_f64;
         for r in 0..k {
-            let row = &self.q[r * n..(r + 1) * n];
+            let row = &self.q[r * n..r * n + self.q_len[r]];
             let mut v = -self.rhs_w[r];
-            for j in 0..n {
-                v += row[j] * x[j];
+            for (q, xj) in row.iter().zip(x) {
+                v += q * xj;
             }
             for c in 0..k {
                 v += self.r[r * k + c] * w[c];
@@ -522,6 +555,62 @@ mod tests {
                 if let Some(v) = sys.held[i] {
                     assert_eq!(x[i], v);
                 }
+            }
+        }
+    }
+
+    /// Borders shaped like a contact step's: a point force on link `L` fills its column and
+    /// row up to `L` only, and a hair angle not in contact (most of them, on a long antenna
+    /// with hairs) none of them, its row of `R` its diagonal alone. The solve that skips
+    /// those zeros ([`BorderedSystem::measure_supports`]) agrees with the dense LU.
+    #[test]
+    fn structured_solve_with_truncated_and_empty_borders_matches_dense() {
+        let mut seed = 11u64;
+        for (n, k) in [(4, 3), (36, 9), (150, 45)] {
+            let mut sys = BorderedSystem::default();
+            sys.reset(n, k);
+            for i in 0..n {
+                sys.diagonal[i] = 1.0 + lcg(&mut seed).abs();
+                sys.coefficients[i] = 0.3 * lcg(&mut seed);
+                sys.rhs_x[i] = lcg(&mut seed);
+                if i % 7 == 5 {
+                    sys.held[i] = Some(lcg(&mut seed));
+                }
+            }
+            for c in 0..k {
+                let empty = c % 4 != 0;
+                // Where the border's column and row end (a link of the chain), or nothing.
+                let len = if empty {
+                    0
+                } else {
+                    1 + ((lcg(&mut seed) + 0.5) * (n - 1) as f64) as usize
+                };
+                for i in 0..len {
+                    sys.p_col(c)[i] = lcg(&mut seed);
+                    sys.q_row(c)[i] = lcg(&mut seed);
+                }
+                for j in 0..k {
+                    *sys.r_at(c, j) = if c == j {
+                        2.0 + lcg(&mut seed)
+                    } else if empty || j % 4 != 0 {
+                        0.0
+                    } else {
+                        lcg(&mut seed)
+                    };
+                }
+                sys.rhs_w[c] = lcg(&mut seed);
+            }
+            let (mut x, mut w) = (vec![0.0; n], vec![0.0; k]);
+            let stats = sys.solve(&mut x, &mut w).unwrap();
+            assert!(!stats.dense, "n = {n}: {stats:?}");
+            assert!(sys.p_len.iter().filter(|&&l| l == 0).count() >= k / 2);
+            let (mut xd, mut wd) = (vec![0.0; n], vec![0.0; k]);
+            assert!(sys.dense(&mut xd, &mut wd));
+            for (a, b) in x.iter().zip(&xd).chain(w.iter().zip(&wd)) {
+                assert!(
+                    (a - b).abs() <= 1e-9 * (1.0 + b.abs()),
+                    "n = {n}: {a} vs {b}"
+                );
             }
         }
     }
