@@ -73,7 +73,10 @@ fn sweep_4_2_1(links: usize, duration_s: f64) -> Sweep {
 /// sliding contacts stuck, which settles the two ends of a link flat on the wall in one
 /// mode (6.8 per step, 431 at the worst). A solve's first Newton step keeps the contacts
 /// pressed in the last step pressed, where the last posture carried with the base would
-/// have let them go for that step (2.0 per step, 92 at the worst).
+/// have let them go for that step (2.0 per step, 92 at the worst). At each roll the stall's
+/// repair stuck the sliding contact into an answer that needed 103% of `mu N` and then ran
+/// the plain solve from it for 20 iterations to fail: such answers are now refused at once
+/// (the worst step 62 -> 47).
 #[test]
 fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
     let mut sweep = sweep_4_2_1(150, 6.0);
@@ -93,7 +96,7 @@ fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
     let worst = iterations.iter().copied().max().unwrap();
     eprintln!("N = 150, 600 steps: {total} Newton iterations, mean {mean:.2}, worst {worst}");
     assert!(mean <= 3.0, "mean {mean:.2} Newton iterations per step");
-    assert!(worst <= 200, "a step took {worst} Newton iterations");
+    assert!(worst <= 50, "a step took {worst} Newton iterations");
 }
 
 /// Soak case 4221:628 (`ANTENNA_STRESS_REPLAY=soak:4221:628`): a 72-link antenna of the

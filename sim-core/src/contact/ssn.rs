@@ -106,6 +106,11 @@ const CREEP_ITERATIONS: usize = 4;
 /// huge.
 const CREEP_STEP: f64 = 1e-3;
 
+/// How far (relative) a repaired stuck contact's shear force may exceed its bound `mu N`
+/// and still count as inside its cone (rounding; the certificate's own tolerance is
+/// looser).
+const CONE_SLACK: f64 = 1e-9;
+
 /// The factor by which the best merit must fall to count as progress.
 const STALL_FACTOR: f64 = 0.5;
 
@@ -294,13 +299,12 @@ impl Ssn {
             parts[..=i].rotate_right(1);
         }
         // The row with the largest residual may be a part that none of the above holds: a
-        // contact let go whose normal force the stall left nonzero (a hair tip touching
-        // with next to no force, its normal row taking turns between pressed and let go).
-        // Its letting go is tried first (soak 1911, 150 links with distal hairs on a
-        // digitized line: 43,108 -> 29,897 Newton iterations; the CI sample 49,972 ->
-        // 51,003). The parts above keep their order: the worst row's part moved ahead of
-        // them as well, it cost more (the CI sample 51,952, measured with the snap's
-        // `HARD_IN_A_ROW` at 3).
+        // hair tip let go whose normal force the stall left nonzero (touching with next to
+        // no force, its normal row taking turns between pressed and let go). Its letting
+        // go is tried first (soak 1911, 150 links with distal hairs on a digitized line:
+        // 43,108 -> 29,897 Newton iterations). Only for hair tips: for any pair it cost the
+        // CI sample 49,972 -> 51,003 and the 150-link 4.2.1 sweep (no hairs) a p99 of 58
+        // -> 80; and moved ahead of the parts above as well, the CI sample 51,952.
         if let Some(worst) = self.worst_row_part(pairs)
             && !parts.contains(&worst)
         {
@@ -326,6 +330,17 @@ impl Ssn {
             if outcome.residual_m.is_nan() || outcome.residual_m > p.tolerance_m {
                 continue;
             }
+            // A contact stuck by force whose shear force lies outside its cone is no answer
+            // of Coulomb's law: the plain modes would slide it again, back to the stall, so
+            // the plain solve from there is not tried (the 150-link 4.2.1 sweep's contact
+            // rolling to the next joint: a stuck answer needing 103% of `mu N`, then 20
+            // iterations of the plain solve to fail; its worst step 73 -> 58 Newton
+            // iterations, the CI sample 49,972 -> 49,430).
+            if let Forced::Stuck(k) = part
+                && self.eq.z[m + c + k].abs() > bound_of(&pairs[k]).0 * (1.0 + CONE_SLACK)
+            {
+                continue;
+            }
             // The plain modes at the repaired answer: converged there, or a few more
             // iterations from it.
             self.descend(p, x_start, pairs, REPAIR_ITERATIONS, outcome);
@@ -342,9 +357,10 @@ impl Ssn {
     }
 
     /// The part a repair can force on the row of `Phi` with the largest magnitude: its
-    /// coordinate freed (if held), its pair let go (a normal row), or stuck (the shear row
-    /// of a pressed contact sliding with friction). `None` for a free coordinate's row or a
-    /// shear row that sticking cannot change.
+    /// coordinate freed (if held), its hair tip's pair let go (a hair tip's normal row), or
+    /// stuck (the shear row of a pressed contact sliding with friction). `None` for a free
+    /// coordinate's row, another pair's normal row, or a shear row that sticking cannot
+    /// change.
     fn worst_row_part(&self, pairs: &[Pair]) -> Option<Forced> {
         let m = self.eq.m();
         let c = pairs.len();
@@ -360,7 +376,8 @@ impl Ssn {
         if i < m {
             self.eq.held[i].is_some().then_some(Forced::Free(i))
         } else if i < m + c {
-            Some(Forced::LetGo(i - m))
+            let k = i - m;
+            pairs.get(k)?.key.hair_link().map(|_| Forced::LetGo(k))
         } else {
             let k = i - m - c;
             let pair = pairs.get(k)?;
@@ -589,9 +606,8 @@ mod tests {
     use crate::{Chain, Line, SolidSide, Surface, SurfaceMap, Wall};
 
     /// The row with the largest residual names the part a repair tries first when no other
-    /// part holds it: a pair let go whose normal force is not zero (a hair tip touching
-    /// with next to no force, soak 1911) is let go; a pressed pair stays where the repair's
-    /// order puts it.
+    /// part holds it: a hair tip let go whose normal force is not zero (touching with next
+    /// to no force, soak 1911) is let go; another pair, or a free joint, names none.
     #[test]
     fn the_worst_row_of_a_let_go_pair_with_a_force_is_its_letting_go() {
         let length_m = 0.05;
@@ -646,7 +662,18 @@ mod tests {
         ssn.eq.load(&[0.0], &pairs);
         ssn.eq.evaluate(&problem, &mut pairs);
         assert!(!pairs[1].normal_active);
+        // A chain point's pair: not a part of its own (the repair's order stands).
+        assert_eq!(ssn.worst_row_part(&pairs), None);
+        // A hair tip's pair with the same rows: its letting go.
+        pairs[1].key = PairKey::point(ChainPoint::HairTip(1), 1);
         assert_eq!(ssn.worst_row_part(&pairs), Some(Forced::LetGo(1)));
+        // A joint held on its stop whose row is the largest: freed.
+        ssn.eq.phi.iter_mut().for_each(|v| *v = 0.0);
+        ssn.eq.phi[0] = 1.0;
+        ssn.eq.held[0] = Some(0.0);
+        assert_eq!(ssn.worst_row_part(&pairs), Some(Forced::Free(0)));
+        ssn.eq.held[0] = None;
+        assert_eq!(ssn.worst_row_part(&pairs), None);
     }
 
     /// One flexible joint, its tip pressed by wall A to `theta*` and wall B `delta`
