@@ -605,6 +605,26 @@ mod tests {
     use crate::contact::pair::{ChainPoint, PairKey};
     use crate::{Chain, Line, SolidSide, Surface, SurfaceMap, Wall};
 
+    /// A plain step (no proximal term, the stall stop on) of `chain` against `pieces` with the
+    /// default tolerances, its base at the origin and no hairs.
+    fn plain_problem<'a>(chain: &'a Chain, pieces: &'a [Wall]) -> StepProblem<'a> {
+        StepProblem {
+            chain,
+            pieces,
+            tip_force_n: Vector2::zeros(),
+            base_m: Vector2::zeros(),
+            hair_links: &[],
+            hair_beta_rad: &[0.0, 0.0],
+            proximal: None,
+            hand_m: None,
+            tolerance_m: 1e-12,
+            acceptable_m: 1e-9,
+            max_departure_rad: 1.0,
+            max_iterations: 60,
+            stall_stop: true,
+        }
+    }
+
     /// The row with the largest residual names the part a repair tries first when no other
     /// part holds it: a hair tip let go whose normal force is not zero (touching with next
     /// to no force, soak 1911) is let go; another pair, or a free joint, names none.
@@ -642,21 +662,7 @@ mod tests {
             .collect();
         // Pair 1 let go with a pull left on it, pair 0 let go with none.
         pairs[1].normal_force_n = -0.02;
-        let problem = StepProblem {
-            chain: &chain,
-            pieces: &pieces,
-            tip_force_n: Vector2::zeros(),
-            base_m: Vector2::zeros(),
-            hair_links: &[],
-            hair_beta_rad: &[0.0, 0.0],
-            proximal: None,
-            hand_m: None,
-            tolerance_m: 1e-12,
-            acceptable_m: 1e-9,
-            max_departure_rad: 1.0,
-            max_iterations: 60,
-            stall_stop: true,
-        };
+        let problem = plain_problem(&chain, &pieces);
         let mut ssn = Ssn::default();
         ssn.eq.prepare(&problem);
         ssn.eq.load(&[0.0], &pairs);
@@ -718,21 +724,7 @@ mod tests {
                 pair
             })
             .collect();
-        let problem = StepProblem {
-            chain: &chain,
-            pieces: &pieces,
-            tip_force_n: Vector2::zeros(),
-            base_m: Vector2::zeros(),
-            hair_links: &[],
-            hair_beta_rad: &[0.0, 0.0],
-            proximal: None,
-            hand_m: None,
-            tolerance_m: 1e-12,
-            acceptable_m: 1e-9,
-            max_departure_rad: 1.0,
-            max_iterations: 60,
-            stall_stop: true,
-        };
+        let problem = plain_problem(&chain, &pieces);
         let mut x = vec![theta_star];
         let mut ssn = Ssn::default();
         let pairs_start = pairs.clone();

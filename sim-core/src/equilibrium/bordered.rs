@@ -516,20 +516,44 @@ mod tests {
         ((*state >> 11) as f64) / ((1u64 << 53) as f64) - 0.5
     }
 
+    /// Fills the chain's part of `sys` at random: diagonal, coefficients, right-hand side,
+    /// and joint `i` held where `i % every == at` (`held = (every, at)`).
+    fn random_chain(sys: &mut BorderedSystem, seed: &mut u64, held: (usize, usize)) {
+        for i in 0..sys.n {
+            sys.diagonal[i] = 1.0 + lcg(seed).abs();
+            sys.coefficients[i] = 0.3 * lcg(seed);
+            sys.rhs_x[i] = lcg(seed);
+            if i % held.0 == held.1 {
+                sys.held[i] = Some(lcg(seed));
+            }
+        }
+    }
+
+    /// Solves `sys` by the structured solve (which must not fall back to the dense one),
+    /// asserts that it agrees with the dense LU, and returns its `x`.
+    fn structured_matching_dense(sys: &mut BorderedSystem) -> Vec<f64> {
+        let (n, k) = (sys.n, sys.k);
+        let (mut x, mut w) = (vec![0.0; n], vec![0.0; k]);
+        let stats = sys.solve(&mut x, &mut w).unwrap();
+        assert!(!stats.dense, "n = {n}: {stats:?}");
+        let (mut xd, mut wd) = (vec![0.0; n], vec![0.0; k]);
+        assert!(sys.dense(&mut xd, &mut wd));
+        for (a, b) in x.iter().zip(&xd).chain(w.iter().zip(&wd)) {
+            assert!(
+                (a - b).abs() <= 1e-9 * (1.0 + b.abs()),
+                "n = {n}: {a} vs {b}"
+            );
+        }
+        x
+    }
+
     #[test]
     fn structured_solve_matches_dense_with_held_joints_and_borders() {
         let mut seed = 7u64;
         for (n, k) in [(1, 0), (3, 2), (9, 4), (40, 7), (150, 12)] {
             let mut sys = BorderedSystem::default();
             sys.reset(n, k);
-            for i in 0..n {
-                sys.diagonal[i] = 1.0 + lcg(&mut seed).abs();
-                sys.coefficients[i] = 0.3 * lcg(&mut seed);
-                sys.rhs_x[i] = lcg(&mut seed);
-                if i % 5 == 3 {
-                    sys.held[i] = Some(lcg(&mut seed));
-                }
-            }
+            random_chain(&mut sys, &mut seed, (5, 3));
             for c in 0..k {
                 for i in 0..n {
                     sys.p_col(c)[i] = lcg(&mut seed);
@@ -540,17 +564,7 @@ mod tests {
                 }
                 sys.rhs_w[c] = lcg(&mut seed);
             }
-            let (mut x, mut w) = (vec![0.0; n], vec![0.0; k]);
-            let stats = sys.solve(&mut x, &mut w).unwrap();
-            assert!(!stats.dense, "n = {n}: {stats:?}");
-            let (mut xd, mut wd) = (vec![0.0; n], vec![0.0; k]);
-            assert!(sys.dense(&mut xd, &mut wd));
-            for (a, b) in x.iter().zip(&xd).chain(w.iter().zip(&wd)) {
-                assert!(
-                    (a - b).abs() <= 1e-9 * (1.0 + b.abs()),
-                    "n = {n}: {a} vs {b}"
-                );
-            }
+            let x = structured_matching_dense(&mut sys);
             for i in 0..n {
                 if let Some(v) = sys.held[i] {
                     assert_eq!(x[i], v);
@@ -569,14 +583,7 @@ mod tests {
         for (n, k) in [(4, 3), (36, 9), (150, 45)] {
             let mut sys = BorderedSystem::default();
             sys.reset(n, k);
-            for i in 0..n {
-                sys.diagonal[i] = 1.0 + lcg(&mut seed).abs();
-                sys.coefficients[i] = 0.3 * lcg(&mut seed);
-                sys.rhs_x[i] = lcg(&mut seed);
-                if i % 7 == 5 {
-                    sys.held[i] = Some(lcg(&mut seed));
-                }
-            }
+            random_chain(&mut sys, &mut seed, (7, 5));
             for c in 0..k {
                 let empty = c % 4 != 0;
                 // Where the border's column and row end (a link of the chain), or nothing.
@@ -600,18 +607,8 @@ mod tests {
                 }
                 sys.rhs_w[c] = lcg(&mut seed);
             }
-            let (mut x, mut w) = (vec![0.0; n], vec![0.0; k]);
-            let stats = sys.solve(&mut x, &mut w).unwrap();
-            assert!(!stats.dense, "n = {n}: {stats:?}");
+            structured_matching_dense(&mut sys);
             assert!(sys.p_len.iter().filter(|&&l| l == 0).count() >= k / 2);
-            let (mut xd, mut wd) = (vec![0.0; n], vec![0.0; k]);
-            assert!(sys.dense(&mut xd, &mut wd));
-            for (a, b) in x.iter().zip(&xd).chain(w.iter().zip(&wd)) {
-                assert!(
-                    (a - b).abs() <= 1e-9 * (1.0 + b.abs()),
-                    "n = {n}: {a} vs {b}"
-                );
-            }
         }
     }
 
