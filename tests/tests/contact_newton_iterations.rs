@@ -68,8 +68,8 @@ fn sweep_4_2_1(links: usize, duration_s: f64) -> Sweep {
 /// Where the contact rolls from joint to joint, the solve used to take turns between the
 /// two mode sets for its whole budget of 60 iterations before the fixed point on the normal
 /// forces found the answer: 80-95 Newton iterations at each of those steps, 1,282 at the
-/// first, 12.2 per step on average over these 6 s. A solve that stops making progress now
-/// stops early (8.5 per step, 407 at the worst), and the repair of a stall tries the
+/// first, 12.2 per step on average over the first 6 s. A solve that stops making progress
+/// now stops early (8.5 per step, 407 at the worst), and the repair of a stall tries the
 /// sliding contacts stuck, which settles the two ends of a link flat on the wall in one
 /// mode (6.8 per step, 431 at the worst). A solve's first Newton step keeps the contacts
 /// pressed in the last step pressed, where the last posture carried with the base would
@@ -77,9 +77,18 @@ fn sweep_4_2_1(links: usize, duration_s: f64) -> Sweep {
 /// repair stuck the sliding contact into an answer that needed 103% of `mu N` and then ran
 /// the plain solve from it for 20 iterations to fail: such answers are now refused at once
 /// (the worst step 62 -> 47).
+///
+/// The joint taking the contact over is pressed onto the wall only by its own friction:
+/// without it, its pressed mode needs a pull (`N < 0`), so Newton's step let it go, inside
+/// the wall, and the next pressed it again, for 15 to 33 iterations until the solve
+/// stalled and the fixed point settled it. The equation of a pressed contact sliding held
+/// its shear force to `mu max(N, 0)`, flat for `N < 0`: Newton's model never saw the
+/// friction that presses the joint. It is now `mu N` for either sign (the normal row still
+/// asks `N >= 0` of an answer); over the whole 10 s, the Newton p99 per step 43 -> 4 and the
+/// worst step 58 -> 22 (the goal: p99 <= 40).
 #[test]
 fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
-    let mut sweep = sweep_4_2_1(150, 6.0);
+    let mut sweep = sweep_4_2_1(150, 10.0);
     let mut iterations = Vec::new();
     while let Some(step) = sweep.next_step() {
         let step = step.unwrap();
@@ -90,13 +99,19 @@ fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
         );
         iterations.push(step.report.iterations);
     }
-    assert_eq!(iterations.len(), 600);
+    assert_eq!(iterations.len(), 1000);
     let total: usize = iterations.iter().sum();
     let mean = total as f64 / iterations.len() as f64;
-    let worst = iterations.iter().copied().max().unwrap();
-    eprintln!("N = 150, 600 steps: {total} Newton iterations, mean {mean:.2}, worst {worst}");
-    assert!(mean <= 3.0, "mean {mean:.2} Newton iterations per step");
-    assert!(worst <= 50, "a step took {worst} Newton iterations");
+    let mut sorted = iterations.clone();
+    sorted.sort_unstable();
+    let p99 = sorted[sorted.len() * 99 / 100 - 1];
+    let worst = sorted[sorted.len() - 1];
+    eprintln!(
+        "N = 150, 1000 steps: {total} Newton iterations, mean {mean:.2}, p99 {p99}, worst {worst}"
+    );
+    assert!(mean <= 2.0, "mean {mean:.2} Newton iterations per step");
+    assert!(p99 <= 10, "p99 {p99} Newton iterations per step");
+    assert!(worst <= 30, "a step took {worst} Newton iterations");
 }
 
 /// Soak case 4221:628 (`ANTENNA_STRESS_REPLAY=soak:4221:628`): a 72-link antenna of the

@@ -388,10 +388,11 @@ impl Equations {
                 slip
             };
             pair.slip = slip;
+            let sliding_bound = sliding_bound_of(pair).0;
             self.phi[row_t] = match slip {
                 Slip::Stuck => pair.slip_m,
-                Slip::Backward => (shear - bound) / cn,
-                Slip::Forward => (shear + bound) / cn,
+                Slip::Backward => (shear - sliding_bound) / cn,
+                Slip::Forward => (shear + sliding_bound) / cn,
             };
         }
         let merit = 0.5 * self.phi.iter().map(|v| v * v).sum::<f64>();
@@ -428,6 +429,27 @@ pub(crate) fn bound_of(pair: &Pair) -> (f64, f64) {
     }
 }
 
+/// The shear bound a sliding pair's equation holds its shear force to, and its `dB/dN`:
+/// [`bound_of`], except that a pressed Coulomb contact's bound is `mu N` for either sign of
+/// `N`. An answer is the same (its normal row asks `N >= 0` of a pressed contact), but
+/// Newton's model of a pressed contact with `N < 0` now sees the friction that may be what
+/// presses it: on the 4.2.1 wall a 150-link antenna's contact rolls onto the next joint,
+/// which only its own friction holds on the wall; with the bound `mu max(N, 0)`, flat there,
+/// each Newton step let it go (frictionless, it needs a pull) and the next pressed it again,
+/// until the solve stalled and the fixed point settled it (the sweep's Newton p99 per step
+/// 43, now 4; the stress soak's relaxed steps 6,643 -> 4,970). The modes still read the
+/// cone's bound, [`bound_of`].
+pub(crate) fn sliding_bound_of(pair: &Pair) -> (f64, f64) {
+    if pair.normal_active
+        && pair.tresca_n.is_none()
+        && !pair.frictionless
+        && let super::feature::FrictionLaw::Coulomb { mu } = pair.law
+    {
+        return (mu * pair.normal_force_n, mu);
+    }
+    bound_of(pair)
+}
+
 /// The tangent mode without hysteresis.
 fn free_mode(y: f64, bound: f64) -> Slip {
     if y >= bound {
@@ -451,4 +473,43 @@ pub(crate) fn hair_index(hair_links: &[usize], link: usize) -> usize {
 #[allow(dead_code)]
 pub(crate) fn is_bilateral(law: &FrictionLaw) -> bool {
     law.min_normal_n() == f64::NEG_INFINITY
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Vector2;
+
+    use super::super::feature::FrictionLaw;
+    use super::super::pair::{ChainPoint, Pair, PairKey};
+    use super::{bound_of, sliding_bound_of};
+
+    fn pair(normal_force_n: f64, normal_active: bool) -> Pair {
+        let mut p = Pair::new(
+            PairKey::point(ChainPoint::Vertex(1), 0),
+            FrictionLaw::Coulomb { mu: 0.3 },
+            1,
+            1.0,
+            Vector2::zeros(),
+        );
+        p.normal_force_n = normal_force_n;
+        p.normal_active = normal_active;
+        p
+    }
+
+    /// A pressed contact's sliding equation sees its friction for either sign of `N` (the
+    /// joint that the 150-link 4.2.1 sweep's contact rolls onto is pressed only by it); the
+    /// cone (`bound_of`), a contact let go and a Tresca bound are unchanged.
+    #[test]
+    fn a_pressed_contact_slides_at_mu_n_for_either_sign_of_n() {
+        assert_eq!(sliding_bound_of(&pair(-2.0, true)), (-0.6, 0.3));
+        assert_eq!(sliding_bound_of(&pair(2.0, true)), (0.6, 0.3));
+        assert_eq!(bound_of(&pair(-2.0, true)), (0.0, 0.0));
+        assert_eq!(sliding_bound_of(&pair(-2.0, false)), (0.0, 0.0));
+        let mut held = pair(-2.0, true);
+        held.tresca_n = Some(1.0);
+        assert_eq!(sliding_bound_of(&held), (0.3, 0.0));
+        let mut frictionless = pair(2.0, true);
+        frictionless.frictionless = true;
+        assert_eq!(sliding_bound_of(&frictionless), (0.0, 0.0));
+    }
 }

@@ -29,7 +29,7 @@
 
 use nalgebra::Vector2;
 
-use super::equations::{Equations, StepProblem, bound_of, hair_index};
+use super::equations::{Equations, StepProblem, hair_index, sliding_bound_of};
 use super::feature::Slip;
 use super::geometry::{PairGeometry, Turn, generalized, hair_of};
 use super::pair::Pair;
@@ -170,7 +170,7 @@ impl NewtonSystem {
                 &self.gt[kk * n..(kk + 1) * n],
             );
             let (gn_h, gt_h) = (self.gn_hair[kk], self.gt_hair[kk]);
-            let (bound, dbound) = bound_of(pair);
+            let (bound, dbound) = sliding_bound_of(pair);
             let sign = match pair.slip {
                 Slip::Backward => 1.0,
                 Slip::Forward => -1.0,
@@ -274,7 +274,7 @@ impl NewtonSystem {
         dz[..n].copy_from_slice(&self.x);
         dz[n..m].copy_from_slice(&self.w[..nh]);
         for (kk, pair) in pairs.iter().enumerate() {
-            let (bound, dbound) = bound_of(pair);
+            let (bound, dbound) = sliding_bound_of(pair);
             let sign = match pair.slip {
                 Slip::Backward => 1.0,
                 Slip::Forward => -1.0,
