@@ -320,14 +320,13 @@ fn main() -> BoxResult<()> {
         md,
         "\nCurved and cornered walls: a crest or a corner pressing on a link between its \
          joints makes that contact's point slide along the link and its normal turn as the \
-         posture changes; those second-order terms of the step's Jacobian come from central \
-         differences of the contact forces (one evaluation of the contacts per coordinate \
-         and side) instead of closed forms. A Newton iteration costs {} along the sinusoid \
+         posture changes; those second-order terms of the step's Jacobian are closed forms \
+         (the point's slide by the envelope theorem, the wall's curvature; central \
+         differences only in the tests). A Newton iteration costs {} along the sinusoid \
          and {} along the trapezoid, against {} along the line; a sweep x{} and x{} the \
-         line's. Along the sinusoid nearly all of it (95% in `perf`) is the wall's \
-         nearest-point search (a scan and Newton's method on sin and cos), tens of them per \
-         iteration; closed-form curvature terms in place of the differences would remove \
-         most of them.",
+         line's. Along the sinusoid each evaluation of the contacts finds the wall's nearest \
+         points on the curve (a scan and Newton's method on sin and cos) where the line and \
+         the polyline have them in closed form; what that costs per step is issue #14's.",
         per_iteration(SINE),
         per_iteration(TRAPEZOID),
         per_iteration(FRICTION),

@@ -17,8 +17,11 @@
 //! the same `check()` is called once more on the state reached, timed on its own, and summed
 //! over the sweep; its share is that sum over the sweep's time. The N are interleaved round
 //! by round ([`ROUNDS`] rounds, the order turned each round); ratios to N = 9 are taken within
-//! each round and the median over the rounds reported. Run by `scripts/bench-sweep` (release
-//! build); `-- --rounds N` sets the rounds.
+//! each round and the median over the rounds reported. Then the Newton iterations per step
+//! on the seed's walls (the 4.2.1 line, the 4.2.2 trapezoid and its sinusoid of 14.2
+//! cycles/m) at N = 4 to 150 against the issue's goal (median <= 8, p99 <= 40), one
+//! deterministic sweep each. Run by `scripts/bench-sweep` (release build); `-- --rounds N`
+//! sets the rounds.
 
 mod bench_common;
 
@@ -31,7 +34,9 @@ use nalgebra::Vector2;
 use sim_core::contact::ContactSettings;
 use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
-use sim_core::{Chain, InitialGuess, JointLimit, Line, SolidSide, Surface, SurfaceMap, Wall};
+use sim_core::{
+    Chain, InitialGuess, JointLimit, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall,
+};
 
 type BoxResult<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -87,19 +92,28 @@ fn settings(links: usize, scaled_jump: bool) -> ContactSettings {
     }
 }
 
-fn scene(links: usize, scaled_jump: bool) -> BoxResult<SweepScene> {
-    let wall = Wall::new(
+/// The 4.2.1 wall: through (0, 0.2) m, closing in at 8 deg, mu = 0.3.
+fn wall_4_2_1() -> BoxResult<Wall> {
+    Ok(Wall::new(
         Line::new(
             Vector2::new(0.0, 0.2),
             (-8f64).to_radians(),
             SolidSide::Left,
         )?,
         SurfaceMap::uniform(Surface::Smooth { mu: 0.3 })?,
-    );
+    ))
+}
+
+fn scene(links: usize, scaled_jump: bool) -> BoxResult<SweepScene> {
+    scene_on(links, scaled_jump, wall_4_2_1()?, DURATION_S)
+}
+
+/// The sweep of the antenna cut into `links` links along `wall` for `duration_s`.
+fn scene_on(links: usize, scaled_jump: bool, wall: Wall, duration_s: f64) -> BoxResult<SweepScene> {
     Ok(SweepScene {
         motion: Motion {
             velocity_m_per_s: Vector2::new(0.0167, 0.0),
-            duration_s: DURATION_S,
+            duration_s,
             step_s: STEP_S,
         },
         placement: Placement::TipOnWall {
@@ -110,6 +124,84 @@ fn scene(links: usize, scaled_jump: bool) -> BoxResult<SweepScene> {
         settings: settings(links, scaled_jump),
         ..SweepScene::new(antenna(links)?, vec![wall])
     })
+}
+
+/// Links of the Newton table on the seed's walls (the issue's range, N = 4 to 150).
+const NEWTON_LINKS: [usize; 6] = [4, 9, 18, 36, 72, 150];
+
+/// The seed's walls for the Newton table (mu = 0.3): the 4.2.1 line for [`DURATION_S`],
+/// the 4.2.2 trapezoid crossed in full (50 s) and the sinusoid of the seed's highest
+/// spatial frequency, 14.2 cycles/m, 10 mm amplitude (a crest radius of 12.6 mm) for 20 s
+/// (nearly five crests).
+fn seed_walls() -> BoxResult<Vec<(&'static str, Wall, f64)>> {
+    let smooth = SurfaceMap::uniform(Surface::Smooth { mu: 0.3 })?;
+    Ok(vec![
+        ("4.2.1 line", wall_4_2_1()?, DURATION_S),
+        (
+            "4.2.2 trapezoid",
+            Wall::new(
+                Polyline::new(
+                    [
+                        (0.0, 0.2),
+                        (0.25, 0.2),
+                        (0.35, 0.14),
+                        (0.55, 0.14),
+                        (0.65, 0.2),
+                        (1.0, 0.2),
+                    ]
+                    .map(|(x, y)| Vector2::new(x, y))
+                    .to_vec(),
+                    SolidSide::Left,
+                )?,
+                smooth.clone(),
+            ),
+            50.0,
+        ),
+        (
+            "sinusoid 14.2 cycles/m",
+            Wall::new(
+                Sinusoid::new(
+                    Vector2::new(0.0, 0.17),
+                    0.0,
+                    0.01,
+                    14.2,
+                    0.0,
+                    SolidSide::Left,
+                )?,
+                smooth,
+            ),
+            20.0,
+        ),
+    ])
+}
+
+/// Newton iterations per step of one sweep on a seed wall, or where it failed.
+struct NewtonRun {
+    iterations: Vec<usize>,
+    snaps: usize,
+    failure: Option<String>,
+}
+
+fn newton_run(links: usize, wall: &Wall, duration_s: f64) -> BoxResult<NewtonRun> {
+    let mut sweep = Sweep::new(scene_on(links, true, wall.clone(), duration_s)?)?;
+    let mut run = NewtonRun {
+        iterations: Vec::new(),
+        snaps: 0,
+        failure: None,
+    };
+    while let Some(step) = sweep.next_step() {
+        match step {
+            Ok(step) => {
+                run.iterations.push(step.report.iterations);
+                run.snaps += usize::from(step.report.snapped);
+            }
+            Err(e) => {
+                run.failure = Some(e.to_string());
+                break;
+            }
+        }
+    }
+    Ok(run)
 }
 
 /// One sweep.
@@ -237,6 +329,79 @@ fn row(md: &mut String, runs: &[Vec<Run>], i: usize, links: usize) -> BoxResult<
     Ok(median(&ratios))
 }
 
+/// The issue's goals for Newton iterations per step.
+const GOAL_MEDIAN: usize = 8;
+const GOAL_P99: usize = 40;
+
+/// The Newton iterations per step on the seed's walls at every N of the issue's range
+/// (deterministic: one sweep each).
+fn newton_table(md: &mut String) -> BoxResult<()> {
+    let walls = seed_walls()?;
+    writeln!(
+        md,
+        "\n**Newton iterations on the seed's walls** (issue #13's goal: median <= {GOAL_MEDIAN} and \
+         p99 <= {GOAL_P99} per step at every N from 4 to 150). The same antenna and settings as the \
+         first table (the jump threshold scaled), mu = 0.3 on every wall: the 4.2.1 line for \
+         {DURATION_S} s, the 4.2.2 trapezoid crossed in full (50 s) and the sinusoid of the \
+         seed's highest spatial frequency (4.2.2: 14.2 cycles/m), 10 mm amplitude, a crest \
+         radius of 12.6 mm, for 20 s. Per cell: median / p99 / max Newton iterations per step, \
+         steps over {GOAL_P99} and snaps, or where the sweep failed. The iteration counts are \
+         deterministic (one sweep each).\n"
+    )?;
+    write!(md, "| N links |")?;
+    for (name, _, _) in &walls {
+        write!(md, " {name} |")?;
+    }
+    write!(md, "\n|---:|")?;
+    for _ in &walls {
+        write!(md, "---|")?;
+    }
+    writeln!(md)?;
+    let mut missed: Vec<String> = Vec::new();
+    for links in NEWTON_LINKS {
+        write!(md, "| {links} |")?;
+        for (name, wall, duration_s) in &walls {
+            let run = newton_run(links, wall, *duration_s)?;
+            let median = percentile(&run.iterations, 0.5);
+            let p99 = percentile(&run.iterations, 0.99);
+            let worst = run.iterations.iter().max().copied().unwrap_or(0);
+            let over = run.iterations.iter().filter(|&&i| i > GOAL_P99).count();
+            eprintln!("seed wall {name}, N = {links}: median {median}, p99 {p99}, max {worst}");
+            let cell = format!(
+                "{median} / {p99} / {worst}; {over} of {} steps over {GOAL_P99}, {} snaps",
+                run.iterations.len(),
+                run.snaps
+            );
+            match &run.failure {
+                Some(e) => {
+                    missed.push(format!("{name} at N = {links} (failed)"));
+                    write!(md, " **failed** after {cell}: {e} |")?;
+                }
+                None => {
+                    if median > GOAL_MEDIAN || p99 > GOAL_P99 {
+                        missed.push(format!("{name} at N = {links}"));
+                        write!(md, " **{cell}** |")?;
+                    } else {
+                        write!(md, " {cell} |")?;
+                    }
+                }
+            }
+        }
+        writeln!(md)?;
+    }
+    writeln!(
+        md,
+        "\nGoal met on every wall and N: {}{}.",
+        if missed.is_empty() { "yes" } else { "no" },
+        if missed.is_empty() {
+            String::new()
+        } else {
+            format!(" (missed, in bold: {})", missed.join(", "))
+        }
+    )?;
+    Ok(())
+}
+
 fn main() -> BoxResult<()> {
     let mut rounds = ROUNDS;
     let mut args = std::env::args().skip(1);
@@ -347,6 +512,7 @@ fn main() -> BoxResult<()> {
         "\n| goal | measured | met |\n|---|---:|:---:|\n| time per step, N = 150 within {GOAL_RATIO}x of N = 9 (the jump threshold scaled) | {ratio_150:.1}x | {} |",
         if ratio_150 <= GOAL_RATIO { "yes" } else { "no" }
     )?;
+    newton_table(&mut md)?;
     let r = |i: usize| &runs[0][i];
     let iterations =
         |run: &Run| run.iterations.iter().sum::<usize>() as f64 / run.steps.max(1) as f64;
@@ -384,10 +550,10 @@ fn main() -> BoxResult<()> {
         md,
         "\n**Reading.** {} At N = 150 the median step is {} Newton iteration(s), the p99 {} \
          and the worst {}. The bent-back distal part \
-         lies on the wall over many closely spaced vertices; where contacts move from vertex \
-         to vertex it jams ({} steps relaxed: friction dropped at jammed contacts) and is \
-         refined into substeps (up to {}): {:.1} Newton iterations a step on average against \
-         {:.1} at N = 9. Without them (the \
+         lies on the wall over many closely spaced vertices, the contact moving from vertex \
+         to vertex: {} steps relaxed (friction dropped at jammed contacts), at most {} \
+         substeps a step, {:.1} Newton iterations a step on average against {:.1} at \
+         N = 9. Without them (the \
          default-settings row at N = 150: one contact, {:.1} iterations per step, another \
          sweep) a step costs x{:.1} N = 9's. The certification is one pass over the links, \
          the walls and the contacts: {:.1}% of the sweep at N = 9, where a step is about one \
