@@ -40,8 +40,8 @@ use sim_core::contact::{ContactSettings, Feature};
 use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene, SweepStep};
 use sim_core::{
-    Chain, InitialGuess, JointLimit, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap,
-    Wall, pearson_correlation,
+    Chain, InitialGuess, JointLimit, Line, SolidSide, Surface, SurfaceMap, Wall,
+    pearson_correlation,
 };
 
 type BoxResult<T> = Result<T, Box<dyn std::error::Error>>;
@@ -188,38 +188,13 @@ fn scene_defs() -> BoxResult<Vec<SceneDef>> {
         },
         SceneDef {
             name: "trapezoid",
-            walls: vec![Wall::new(
-                Polyline::new(
-                    [
-                        (0.0, 0.2),
-                        (0.25, 0.2),
-                        (0.35, 0.14),
-                        (0.55, 0.14),
-                        (0.65, 0.2),
-                        (1.0, 0.2),
-                    ]
-                    .map(|(x, y)| Vector2::new(x, y))
-                    .to_vec(),
-                    SolidSide::Left,
-                )?,
-                smooth()?,
-            )],
+            walls: vec![bench_common::trapezoid_4_2_2(0.3)?],
             duration_s: 50.0,
             half_step: true,
         },
         SceneDef {
             name: "sinusoid 14.2 1/m",
-            walls: vec![Wall::new(
-                Sinusoid::new(
-                    Vector2::new(0.0, 0.17),
-                    0.0,
-                    0.01,
-                    14.2,
-                    0.0,
-                    SolidSide::Left,
-                )?,
-                smooth()?,
-            )],
+            walls: vec![bench_common::sinusoid_14_2(0.3)?],
             duration_s: SINE_DURATION_S,
             half_step: false,
         },

@@ -26,8 +26,8 @@ use nalgebra::Vector2;
 use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
 use sim_core::{
-    Chain, Hair, HairDirection, InitialGuess, JointLimit, Line, Polyline, Sinusoid, SolidSide,
-    Surface, SurfaceMap, Wall,
+    Chain, Hair, HairDirection, InitialGuess, JointLimit, Line, SolidSide, Surface, SurfaceMap,
+    Wall,
 };
 
 type BoxResult<T> = Result<T, Box<dyn std::error::Error>>;
@@ -132,42 +132,13 @@ fn scenarios() -> BoxResult<Vec<Scenario>> {
             name: "4.2.2 sinusoid 14.2 1/m, fast-exponential",
             scene: scene(
                 fast()?,
-                vec![Wall::new(
-                    Sinusoid::new(
-                        Vector2::new(0.0, 0.17),
-                        0.0,
-                        0.01,
-                        14.2,
-                        0.0,
-                        SolidSide::Left,
-                    )?,
-                    SurfaceMap::uniform(Surface::Smooth { mu: 0.3 })?,
-                )],
+                vec![bench_common::sinusoid_14_2(0.3)?],
                 on_wall.clone(),
             ),
         },
         Scenario {
             name: "4.2.2 trapezoid, fast-exponential",
-            scene: scene(
-                fast()?,
-                vec![Wall::new(
-                    Polyline::new(
-                        [
-                            (0.0, 0.2),
-                            (0.25, 0.2),
-                            (0.35, 0.14),
-                            (0.55, 0.14),
-                            (0.65, 0.2),
-                            (1.0, 0.2),
-                        ]
-                        .map(|(x, y)| Vector2::new(x, y))
-                        .to_vec(),
-                        SolidSide::Left,
-                    )?,
-                    SurfaceMap::uniform(Surface::Smooth { mu: 0.3 })?,
-                )],
-                on_wall,
-            ),
+            scene: scene(fast()?, vec![bench_common::trapezoid_4_2_2(0.3)?], on_wall),
         },
         Scenario {
             name: "no wall",

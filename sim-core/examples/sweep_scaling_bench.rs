@@ -34,9 +34,7 @@ use nalgebra::Vector2;
 use sim_core::contact::ContactSettings;
 use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
-use sim_core::{
-    Chain, InitialGuess, JointLimit, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall,
-};
+use sim_core::{Chain, InitialGuess, JointLimit, Line, SolidSide, Surface, SurfaceMap, Wall};
 
 type BoxResult<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -134,42 +132,12 @@ const NEWTON_LINKS: [usize; 6] = [4, 9, 18, 36, 72, 150];
 /// spatial frequency, 14.2 cycles/m, 10 mm amplitude (a crest radius of 12.6 mm) for 20 s
 /// (nearly five crests).
 fn seed_walls() -> BoxResult<Vec<(&'static str, Wall, f64)>> {
-    let smooth = SurfaceMap::uniform(Surface::Smooth { mu: 0.3 })?;
     Ok(vec![
         ("4.2.1 line", wall_4_2_1()?, DURATION_S),
-        (
-            "4.2.2 trapezoid",
-            Wall::new(
-                Polyline::new(
-                    [
-                        (0.0, 0.2),
-                        (0.25, 0.2),
-                        (0.35, 0.14),
-                        (0.55, 0.14),
-                        (0.65, 0.2),
-                        (1.0, 0.2),
-                    ]
-                    .map(|(x, y)| Vector2::new(x, y))
-                    .to_vec(),
-                    SolidSide::Left,
-                )?,
-                smooth.clone(),
-            ),
-            50.0,
-        ),
+        ("4.2.2 trapezoid", bench_common::trapezoid_4_2_2(0.3)?, 50.0),
         (
             "sinusoid 14.2 cycles/m",
-            Wall::new(
-                Sinusoid::new(
-                    Vector2::new(0.0, 0.17),
-                    0.0,
-                    0.01,
-                    14.2,
-                    0.0,
-                    SolidSide::Left,
-                )?,
-                smooth,
-            ),
+            bench_common::sinusoid_14_2(0.3)?,
             20.0,
         ),
     ])

@@ -68,3 +68,38 @@ pub fn date() -> String {
     let year = yoe + era * 400 + i64::from(month <= 2);
     format!("{year:04}-{month:02}-{day:02}")
 }
+
+/// The seed's 4.2.2 trapezoid (a 6 cm deep recess from x = 0.25 m to 0.65 m, solid above),
+/// with friction `mu`.
+pub fn trapezoid_4_2_2(mu: f64) -> Result<sim_core::Wall, Box<dyn std::error::Error>> {
+    let vertices = [
+        (0.0, 0.2),
+        (0.25, 0.2),
+        (0.35, 0.14),
+        (0.55, 0.14),
+        (0.65, 0.2),
+        (1.0, 0.2),
+    ]
+    .map(|(x, y)| nalgebra::Vector2::new(x, y))
+    .to_vec();
+    Ok(sim_core::Wall::new(
+        sim_core::Polyline::new(vertices, sim_core::SolidSide::Left)?,
+        sim_core::SurfaceMap::uniform(sim_core::Surface::Smooth { mu })?,
+    ))
+}
+
+/// The sinusoid of the seed's highest spatial frequency (4.2.2: 14.2 cycles/m), 10 mm
+/// amplitude about y = 0.17 m (crests of 12.6 mm radius), solid above, with friction `mu`.
+pub fn sinusoid_14_2(mu: f64) -> Result<sim_core::Wall, Box<dyn std::error::Error>> {
+    Ok(sim_core::Wall::new(
+        sim_core::Sinusoid::new(
+            nalgebra::Vector2::new(0.0, 0.17),
+            0.0,
+            0.01,
+            14.2,
+            0.0,
+            sim_core::SolidSide::Left,
+        )?,
+        sim_core::SurfaceMap::uniform(sim_core::Surface::Smooth { mu })?,
+    ))
+}

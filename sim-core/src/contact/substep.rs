@@ -1,5 +1,6 @@
 //! One (sub)step: the pairs that take part, the semismooth Newton solve (or, where it fails
-//! with friction, the fixed point on the normal forces), pairs missed or let go re-solved,
+//! with friction, the fixed point on the normal forces), pairs missed (by a solve that
+//! converged or one that failed) or let go re-solved,
 //! hairs anchored or let go, and the jump test.
 
 use nalgebra::Vector2;
