@@ -282,7 +282,10 @@ fn soak_sweeps_fixed_since_still_finish() {
 /// words, not a solver failure (soak 1110: N = 4, tip-on-wall S with the tip held 20 mm
 /// behind the base, joint 2 on its stop and joint 3 pressed on the wall; the search for a
 /// posture out of the wall used to move the held tip and found one, so the stalled solve was
-/// reported as "the downhill path did not come to rest").
+/// reported as "the downhill path did not come to rest"). Which link the jam names, and
+/// which joints pin it, depend on the path the held antenna took: link 2 with joint 2 on
+/// its stop until 2026-11-27, link 1 pinned by joints 2 and 3 since a solve's first Newton
+/// step keeps an unloaded contact free.
 #[test]
 fn a_held_antenna_that_jams_on_its_way_onto_the_wall_is_refused_with_the_jam() {
     let record = run_index(SOAK_SEED, 1110, Sample::Soak, false);
@@ -291,8 +294,9 @@ fn a_held_antenna_that_jams_on_its_way_onto_the_wall_is_refused_with_the_jam() {
     };
     for words in [
         "bringing the antenna onto the wall held by its tip failed: the antenna jammed",
-        "no posture near the last one with the tip where the hand holds it keeps link 2 out",
-        "joint 2 on its counter-clockwise stop",
+        "no posture near the last one with the tip where the hand holds it keeps link",
+        "out of the walls",
+        "pinned by joint",
         "try another ahead_m or start",
     ] {
         assert!(message.contains(words), "{words:?} not in: {message}");

@@ -174,7 +174,8 @@ impl Ssn {
         // posture carried with the base lifts a pressed contact off its wall by the base's
         // displacement, and the mode read there would let it go for one step, a step a
         // soft antenna's free posture makes huge (the line search then takes it in
-        // slivers, and the modes take turns).
+        // slivers, and the modes take turns). Likewise an unloaded pair the carried
+        // posture pushes slightly into its wall stays let go for that step.
         self.eq.keep_pressed = true;
         // `descend` reads the residual at the start.
         let mut outcome = SsnOutcome::not_converged();
