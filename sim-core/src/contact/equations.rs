@@ -85,7 +85,7 @@ pub(crate) const HAND_STIFFNESS: f64 = 1e3;
 const HYSTERESIS_M: f64 = 1e-11;
 
 /// How deep in its wall a pair the last step let go (unloaded) may start a solve and keep
-/// its mode for the solve's first Newton step, metres ([`Equations::keep_pressed`]): the
+/// its mode for the solve's first Newton step, metres ([`Equations::keep_last_modes`]): the
 /// last posture carried with the base may push a free contact into its wall as it lifts a
 /// pressed one off (the seed's 14.2 cycles/m sinusoid under 4 links: a joint 1.5 nm off the
 /// wall's flank carried 14 nm into it, pressed, took the load of the crest beside it, and the
@@ -149,7 +149,7 @@ pub(crate) struct Equations {
     /// evaluation (a solve's first: the modes the last step ended in, see [`super::ssn`]);
     /// and the unloaded pairs let go, unless deeper in their wall than
     /// [`KEEP_FREE_DEPTH_M`].
-    pub keep_pressed: bool,
+    pub keep_last_modes: bool,
 }
 
 impl Equations {
@@ -360,7 +360,7 @@ impl Equations {
             if self.forced == Some(Forced::LetGo(idx)) {
                 pair.normal_active = false;
             } else if !frozen
-                && (!self.keep_pressed
+                && (!self.keep_last_modes
                     || (!pair.normal_active
                         && (pair.normal_force_n != 0.0 || pair.geo.gap_m < -KEEP_FREE_DEPTH_M)))
             {
@@ -395,7 +395,7 @@ impl Equations {
                 Slip::Backward | Slip::Forward if bound > 0.0 => Slip::Stuck,
                 Slip::Backward | Slip::Forward => free_mode(y, bound),
             };
-            let keep_slip = self.keep_pressed && pair.normal_active && pair.slip == Slip::Stuck;
+            let keep_slip = self.keep_last_modes && pair.normal_active && pair.slip == Slip::Stuck;
             let slip = if frozen || keep_slip {
                 pair.slip
             } else if pair.normal_active && self.forced == Some(Forced::Stuck(idx)) {

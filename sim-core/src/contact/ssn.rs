@@ -176,7 +176,7 @@ impl Ssn {
         // soft antenna's free posture makes huge (the line search then takes it in
         // slivers, and the modes take turns). Likewise an unloaded pair the carried
         // posture pushes slightly into its wall stays let go for that step.
-        self.eq.keep_pressed = true;
+        self.eq.keep_last_modes = true;
         // `descend` reads the residual at the start.
         let mut outcome = SsnOutcome::not_converged();
         self.descend(p, x, pairs, p.max_iterations, &mut outcome);
@@ -401,8 +401,8 @@ impl Ssn {
         let m = x_start.len();
         let n = p.chain.n();
         let mut merit = self.eq.evaluate(p, pairs);
-        if self.eq.keep_pressed {
-            self.eq.keep_pressed = false;
+        if self.eq.keep_last_modes {
+            self.eq.keep_last_modes = false;
             if self.eq.residual_m() <= p.tolerance_m {
                 // Converged only with the kept modes: judged with its own.
                 merit = self.eq.evaluate(p, pairs);

@@ -133,6 +133,7 @@ impl QuasiStatic {
                 // start with it, as after a solve that converged (the 14.2 cycles/m
                 // sinusoid at N = 72: a crest's contact crossing a joint, Newton p99 per
                 // step over 20 s 46 -> 25).
+                // (`Self::probe_at`, written out: `problem` still borrows the chain.)
                 let theta = theta_of(&self.theta, &x);
                 self.probe.update(&self.chain, goal, &theta);
                 let missed = self.missed_pairs(&x, &hair_links, &pairs);
