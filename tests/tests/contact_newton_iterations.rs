@@ -170,6 +170,38 @@ fn a_joint_carried_into_a_flank_stays_free_for_the_first_newton_step() {
     assert!(total <= 16_000, "{total} Newton iterations");
 }
 
+/// The same sinusoid under 4 links for 20 s: friction locks the antenna in most steps (1,529
+/// of 2,000: sliding on would need ever more normal force), so each step tries one quick
+/// solve with friction and, where it fails, drops friction for the step (reported as a
+/// relaxation). The quick solve spent its whole budget of 12 Newton iterations to fail, and
+/// the median step took 14 (the issue's goal: 8). A quick solve whose best merit has not
+/// halved in 4 iterations now stops there: the median step takes 6, and friction is
+/// dropped in exactly the same steps.
+#[test]
+fn a_quick_solve_where_friction_still_locks_stops_after_a_few_iterations() {
+    let mut sweep = sweep_along(4, seed_sinusoid(), 20.0);
+    let mut iterations = Vec::new();
+    let mut dropped = 0;
+    while let Some(step) = sweep.next_step() {
+        let step = step.unwrap();
+        assert!(
+            step.report
+                .certificate
+                .holds_within(&sweep.sim().certify_tolerances())
+        );
+        iterations.push(step.report.iterations);
+        dropped += usize::from(step.report.friction_dropped);
+    }
+    assert_eq!(iterations.len(), 2000);
+    iterations.sort_unstable();
+    let median = iterations[iterations.len() / 2];
+    eprintln!(
+        "N = 4 along the 14.2 cycles/m sinusoid, 20 s: median {median}, friction dropped in {dropped} steps"
+    );
+    assert!(median <= 8, "median {median} Newton iterations per step");
+    assert_eq!(dropped, 1_529, "steps that dropped friction");
+}
+
 /// The seed's tightest sinusoid (4.2.2: 14.2 cycles/m; 10 mm amplitude, crests of 12.6 mm
 /// radius) under a 72-link antenna for 20 s (BENCHMARKS.md, "Newton iterations on the seed's
 /// walls"). A crest's contact crosses a joint: the step's solve failed with the crest inside

@@ -73,9 +73,10 @@ pub(crate) struct StepProblem<'a> {
     /// (its step would be refused as a jump anyway), radians.
     pub max_departure_rad: f64,
     pub max_iterations: usize,
-    /// Whether a solve that stops making progress gives up early, at its best point (see
-    /// [`super::ssn`]), rather than spend its whole budget.
-    pub stall_stop: bool,
+    /// `Some(k)`: a solve whose best merit has not halved in `k` iterations has stopped
+    /// making progress and gives up early, at its best point (see [`super::ssn`]);
+    /// `None`: it spends its whole budget.
+    pub stall_after: Option<usize>,
 }
 
 /// The hand spring's stiffness in units of the chain's stiffness at its tip, `k_mean / R^2`.

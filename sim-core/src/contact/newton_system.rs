@@ -769,7 +769,7 @@ mod tests {
             acceptable_m: 1e-9,
             max_departure_rad: 1.0,
             max_iterations: 10,
-            stall_stop: true,
+            stall_after: Some(crate::contact::ssn::STALL_ITERATIONS),
         }
     }
 

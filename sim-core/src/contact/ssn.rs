@@ -88,7 +88,7 @@ const NONMONOTONE_MEMORY: usize = 6;
 /// BENCHMARKS.md, "Contact stress soak"). Over the CI sample, 230 of some 26,000 plain
 /// solves converged after such a stall of 12 or more iterations, and 3,835 did not converge
 /// at all.
-const STALL_ITERATIONS: usize = 14;
+pub(super) const STALL_ITERATIONS: usize = 14;
 
 /// A plain solve whose last this many accepted steps were all along a Newton step so large
 /// that the cap on a coordinate's change ([`MAX_CHANGE_RAD`]) cut it to at most
@@ -316,7 +316,7 @@ impl Ssn {
         let residual_stalled = outcome.residual_m;
         let spent_before = outcome.iterations;
         for part in parts {
-            if p.stall_stop && outcome.iterations - spent_before >= REPAIR_BUDGET {
+            if p.stall_after.is_some() && outcome.iterations - spent_before >= REPAIR_BUDGET {
                 break;
             }
             self.eq.z.clone_from(&z_stalled);
@@ -417,7 +417,7 @@ impl Ssn {
         // non-monotone search lets it take turns between two wrong mode sets) or creeping
         // at tiny steps: it stops there, at its best point, rather than spend its budget
         // (the caller falls back to the fixed point or refines the step). A problem without
-        // `stall_stop` (a snap's step) keeps its whole budget above the acceptable residual
+        // `stall_after` (a snap's step) keeps its whole budget above the acceptable residual
         // (within it, it stops where it stands: below).
         let mut best_merit = if merit.is_finite() {
             merit
@@ -432,7 +432,7 @@ impl Ssn {
         // mode sets at a degenerate point (a contact touching with no force) would spend
         // its whole budget to end where it stood (soak 545, 150 links: 60 iterations per
         // step at 1e-11 m).
-        let can_stall = p.stall_stop;
+        let can_stall = p.stall_after.is_some();
         if can_stall {
             self.z_best.clone_from(&self.eq.z);
             self.pairs_best.clear();
@@ -441,8 +441,8 @@ impl Ssn {
         while (outcome.residual_m > p.tolerance_m || outcome.residual_m.is_nan()) && spent < budget
         {
             let since_progress = spent - progress_at;
-            if can_stall
-                && (since_progress >= STALL_ITERATIONS
+            if let Some(stall_after) = p.stall_after
+                && (since_progress >= stall_after
                     || (creeping >= CREEP_ITERATIONS && since_progress >= CREEP_ITERATIONS))
             {
                 stalled = true;
@@ -622,7 +622,7 @@ mod tests {
             acceptable_m: 1e-9,
             max_departure_rad: 1.0,
             max_iterations: 60,
-            stall_stop: true,
+            stall_after: Some(STALL_ITERATIONS),
         }
     }
 
@@ -757,7 +757,7 @@ mod tests {
         // longer halves, it reaches the same answer by the repair in half the iterations of
         // a solve that spends its whole budget there (40 against 81).
         let patient = StepProblem {
-            stall_stop: false,
+            stall_after: None,
             ..problem
         };
         let mut x_patient = vec![theta_star];

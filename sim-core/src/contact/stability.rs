@@ -49,7 +49,7 @@ impl QuasiStatic {
             acceptable_m: self.settings.acceptable_m,
             max_departure_rad: f64::INFINITY,
             max_iterations: 1,
-            stall_stop: false,
+            stall_after: None,
         };
         let reduced = self.ssn.tangent_hessian(&problem, &x, &mut pairs);
         if reduced.nrows() == 0 {
