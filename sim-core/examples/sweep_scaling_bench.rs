@@ -20,7 +20,7 @@
 //! each round and the median over the rounds reported. Then the Newton iterations per step
 //! on the seed's walls (the 4.2.1 line, the 4.2.2 trapezoid and its sinusoid of 14.2
 //! cycles/m) at N = 4 to 150 against the issue's goal (median <= 8, p99 <= 40), one
-//! deterministic sweep each. Run by `scripts/bench-sweep` (release build); `-- --rounds N`
+//! deterministic sweep each, with the walls' friction (mu = 0.3) and without. Run by `scripts/bench-sweep` (release build); `-- --rounds N`
 //! sets the rounds.
 
 mod bench_common;
@@ -92,13 +92,18 @@ fn settings(links: usize, scaled_jump: bool) -> ContactSettings {
 
 /// The 4.2.1 wall: through (0, 0.2) m, closing in at 8 deg, mu = 0.3.
 fn wall_4_2_1() -> BoxResult<Wall> {
+    line_4_2_1(0.3)
+}
+
+/// The 4.2.1 wall's line with friction `mu`.
+fn line_4_2_1(mu: f64) -> BoxResult<Wall> {
     Ok(Wall::new(
         Line::new(
             Vector2::new(0.0, 0.2),
             (-8f64).to_radians(),
             SolidSide::Left,
         )?,
-        SurfaceMap::uniform(Surface::Smooth { mu: 0.3 })?,
+        SurfaceMap::uniform(Surface::Smooth { mu })?,
     ))
 }
 
@@ -127,17 +132,17 @@ fn scene_on(links: usize, scaled_jump: bool, wall: Wall, duration_s: f64) -> Box
 /// Links of the Newton table on the seed's walls (the issue's range, N = 4 to 150).
 const NEWTON_LINKS: [usize; 6] = [4, 9, 18, 36, 72, 150];
 
-/// The seed's walls for the Newton table (mu = 0.3): the 4.2.1 line for [`DURATION_S`],
-/// the 4.2.2 trapezoid crossed in full (50 s) and the sinusoid of the seed's highest
-/// spatial frequency, 14.2 cycles/m, 10 mm amplitude (a crest radius of 12.6 mm) for 20 s
-/// (nearly five crests).
-fn seed_walls() -> BoxResult<Vec<(&'static str, Wall, f64)>> {
+/// The seed's walls for the Newton table with friction `mu`: the 4.2.1 line for
+/// [`DURATION_S`], the 4.2.2 trapezoid crossed in full (50 s) and the sinusoid of the seed's
+/// highest spatial frequency, 14.2 cycles/m, 10 mm amplitude (a crest radius of 12.6 mm) for
+/// 20 s (nearly five crests).
+fn seed_walls(mu: f64) -> BoxResult<Vec<(&'static str, Wall, f64)>> {
     Ok(vec![
-        ("4.2.1 line", wall_4_2_1()?, DURATION_S),
-        ("4.2.2 trapezoid", bench_common::trapezoid_4_2_2(0.3)?, 50.0),
+        ("4.2.1 line", line_4_2_1(mu)?, DURATION_S),
+        ("4.2.2 trapezoid", bench_common::trapezoid_4_2_2(mu)?, 50.0),
         (
             "sinusoid 14.2 cycles/m",
-            bench_common::sinusoid_14_2(0.3)?,
+            bench_common::sinusoid_14_2(mu)?,
             20.0,
         ),
     ])
@@ -301,21 +306,29 @@ fn row(md: &mut String, runs: &[Vec<Run>], i: usize, links: usize) -> BoxResult<
 const GOAL_MEDIAN: usize = 8;
 const GOAL_P99: usize = 40;
 
-/// The Newton iterations per step on the seed's walls at every N of the issue's range
-/// (deterministic: one sweep each).
-fn newton_table(md: &mut String) -> BoxResult<()> {
-    let walls = seed_walls()?;
-    writeln!(
-        md,
-        "\n**Newton iterations on the seed's walls** (issue #13's goal: median <= {GOAL_MEDIAN} and \
-         p99 <= {GOAL_P99} per step at every N from 4 to 150). The same antenna and settings as the \
-         first table (the jump threshold scaled), mu = 0.3 on every wall: the 4.2.1 line for \
-         {DURATION_S} s, the 4.2.2 trapezoid crossed in full (50 s) and the sinusoid of the \
-         seed's highest spatial frequency (4.2.2: 14.2 cycles/m), 10 mm amplitude, a crest \
-         radius of 12.6 mm, for 20 s. Per cell: median / p99 / max Newton iterations per step, \
-         steps over {GOAL_P99} and snaps, or where the sweep failed. The iteration counts are \
-         deterministic (one sweep each).\n"
-    )?;
+/// The Newton iterations per step on the seed's walls with friction `mu` at every N of the
+/// issue's range (deterministic: one sweep each).
+fn newton_table(md: &mut String, mu: f64) -> BoxResult<()> {
+    let walls = seed_walls(mu)?;
+    if mu > 0.0 {
+        writeln!(
+            md,
+            "\n**Newton iterations on the seed's walls** (issue #13's goal: median <= \
+             {GOAL_MEDIAN} and p99 <= {GOAL_P99} per step at every N from 4 to 150). The same \
+             antenna and settings as the first table (the jump threshold scaled), mu = {mu} on \
+             every wall: the 4.2.1 line for {DURATION_S} s, the 4.2.2 trapezoid crossed in full \
+             (50 s) and the sinusoid of the seed's highest spatial frequency (4.2.2: 14.2 \
+             cycles/m), 10 mm amplitude, a crest radius of 12.6 mm, for 20 s. Per cell: median \
+             / p99 / max Newton iterations per step, steps over {GOAL_P99} and snaps, or where \
+             the sweep failed. The iteration counts are deterministic (one sweep each).\n"
+        )?;
+    } else {
+        writeln!(
+            md,
+            "\n**The same walls without friction** (mu = 0; the seed's walls have friction, a \
+             user's may not). Cells as above.\n"
+        )?;
+    }
     write!(md, "| N links |")?;
     for (name, _, _) in &walls {
         write!(md, " {name} |")?;
@@ -334,7 +347,9 @@ fn newton_table(md: &mut String) -> BoxResult<()> {
             let p99 = percentile(&run.iterations, 0.99);
             let worst = run.iterations.iter().max().copied().unwrap_or(0);
             let over = run.iterations.iter().filter(|&&i| i > GOAL_P99).count();
-            eprintln!("seed wall {name}, N = {links}: median {median}, p99 {p99}, max {worst}");
+            eprintln!(
+                "seed wall {name} (mu = {mu}), N = {links}: median {median}, p99 {p99}, max {worst}"
+            );
             let cell = format!(
                 "{median} / {p99} / {worst}; {over} of {} steps over {GOAL_P99}, {} snaps",
                 run.iterations.len(),
@@ -480,7 +495,8 @@ fn main() -> BoxResult<()> {
         "\n| goal | measured | met |\n|---|---:|:---:|\n| time per step, N = 150 within {GOAL_RATIO}x of N = 9 (the jump threshold scaled) | {ratio_150:.1}x | {} |",
         if ratio_150 <= GOAL_RATIO { "yes" } else { "no" }
     )?;
-    newton_table(&mut md)?;
+    newton_table(&mut md, 0.3)?;
+    newton_table(&mut md, 0.0)?;
     let r = |i: usize| &runs[0][i];
     let iterations =
         |run: &Run| run.iterations.iter().sum::<usize>() as f64 / run.steps.max(1) as f64;

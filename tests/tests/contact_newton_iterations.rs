@@ -209,8 +209,8 @@ fn a_quick_solve_where_friction_still_locks_stops_after_a_few_iterations() {
 /// step was halved twelve times and followed as a snap. A failed solve with something in a
 /// wall that no pair holds now solves the round again with that pair: the p99 per step 46 ->
 /// 25, 16,512 -> 12,129 Newton iterations (12,940 since an unloaded pair keeps its mode for
-/// a solve's first Newton step). (At N = 150 and with 4 links the seed's sinusoid
-/// still misses the issue's goal: issue #13.)
+/// a solve's first Newton step). (At N = 150 the seed's sinusoid still misses the
+/// issue's goal: issue #13.)
 #[test]
 fn a_crest_inside_a_link_after_a_failed_solve_joins_the_step() {
     let iterations = iterations_of(sweep_along(72, seed_sinusoid(), 20.0));
