@@ -582,7 +582,7 @@ that knee's time; and it is the seed's 100 Hz recording rate, which the step als
 that needs only the summary metrics may take 0.02 s (half to two thirds of the time, the same joint \
 angles to 5e-10 rad on the line and the sinusoid and to 1.1e-4 rad at the trapezoid's \
 corners); above 0.05 s the line's events move. Keep `ContactSettings::tolerance_m` = 1e-12 \
-m: 1e-10 m saves the last Newton iteration of some steps (x0.90 to x0.98 of the time) for \
+m: 1e-10 m saves the last Newton iteration of some steps (x0.88 to x0.99 of the time) for \
 joint angles that move by less than 1e-8 rad, and on the trapezoid it reports other touching \
 features at 722 of 5,001 steps (contacts within the looser tolerance of the wall, with no \
 force); as the default it left 2 of the stress soak's 2,000 sweeps (seed 4221: 1143 \

@@ -176,7 +176,7 @@ fn a_joint_carried_into_a_flank_stays_free_for_the_first_newton_step() {
 /// relaxation). The quick solve spent its whole budget of 12 Newton iterations to fail, and
 /// the median step took 14 (the goal: 8). A quick solve whose best merit has not
 /// halved in 4 iterations now stops there: the median step takes 6, and friction is
-/// dropped in exactly the same steps.
+/// dropped in as many steps.
 #[test]
 fn a_quick_solve_where_friction_still_locks_stops_after_a_few_iterations() {
     let mut sweep = sweep_along(4, seed_sinusoid(), 20.0);

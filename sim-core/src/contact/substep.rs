@@ -40,8 +40,9 @@ const QUICK_ITERATIONS: usize = 12;
 /// stalled: friction still locks the antenna, and the step drops it at once. A step that
 /// sticks again converges without such a stall: over 20 s of the seed's walls under 4
 /// links (90 mm links; friction locks the antenna in 787-1,529 of 2,000 steps), 4 drops
-/// friction in exactly the steps that 14 ([`STALL_ITERATIONS`]) does, and the median step
-/// takes 6 Newton iterations instead of 14 (the failing quick attempt spent 12 of them).
+/// friction in as many steps on each wall as 14 ([`STALL_ITERATIONS`]) does, and the median
+/// step takes 6 Newton iterations instead of 14 (the failing quick attempt spent 12 of
+/// them).
 const QUICK_STALL_ITERATIONS: usize = 4;
 
 impl QuasiStatic {
