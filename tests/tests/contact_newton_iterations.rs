@@ -8,7 +8,7 @@
 #![allow(clippy::unwrap_used)]
 
 use nalgebra::Vector2;
-use sim_core::contact::ContactSettings;
+use sim_core::contact::{ContactSettings, StepReport};
 use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
 use sim_core::{
@@ -77,9 +77,9 @@ fn sweep_along(links: usize, wall: Wall, duration_s: f64) -> Sweep {
     .unwrap()
 }
 
-/// Every step certified; the Newton iterations per step.
-fn iterations_of(mut sweep: Sweep) -> Vec<usize> {
-    let mut iterations = Vec::new();
+/// Every step certified; the steps' reports.
+fn reports_of(mut sweep: Sweep) -> Vec<StepReport> {
+    let mut reports = Vec::new();
     while let Some(step) = sweep.next_step() {
         let step = step.unwrap();
         assert!(
@@ -87,9 +87,14 @@ fn iterations_of(mut sweep: Sweep) -> Vec<usize> {
                 .certificate
                 .holds_within(&sweep.sim().certify_tolerances())
         );
-        iterations.push(step.report.iterations);
+        reports.push(step.report);
     }
-    iterations
+    reports
+}
+
+/// Every step certified; the Newton iterations per step.
+fn iterations_of(sweep: Sweep) -> Vec<usize> {
+    reports_of(sweep).iter().map(|r| r.iterations).collect()
 }
 
 /// The nearest-rank p99 of `iterations`.
@@ -179,19 +184,9 @@ fn a_joint_carried_into_a_flank_stays_free_for_the_first_newton_step() {
 /// dropped in as many steps.
 #[test]
 fn a_quick_solve_where_friction_still_locks_stops_after_a_few_iterations() {
-    let mut sweep = sweep_along(4, seed_sinusoid(), 20.0);
-    let mut iterations = Vec::new();
-    let mut dropped = 0;
-    while let Some(step) = sweep.next_step() {
-        let step = step.unwrap();
-        assert!(
-            step.report
-                .certificate
-                .holds_within(&sweep.sim().certify_tolerances())
-        );
-        iterations.push(step.report.iterations);
-        dropped += usize::from(step.report.friction_dropped);
-    }
+    let reports = reports_of(sweep_along(4, seed_sinusoid(), 20.0));
+    let mut iterations: Vec<usize> = reports.iter().map(|r| r.iterations).collect();
+    let dropped = reports.iter().filter(|r| r.friction_dropped).count();
     assert_eq!(iterations.len(), 2000);
     iterations.sort_unstable();
     let median = iterations[iterations.len() / 2];
