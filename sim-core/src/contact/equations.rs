@@ -358,13 +358,14 @@ impl Equations {
             let frozen = self.frozen_modes;
             #[cfg(not(test))]
             let frozen = false;
+            // The first evaluation of a solve keeps a pressed pair pressed, and an unloaded
+            // one let go unless it starts deeper in its wall than KEEP_FREE_DEPTH_M.
+            let deep = pair.geo.gap_m < -KEEP_FREE_DEPTH_M;
+            let keep_normal = self.keep_last_modes
+                && (pair.normal_active || (pair.normal_force_n == 0.0 && !deep));
             if self.forced == Some(Forced::LetGo(idx)) {
                 pair.normal_active = false;
-            } else if !frozen
-                && (!self.keep_last_modes
-                    || (!pair.normal_active
-                        && (pair.normal_force_n != 0.0 || pair.geo.gap_m < -KEEP_FREE_DEPTH_M)))
-            {
+            } else if !frozen && !keep_normal {
                 pair.normal_active = if pair.normal_active {
                     y_normal > -hyst
                 } else {
