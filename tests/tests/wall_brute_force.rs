@@ -143,6 +143,71 @@ fn check_segment(wall: &WallShape, a: Vector2<f64>, b: Vector2<f64>, samples: us
     }
 }
 
+/// A point 8.76 mm inside a steep sinusoid (37 mm amplitude, 9.13 cycles/m: a smallest
+/// radius of curvature of 8.2 mm), past the centre of curvature of the crest above it, has
+/// two nearest-point candidates 6 mm apart on either side of the crest, nearly level with
+/// the maximum between them; the nearest-point search once refined only the one its samples
+/// showed and came out 4 um too deep (found by `sinusoid_segment_contact_beats_sampling` on
+/// a proptest seed CI does not pin). Along the segment through it the signed distance must
+/// stay 1-Lipschitz, and the segment's deepest point must beat dense sampling.
+#[test]
+fn a_point_past_a_crests_centre_of_curvature_finds_its_nearest_point() {
+    let wall = Sinusoid::new(
+        v(0.01, 0.1),
+        -0.627_255_553_913_206_3,
+        0.036_991_922_761_345_18,
+        9.129_304_270_248_262,
+        -0.833_766_115_396_753_6,
+        SolidSide::Right,
+    )
+    .unwrap();
+    let a = v(0.060_255_318_039_237_345, 0.098_401_460_121_233_92);
+    let b = v(0.078_684_006_361_575_08, 0.086_116_770_787_776_96);
+    // Dense sampling of the curve for one point: its parameter in the baseline frame.
+    let (o, direction) = (wall.baseline_point_m(), wall.direction_rad());
+    let g = |t: f64| {
+        0.036_991_922_761_345_18
+            * (std::f64::consts::TAU * 9.129_304_270_248_262 * t - 0.833_766_115_396_753_6).sin()
+    };
+    let sampled_distance = |p: Vector2<f64>| {
+        let (px, py) = local(o, direction, p);
+        let step = 1e-6;
+        (0..=40_000)
+            .map(|i| {
+                let t = px - 0.02 + i as f64 * step;
+                ((t - px).powi(2) + (g(t) - py).powi(2)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    // Steepest slope A k = 2.12: sampling at 1 um is within 1.2 um of the true distance.
+    let slack =
+        0.5e-6 * (1.0 + (0.036_991_922_761_345_18 * 57.361_110_455_595_735_f64).powi(2)).sqrt();
+    let mut last: Option<f64> = None;
+    for i in 0..=200 {
+        let s = 0.012 + 0.002 * f64::from(i) / 200.0;
+        let p = a + (b - a) * s;
+        let gap = wall.signed_distance(&p).gap_m;
+        let sampled = sampled_distance(p);
+        assert!(gap < 0.0);
+        assert!(
+            gap.abs() <= sampled + 1e-12,
+            "s = {s}: {} > sampled {sampled}",
+            gap.abs()
+        );
+        assert!(
+            gap.abs() >= sampled - slack - 1e-12,
+            "s = {s}: {} < sampled {sampled}",
+            gap.abs()
+        );
+        if let Some(before) = last {
+            // 1-Lipschitz along the segment.
+            assert!((gap - before).abs() <= 0.002 / 200.0 * (b - a).norm() + 1e-15);
+        }
+        last = Some(gap);
+    }
+    check_segment(&WallShape::Sinusoid(wall), a, b, 20_000);
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
