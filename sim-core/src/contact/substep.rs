@@ -6,6 +6,7 @@
 use nalgebra::Vector2;
 
 use super::equations::{Proximal, StepProblem};
+use super::pair::PairKey;
 use super::quasistatic::{QuasiStatic, theta_of};
 use super::report::StepReport;
 use super::ssn::STALL_ITERATIONS;
@@ -45,6 +46,14 @@ const QUICK_ITERATIONS: usize = 12;
 /// them).
 const QUICK_STALL_ITERATIONS: usize = 4;
 
+/// Whether the last four rounds left two sets of pairs in turn (`A B A B`).
+fn taking_turns(round_keys: &[Vec<PairKey>]) -> bool {
+    match round_keys {
+        [.., a, b, c, d] => a == c && b == d && a != b,
+        _ => false,
+    }
+}
+
 impl QuasiStatic {
     /// Tries one (sub)step from the committed state to the base at `goal` (with a proximal
     /// term when following a snap).
@@ -60,6 +69,8 @@ impl QuasiStatic {
         let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
         let mut anchoring = super::anchoring::AnchorRounds::default();
         let mut handed_over = Vec::new();
+        // The pairs each round left for the next.
+        let mut round_keys: Vec<Vec<PairKey>> = Vec::new();
         for _round in 0..ROUNDS {
             let mut hair_links: Vec<usize> =
                 pairs.iter().filter_map(|c| c.key.hair_link()).collect();
@@ -191,6 +202,16 @@ impl QuasiStatic {
             // Hair anchoring on rough surfaces (model.md 7).
             changed |= self.update_anchors(&x, &hair_links, &mut pairs, &mut anchoring);
             if changed {
+                // Rounds that take turns between two sets of pairs (a crest's force handed
+                // from a link's end to its joint, whose next solve pushes the link into the
+                // crest again) do not settle: the attempt fails after two such turns, and the
+                // step is refined, as after all its rounds.
+                let mut keys: Vec<PairKey> = pairs.iter().map(|q| q.key).collect();
+                keys.sort_unstable();
+                round_keys.push(keys);
+                if taking_turns(&round_keys) {
+                    return Err(Reject::NoConvergence);
+                }
                 report.resolves += 1;
                 continue;
             }
@@ -221,5 +242,39 @@ impl QuasiStatic {
             });
         }
         Err(Reject::NoConvergence)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::pair::{ChainPoint, PairKey};
+    use super::taking_turns;
+    use crate::ConvexFeature;
+
+    /// Rounds that hand a crest's force from link 102's end to joint 102 and back take
+    /// turns (`A B A B`); rounds that change their pairs each time, or keep them, do not.
+    #[test]
+    fn rounds_take_turns_only_between_two_sets_of_pairs() {
+        let link = vec![PairKey::link(102, ConvexFeature::Crest { index: 4 }, 0)];
+        let joint = vec![PairKey::point(ChainPoint::Vertex(102), 0)];
+        let both = vec![link[0], joint[0]];
+        let (a, b) = (link.clone(), joint.clone());
+        assert!(taking_turns(&[a.clone(), b.clone(), a.clone(), b.clone()]));
+        assert!(taking_turns(&[
+            both.clone(),
+            a.clone(),
+            b.clone(),
+            a.clone(),
+            b.clone()
+        ]));
+        assert!(!taking_turns(&[a.clone(), b.clone(), a.clone()]));
+        assert!(!taking_turns(&[
+            a.clone(),
+            b.clone(),
+            a.clone(),
+            both.clone()
+        ]));
+        assert!(!taking_turns(&[a.clone(), a.clone(), a.clone(), a.clone()]));
+        assert!(!taking_turns(&[b.clone(), a.clone(), both, a.clone(), b]));
     }
 }
