@@ -238,9 +238,9 @@ impl Sinusoid {
         let h = (self.wavelength_m() / SAMPLES_PER_WAVELENGTH).min(0.25 * r0);
         let mut best = (x, r0 * r0);
         // Over the bracket `|t - x| <= r0`, `|g - y| <= r0 (1 + A k)`, so that
-        // `D'' / 2 = 1 + g'^2 + (g - y) g'' >= 1 - r0 (1 + A k) A k^2`: below
-        // TWO_MINIMA_FRACTION of the smallest radius of curvature (so scaled), `D` is convex
-        // there and its one minimum is next to its samples' discrete minimum.
+        // `D'' / 2 = 1 + g'^2 + (g - y) g'' >= 1 - r0 (1 + A k) A k^2`: where that product
+        // is at most TWO_MINIMA_FRACTION, `D` is convex over the bracket and its one minimum
+        // is next to its samples' discrete minimum.
         let (a, k) = (self.amplitude_m, self.wavenumber_rad_per_m);
         let two_minima = r0 * (1.0 + a * k) * a * k * k > TWO_MINIMA_FRACTION;
         // `D(t)` and, where two minima can be near, `D'(t) / 2` (else `0`).
