@@ -20,8 +20,8 @@
 //! each round and the median over the rounds reported. Then the Newton iterations per step
 //! on the seed's walls (the 4.2.1 line, the 4.2.2 trapezoid and its sinusoid of 14.2
 //! cycles/m) at N = 4 to 150 against the goal (median <= 8, p99 <= 40), one
-//! deterministic sweep each, with the walls' friction (mu = 0.3) and without. Run by `scripts/bench-sweep` (release build); `-- --rounds N`
-//! sets the rounds.
+//! deterministic sweep each, with the walls' friction (mu = 0.3) and without. Run by
+//! `scripts/bench-sweep` (release build); `-- --rounds N` sets the rounds.
 
 mod bench_common;
 

@@ -253,6 +253,8 @@ impl Sinusoid {
                 (d2(t), 0.0)
             }
         };
+        // `D'(x) / 2`, where both directions' scans start (only where it is read).
+        let start_d1 = if two_minima { sample(x).1 } else { 0.0 };
         for direction in [1.0, -1.0] {
             // Samples t_i = x + direction * i h, i = -1, 0, 1, ...; a discrete local minimum
             // at the middle of three is refined, and so is every interval between two
@@ -263,7 +265,7 @@ impl Sinusoid {
             // into a wall of 37 mm amplitude and 9.1 cycles/m came out 4 um too deep).
             let mut prev2 = (x - direction * h, d2(x - direction * h));
             let mut prev = (x, best.1);
-            let mut prev_d1 = sample(x).1;
+            let mut prev_d1 = start_d1;
             let mut i = 1.0;
             for _ in 0..MAX_SCAN_STEPS {
                 let t = x + direction * i * h;
