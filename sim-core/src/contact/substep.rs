@@ -235,7 +235,9 @@ impl QuasiStatic {
                 // iterations of 2,000, 17 -> 15 snaps). Where a point was found inside a
                 // wall, the answer that put it there is no start (soak 1361: a swing of
                 // the distal links through a corner, 661 -> 18,095 Newton iterations when
-                // started from it), nor is one that jumped.
+                // started from it), nor is one that jumped. A snap's proximal steps start
+                // afresh: started there, the flow of CI sample 4's placement took another
+                // path to another posture (204 -> 10,582 Newton iterations for the sweep).
                 if proximal.is_none()
                     && none_missed
                     && max_change_rad(&x[..n], &self.theta[1..]) <= self.settings.jump_rad
