@@ -239,6 +239,26 @@ fn a_round_that_hands_a_crest_on_starts_from_the_last_rounds_answer() {
     assert!(total <= 700, "{total} Newton iterations");
 }
 
+/// Soak case 4221:1361 (`ANTENNA_STRESS_REPLAY=soak:4221:1361`): a 150-link antenna of the
+/// fast-reciprocal profile with distal hairs along a polyline (mu = 0.6). At steps 84-88 a
+/// round's answer swings the distal links through a corner (points of links 100-102 inside
+/// the wall that no pair held); started from that answer, the next round's solve fails at
+/// once, and the steps were halved six times: 3,000 to 5,100 Newton iterations each, 18,095
+/// in all. A round whose answer found something inside a wall hands the next round no start
+/// (it starts from the step's start): 661 in all, the worst step 361 (a jam's search).
+#[test]
+fn a_round_whose_answer_is_inside_a_wall_is_no_start_for_the_next() {
+    soak_case_finishes_within(
+        1_361,
+        SoakBudget {
+            links: 150,
+            steps: 127,
+            worst: 500,
+            total: 1_200,
+        },
+    );
+}
+
 /// Soak case 4221:628 (`ANTENNA_STRESS_REPLAY=soak:4221:628`): a 72-link antenna of the
 /// constant profile whose tip end hooks on a convex corner of a polyline (mu = 0.6), link
 /// 71 pressed by the corner just short of its end. Carried with the base (the probe that

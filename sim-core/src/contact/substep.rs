@@ -61,6 +61,15 @@ fn taking_turns(round_keys: &[Vec<PairKey>]) -> bool {
     }
 }
 
+/// Records the pairs a round leaves for the next (`round_keys`, sorted keys) and whether
+/// the rounds now take turns ([`taking_turns`]).
+fn taking_turns_with(round_keys: &mut Vec<Vec<PairKey>>, pairs: &[super::pair::Pair]) -> bool {
+    let mut keys: Vec<PairKey> = pairs.iter().map(|q| q.key).collect();
+    keys.sort_unstable();
+    round_keys.push(keys);
+    taking_turns(round_keys)
+}
+
 impl QuasiStatic {
     /// Tries one (sub)step from the committed state to the base at `goal` (with a proximal
     /// term when following a snap).
@@ -180,6 +189,14 @@ impl QuasiStatic {
                     pairs = pairs_start;
                     pairs.extend(missed);
                     report.resolves += 1;
+                    // Rounds whose solves fail for want of a pair that the next round's
+                    // answer lets go again take turns too (the sinusoid under 150 links:
+                    // a crest handed to joints 106 and 107, whose failed solve puts it
+                    // inside link 107, whose pair then hands it back; 33,973 -> 32,099
+                    // Newton iterations over 20 s).
+                    if taking_turns_with(&mut round_keys, &pairs) {
+                        return Err(Reject::NoConvergence);
+                    }
                     continue;
                 }
             }
@@ -220,10 +237,7 @@ impl QuasiStatic {
                 // from a link's end to its joint, whose next solve pushes the link into the
                 // crest again) do not settle: the attempt fails after two such turns, and the
                 // step is refined, as after all its rounds.
-                let mut keys: Vec<PairKey> = pairs.iter().map(|q| q.key).collect();
-                keys.sort_unstable();
-                round_keys.push(keys);
-                if taking_turns(&round_keys) {
+                if taking_turns_with(&mut round_keys, &pairs) {
                     return Err(Reject::NoConvergence);
                 }
                 report.resolves += 1;
