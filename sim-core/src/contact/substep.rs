@@ -6,7 +6,7 @@
 use nalgebra::Vector2;
 
 use super::equations::{Proximal, StepProblem};
-use super::pair::PairKey;
+use super::pair::{Pair, PairKey};
 use super::quasistatic::{QuasiStatic, theta_of};
 use super::report::StepReport;
 use super::ssn::STALL_ITERATIONS;
@@ -24,7 +24,7 @@ pub(super) enum Reject {
 pub(super) struct Accepted {
     pub x: Vec<f64>,
     pub hair_links: Vec<usize>,
-    pub pairs: Vec<super::pair::Pair>,
+    pub pairs: Vec<Pair>,
     pub residual_m: f64,
     pub hand_force_n: Vector2<f64>,
 }
@@ -63,7 +63,7 @@ fn taking_turns(round_keys: &[Vec<PairKey>]) -> bool {
 
 /// Records the pairs a round leaves for the next (`round_keys`, sorted keys) and whether
 /// the rounds now take turns ([`taking_turns`]).
-fn taking_turns_with(round_keys: &mut Vec<Vec<PairKey>>, pairs: &[super::pair::Pair]) -> bool {
+fn taking_turns_with(round_keys: &mut Vec<Vec<PairKey>>, pairs: &[Pair]) -> bool {
     let mut keys: Vec<PairKey> = pairs.iter().map(|q| q.key).collect();
     keys.sort_unstable();
     round_keys.push(keys);
@@ -95,10 +95,14 @@ impl QuasiStatic {
                 pairs.iter().filter_map(|c| c.key.hair_link()).collect();
             hair_links.sort_unstable();
             hair_links.dedup();
-            let mut x: Vec<f64> = self.theta[1..].to_vec();
+            // The last round's answer where it hands one on (below), else the committed
+            // angles.
+            let warmed = warm.is_some();
+            let mut x: Vec<f64> = warm.take().unwrap_or_else(|| self.theta[1..].to_vec());
             // A secant predictor: the last plain step's change of the joint angles, scaled
-            // to this step's base displacement.
+            // to this step's base displacement (for a round that starts afresh).
             if proximal.is_none()
+                && !warmed
                 && let Some((delta, dtheta)) = &self.secant
             {
                 let d2 = delta.norm_squared();
@@ -114,9 +118,6 @@ impl QuasiStatic {
                             .clamp(limits[j + 1].cw_rad, limits[j + 1].ccw_rad);
                     }
                 }
-            }
-            if let Some(from) = warm.take() {
-                x[..n].copy_from_slice(&from);
             }
             x.extend(hair_links.iter().map(|&l| self.beta[l]));
             let prox_x: Vec<f64>;
@@ -200,7 +201,7 @@ impl QuasiStatic {
                     continue;
                 }
             }
-            if !outcome.converged && !pairs.iter().any(super::pair::Pair::has_friction) {
+            if !outcome.converged && !pairs.iter().any(Pair::has_friction) {
                 // Without friction the fixed point's Tresca problems are this very problem:
                 // it would only solve it again (up to hundreds of iterations per attempt in
                 // a frictionless snap, soak 1747), so the attempt fails here.
