@@ -492,6 +492,51 @@ impl QuasiStatic {
             })
     }
 
+    /// Hands the force of a joint stuck on a crest to a `missed` crest pair of one of the
+    /// joint's links whose foot, at the solution (the probe posture, [`Self::probe_at`]),
+    /// lies on the link within [`HAND_BACK_FRACTION`] of the joint: the link has come
+    /// down onto the crest beside the joint's contact, and the two pairs would hold the
+    /// same contact (Newton's system on both is singular). The joint's pair leaves the
+    /// step, and the link's pair is recorded in `handed_over` (it does not hand back in
+    /// this (sub)step); whether any was handed.
+    pub(super) fn hand_stuck_joints_to_missed_links(
+        &self,
+        pairs: &mut Vec<Pair>,
+        missed: &mut [Pair],
+        handed_over: &mut Vec<PairKey>,
+    ) -> bool {
+        let mut handed = false;
+        for m in missed.iter_mut() {
+            let PairKind::Link {
+                link,
+                feature: ConvexFeature::Crest { .. },
+            } = m.key.kind
+            else {
+                continue;
+            };
+            let s = self.geometry_in(&self.probe, &m.key, m.geo).s;
+            let joint = if (1.0 - HAND_BACK_FRACTION..=1.0).contains(&s) {
+                link
+            } else if (0.0..=HAND_BACK_FRACTION).contains(&s) && link >= 2 {
+                link - 1
+            } else {
+                continue;
+            };
+            let stuck_joint = pairs.iter().position(|c| {
+                c.key == PairKey::point(ChainPoint::Vertex(joint), m.key.piece)
+                    && c.is_loaded()
+                    && c.slip == Slip::Stuck
+            });
+            if let Some(k) = stuck_joint {
+                let joint_pair = pairs.remove(k);
+                carry(m, &joint_pair);
+                handed_over.push(m.key);
+                handed = true;
+            }
+        }
+        handed
+    }
+
     /// Puts the probe posture at the solution `x` of a step to `goal` (hair angles are not
     /// part of it; [`Self::missed_pairs`] takes them from `x`).
     pub(super) fn probe_at(&mut self, x: &[f64], goal: Vector2<f64>) {
