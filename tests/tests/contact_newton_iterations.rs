@@ -290,6 +290,32 @@ fn a_link_come_down_beside_a_joint_stuck_on_a_crest_takes_its_force() {
     assert!(total <= 450, "{total} Newton iterations");
 }
 
+/// The same sinusoid under 4 links of 90 mm, its first 10.3 s: at step 1019 (t = 10.19 s)
+/// a joint slides on a crest whose foot on the joint's next link lies past the link's
+/// start. The crest's pair on that link stood beside the joint's own, both for one
+/// contact; the step's solve failed, and the step was halved and ended in a snap (1,118
+/// Newton iterations). Where the last step's change, carried on to this step, puts that
+/// foot on the link, the link's pair now takes the joint's force as the step starts: the
+/// step takes 6, and 7 -> 6 of the 1,030 steps take more than 40.
+#[test]
+fn a_crest_sliding_off_a_joint_onto_the_next_link_takes_its_force_with_it() {
+    let reports = reports_of(sweep_along(4, seed_sinusoid(), 10.3));
+    assert_eq!(reports.len(), 1030);
+    let step = &reports[1019];
+    let over_40 = reports.iter().filter(|r| r.iterations > 40).count();
+    eprintln!(
+        "N = 4 along the 14.2 cycles/m sinusoid, 10.3 s: step 1019 {} Newton iterations (snapped: {}), {over_40} steps over 40",
+        step.iterations, step.snapped
+    );
+    assert!(
+        step.iterations <= 40,
+        "step 1019: {} Newton iterations",
+        step.iterations
+    );
+    assert!(!step.snapped, "step 1019 snapped");
+    assert!(over_40 <= 6, "{over_40} steps over 40 Newton iterations");
+}
+
 /// Soak case 4221:1361 (`ANTENNA_STRESS_REPLAY=soak:4221:1361`): a 150-link antenna of the
 /// fast-reciprocal profile with distal hairs along a polyline (mu = 0.6). At steps 84-88 a
 /// round's answer swings the distal links through a corner (points of links 100-102 inside

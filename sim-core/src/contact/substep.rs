@@ -71,6 +71,32 @@ fn taking_turns_with(round_keys: &mut Vec<Vec<PairKey>>, pairs: &[Pair]) -> bool
 }
 
 impl QuasiStatic {
+    /// The secant predictor of the joint angles `theta_1..theta_n` at the base position
+    /// `goal`: the last plain step's change, scaled to this step's base displacement (up to
+    /// twice the last one), within the joint limits; `None` without a last plain step or
+    /// where the displacements do not point the same way.
+    pub(super) fn secant_prediction(&self, goal: Vector2<f64>) -> Option<Vec<f64>> {
+        let (delta, dtheta) = self.secant.as_ref()?;
+        let d2 = delta.norm_squared();
+        let scale = if d2 > 0.0 {
+            (goal - self.base_m).dot(delta) / d2
+        } else {
+            0.0
+        };
+        if !(scale > 0.0 && scale <= 2.0) {
+            return None;
+        }
+        let limits = self.chain.joint_limits();
+        Some(
+            self.theta[1..]
+                .iter()
+                .zip(dtheta)
+                .zip(&limits[1..])
+                .map(|((t, d), l)| (t + scale * d).clamp(l.cw_rad, l.ccw_rad))
+                .collect(),
+        )
+    }
+
     /// Tries one (sub)step from the committed state to the base at `goal` (with a proximal
     /// term when following a snap).
     pub(super) fn attempt(
@@ -99,25 +125,12 @@ impl QuasiStatic {
             // angles.
             let warmed = warm.is_some();
             let mut x: Vec<f64> = warm.take().unwrap_or_else(|| self.theta[1..].to_vec());
-            // A secant predictor: the last plain step's change of the joint angles, scaled
-            // to this step's base displacement (for a round that starts afresh).
+            // A round that starts afresh starts from the secant predictor.
             if proximal.is_none()
                 && !warmed
-                && let Some((delta, dtheta)) = &self.secant
+                && let Some(predicted) = self.secant_prediction(goal)
             {
-                let d2 = delta.norm_squared();
-                let scale = if d2 > 0.0 {
-                    (goal - self.base_m).dot(delta) / d2
-                } else {
-                    0.0
-                };
-                if scale > 0.0 && scale <= 2.0 {
-                    let limits = self.chain.joint_limits();
-                    for j in 0..n {
-                        x[j] = (x[j] + scale * dtheta[j])
-                            .clamp(limits[j + 1].cw_rad, limits[j + 1].ccw_rad);
-                    }
-                }
+                x.copy_from_slice(&predicted);
             }
             x.extend(hair_links.iter().map(|&l| self.beta[l]));
             let prox_x: Vec<f64>;
