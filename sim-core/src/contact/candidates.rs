@@ -567,14 +567,13 @@ impl QuasiStatic {
     /// down onto the crest beside the joint's contact, and the two pairs would hold the
     /// same contact (Newton's system on both is singular). The joint's pair leaves the
     /// step, and the link's pair is recorded in `handed_over` (it does not hand back in
-    /// this (sub)step); whether any was handed.
+    /// this (sub)step).
     pub(super) fn hand_stuck_joints_to_missed_links(
         &self,
         pairs: &mut Vec<Pair>,
         missed: &mut [Pair],
         handed_over: &mut Vec<PairKey>,
-    ) -> bool {
-        let mut handed = false;
+    ) {
         for m in missed.iter_mut() {
             let PairKind::Link {
                 link,
@@ -600,10 +599,8 @@ impl QuasiStatic {
                 let joint_pair = pairs.remove(k);
                 carry(m, &joint_pair);
                 handed_over.push(m.key);
-                handed = true;
             }
         }
-        handed
     }
 
     /// Puts the probe posture at the solution `x` of a step to `goal` (hair angles are not
