@@ -512,17 +512,9 @@ impl QuasiStatic {
         ahead.update(&self.chain, goal, &theta_of(&self.theta, &predicted));
         let mut left: Vec<usize> = Vec::new();
         for (j, l) in passing {
-            let PairKind::Link {
-                link,
-                feature: feature @ ConvexFeature::Crest { .. },
-            } = pairs[l].key.kind
-            else {
-                continue;
-            };
-            let on_link = self.pieces.walls[pairs[l].key.piece]
-                .shape
-                .feature_contact(feature, &ahead.start_of(link), &ahead.end_m[link])
-                .is_some_and(|fc| (0.0..=1.0).contains(&fc.s));
+            let on_link = self
+                .crest_foot(&pairs[l], &ahead)
+                .is_some_and(|(_, s)| (0.0..=1.0).contains(&s));
             if on_link && !left.contains(&j) {
                 let joint_pair = pairs[j];
                 carry(&mut pairs[l], &joint_pair);
@@ -539,26 +531,28 @@ impl QuasiStatic {
     /// foot, where the last step left the chain, lies past that link's end at joint
     /// `joint` (the distal end of link `joint`).
     fn crest_past_joint(&self, pair: &Pair, joint: usize, piece: usize) -> bool {
+        if pair.key.piece != piece || (pair.key.link != joint && pair.key.link != joint + 1) {
+            return false;
+        }
+        self.crest_foot(pair, &self.start)
+            .is_some_and(|(link, s)| if link == joint { s > 1.0 } else { s < 0.0 })
+    }
+
+    /// The link of `pair` and its crest's foot along it (`0` proximal, `1` distal; beyond
+    /// them off the link) in `posture`; `None` for a pair that is not a crest against a
+    /// link, or whose foot cannot be measured.
+    fn crest_foot(&self, pair: &Pair, posture: &Posture) -> Option<(usize, f64)> {
         let PairKind::Link {
             link,
             feature: feature @ ConvexFeature::Crest { .. },
         } = pair.key.kind
         else {
-            return false;
+            return None;
         };
-        if pair.key.piece != piece || (link != joint && link != joint + 1) {
-            return false;
-        }
-        let shape = &self.pieces.walls[piece].shape;
-        shape
-            .feature_contact(feature, &self.start.start_of(link), &self.start.end_m[link])
-            .is_some_and(|fc| {
-                if link == joint {
-                    fc.s > 1.0
-                } else {
-                    fc.s < 0.0
-                }
-            })
+        self.pieces.walls[pair.key.piece]
+            .shape
+            .feature_contact(feature, &posture.start_of(link), &posture.end_m[link])
+            .map(|fc| (link, fc.s))
     }
 
     /// Hands the force of a joint stuck on a crest to a `missed` crest pair of one of the
