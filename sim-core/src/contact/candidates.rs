@@ -513,7 +513,7 @@ impl QuasiStatic {
         let mut left: Vec<usize> = Vec::new();
         for (j, l) in passing {
             let on_link = self
-                .crest_foot(&pairs[l], &ahead)
+                .crest_foot(&pairs[l].key, &ahead)
                 .is_some_and(|(_, s)| (0.0..=1.0).contains(&s));
             if on_link && !left.contains(&j) {
                 let joint_pair = pairs[j];
@@ -534,25 +534,42 @@ impl QuasiStatic {
         if pair.key.piece != piece || (pair.key.link != joint && pair.key.link != joint + 1) {
             return false;
         }
-        self.crest_foot(pair, &self.start)
+        self.crest_foot(&pair.key, &self.start)
             .is_some_and(|(link, s)| if link == joint { s > 1.0 } else { s < 0.0 })
     }
 
     /// The link of `pair` and its crest's foot along it (`0` proximal, `1` distal; beyond
     /// them off the link) in `posture`; `None` for a pair that is not a crest against a
     /// link, or whose foot cannot be measured.
-    fn crest_foot(&self, pair: &Pair, posture: &Posture) -> Option<(usize, f64)> {
+    fn crest_foot(&self, key: &PairKey, posture: &Posture) -> Option<(usize, f64)> {
         let PairKind::Link {
             link,
             feature: feature @ ConvexFeature::Crest { .. },
-        } = pair.key.kind
+        } = key.kind
         else {
             return None;
         };
-        self.pieces.walls[pair.key.piece]
+        self.pieces.walls[key.piece]
             .shape
             .feature_contact(feature, &posture.start_of(link), &posture.end_m[link])
             .map(|fc| (link, fc.s))
+    }
+
+    /// Whether the crest of the link pair `other` (the other link at a joint whose crest
+    /// pair's foot slid past its link's end there) can take that crest on: `other` is a
+    /// flexible link's pair with a crest, and at the solution (the probe posture,
+    /// [`Self::probe_at`]) the link is no steeper than the crest's flanks, so that the crest
+    /// has a foot on the link's line ([`Self::crest_foot`]). See
+    /// [`Self::drop_stale_pairs`].
+    fn crest_passes_on(&self, other: &PairKey) -> bool {
+        let PairKind::Link {
+            link,
+            feature: ConvexFeature::Crest { .. },
+        } = other.kind
+        else {
+            return false;
+        };
+        (1..=self.chain.n()).contains(&link) && self.crest_foot(other, &self.probe).is_some()
     }
 
     /// Hands the force of a joint stuck on a crest to a `missed` crest pair of one of the
@@ -704,6 +721,25 @@ impl QuasiStatic {
     /// hand-over the joint would lose its contact for the next solve (and swing into the
     /// wall).
     ///
+    /// A loaded crest pair whose foot the solution puts past its link's end at a joint
+    /// hands its force on to the crest's pair of the joint's other link, however far past,
+    /// wherever that link can rest on the crest ([`Self::crest_passes_on`]): a crest is
+    /// smooth, and a chain bent around it passes its contact from link to link, the joint
+    /// between them clear of the crest. Only where the other link is steeper than the
+    /// crest's flanks (it cannot be tangent to the crest) does the joint ride over it: the
+    /// joint's point pair takes the force back as from a corner. On the seed's 14.2
+    /// cycles/m sinusoid under 110 links, step 1014: the crest's foot on link 73 slid to
+    /// 2.6% past the link's end, and the pair was dropped with no hand-over (past the 1% a
+    /// joint takes a corner back from); the solve without it failed, the halved steps
+    /// handed the crest to joint 73, whose solves stalled at a residual of 1e-9 m, and
+    /// after twelve halvings a snap's flow put the crest 1.2% into link 74 (1,229 Newton
+    /// iterations; the joints moved 1.3e-4 rad). Handed to link 74's pair, the step takes
+    /// 5. Over 20 s of that sinusoid, no step snaps under any N from 60 to 150 (14 to 24
+    /// did), and under every N from 30 to 150 at most 7 steps of 2,000 take more than 40
+    /// Newton iterations (the p99 77 -> 7 under 110 links, 147 -> 8 under 150). Handed on where the other
+    /// link cannot rest on the crest, 16 soak sweeps failed (13 of them placements on
+    /// sinusoids of 20-30 mm crest radius under 40 mm links; soak 603, 1125).
+    ///
     /// Each pair hands over at most once in a (sub)step: `handed_over` records them, and a
     /// point pair is not handed to a stand-in recorded there
     /// ([`Self::hand_point_pairs_to_stand_ins`]).
@@ -755,10 +791,11 @@ impl QuasiStatic {
                         }
                     }
                     (_, PairKind::Link { link, feature }) => {
-                        // A corner that stood for a joint and slid past the link's end at
-                        // it, where the joint's other link does not rest on it: the joint's
-                        // own pair takes the force back, and does not hand it to the corner
-                        // again in this (sub)step.
+                        // A corner or crest slid past the link's end at a joint: the
+                        // joint's other link takes the force over where it rests on the
+                        // feature, or where a crest passes on to it; else the joint's own
+                        // pair takes the force back (a corner that stood for the joint),
+                        // and does not hand it to the feature again in this (sub)step.
                         // The joint at the end the foot is nearer, its other link, and
                         // that end's fraction along this link.
                         let (end, other, end_s) = if c.geo.s < 0.5 {
@@ -767,13 +804,18 @@ impl QuasiStatic {
                             (link, link + 1, 1.0)
                         };
                         let at_end = (c.geo.s - end_s).abs() <= HAND_BACK_FRACTION;
-                        let other_rests =
-                            resting.contains(&PairKey::link(other, feature, c.key.piece));
-                        if other_rests {
+                        let other_key = PairKey::link(other, feature, c.key.piece);
+                        if resting.contains(&other_key) {
                             // The joint's other link rests on the corner: its pair takes
                             // the force over (started unloaded, the solve found no way
                             // from one link to the other, soak 1590).
-                            taken_over.push((PairKey::link(other, feature, c.key.piece), *c));
+                            taken_over.push((other_key, *c));
+                        } else if self.crest_passes_on(&other_key) && !handed_over.contains(&c.key)
+                        {
+                            handed_over.push(c.key);
+                            let mut h = self.fresh_pair(other_key);
+                            carry(&mut h, c);
+                            handed.push(h);
                         } else if at_end && end >= 1 && !handed_over.contains(&c.key) {
                             handed_over.push(c.key);
                             let point = PairKey::point(ChainPoint::Vertex(end), c.key.piece);

@@ -232,8 +232,8 @@ impl QuasiStatic {
             }
             // Pairs that are no longer what touches (a feature's foot past its link's end)
             // let go, and any point now inside a wall joins: the step is solved again.
-            let mut changed = self.drop_stale_pairs(&mut pairs, &mut handed_over);
             self.probe_at(&x, goal);
+            let mut changed = self.drop_stale_pairs(&mut pairs, &mut handed_over);
             changed |= self.hand_point_pairs_to_stand_ins_at_probe(
                 &x,
                 &hair_links,
