@@ -734,11 +734,17 @@ impl QuasiStatic {
     /// handed the crest to joint 73, whose solves stalled at a residual of 1e-9 m, and
     /// after twelve halvings a snap's flow put the crest 1.2% into link 74 (1,229 Newton
     /// iterations; the joints moved 1.3e-4 rad). Handed to link 74's pair, the step takes
-    /// 5. Over 20 s of that sinusoid, no step snaps under any N from 60 to 150 (14 to 24
-    /// did), and under every N from 30 to 150 at most 7 steps of 2,000 take more than 40
-    /// Newton iterations (the p99 77 -> 7 under 110 links, 147 -> 8 under 150). Handed on where the other
-    /// link cannot rest on the crest, 16 soak sweeps failed (13 of them placements on
-    /// sinusoids of 20-30 mm crest radius under 40 mm links; soak 603, 1125).
+    /// 5. Over 20 s of that sinusoid, under every N from 60 to 150 at most 2 steps of 2,000
+    /// snap (14 to 24 did), and under every N from 30 to 150 at most 8 take more than 40
+    /// Newton iterations (the p99 77 -> 7 under 110 links, 147 -> 8 under 150). Handed on
+    /// where the other link cannot rest on the crest, 16 soak sweeps failed (13 of them placements on
+    /// sinusoids of 20-30 mm crest radius under 40 mm links; soak 603, 1125). Nor does a
+    /// crest pass back to the link that passed it on in this (sub)step: with the crest
+    /// between the two links' lines, each foot past the joint, the joint rides over it, and
+    /// its pair takes the force back even where it is already in the step unloaded (where
+    /// it kept no force, the crest's was lost). Without friction, 150 links along the same
+    /// sinusoid handed a crest between links 124 and 125 in every round of a snap's flow,
+    /// which failed at t = 2.74 s; it now finishes.
     ///
     /// Each pair hands over at most once in a (sub)step: `handed_over` records them, and a
     /// point pair is not handed to a stand-in recorded there
@@ -753,6 +759,8 @@ impl QuasiStatic {
         let mut handed: Vec<Pair> = Vec::new();
         // Unloaded pairs of the other link at a joint that take over a corner's force.
         let mut taken_over: Vec<(PairKey, Pair)> = Vec::new();
+        // The joints' pairs that take a crest's force back.
+        let mut from_crest: Vec<PairKey> = Vec::new();
         // The corners that links rest on at the solution.
         let resting: Vec<PairKey> = pairs
             .iter()
@@ -810,7 +818,9 @@ impl QuasiStatic {
                             // the force over (started unloaded, the solve found no way
                             // from one link to the other, soak 1590).
                             taken_over.push((other_key, *c));
-                        } else if self.crest_passes_on(&other_key) && !handed_over.contains(&c.key)
+                        } else if self.crest_passes_on(&other_key)
+                            && !handed_over.contains(&c.key)
+                            && !handed_over.contains(&other_key)
                         {
                             handed_over.push(c.key);
                             let mut h = self.fresh_pair(other_key);
@@ -819,6 +829,9 @@ impl QuasiStatic {
                         } else if at_end && end >= 1 && !handed_over.contains(&c.key) {
                             handed_over.push(c.key);
                             let point = PairKey::point(ChainPoint::Vertex(end), c.key.piece);
+                            if matches!(feature, ConvexFeature::Crest { .. }) {
+                                from_crest.push(point);
+                            }
                             let mut h = self.fresh_pair(point);
                             carry(&mut h, c);
                             handed.push(h);
@@ -835,6 +848,13 @@ impl QuasiStatic {
             }
         }
         let changed = active && pairs.len() < before;
+        // A joint's pair already in the step takes a crest's force (unloaded, it would
+        // otherwise stay so and the crest's force be lost for the next round).
+        for h in handed.iter().filter(|h| from_crest.contains(&h.key)) {
+            if let Some(p) = pairs.iter_mut().find(|p| p.key == h.key && !p.is_loaded()) {
+                carry(p, h);
+            }
+        }
         handed.retain(|h| !pairs.iter().any(|c| c.key == h.key));
         pairs.extend(handed);
         changed
