@@ -8,7 +8,8 @@
 //! singular (a joint on a corner a link rests on, a point on a convex corner), stand-ins
 //! take its place, decided where the last step left the chain. After a solve, a point or
 //! feature inside a wall that was not a pair joins, and a feature pair whose foot has left
-//! its link (a corner crossing a joint) lets go; the step is then solved again.
+//! its link (a corner crossing a joint) lets go, or passes on (a crest to the next link);
+//! the step is then solved again.
 
 use nalgebra::Vector2;
 
@@ -737,14 +738,15 @@ impl QuasiStatic {
     /// 5. Over 20 s of that sinusoid, under every N from 60 to 150 at most 2 steps of 2,000
     /// snap (14 to 24 did), and under every N from 30 to 150 at most 8 take more than 40
     /// Newton iterations (the p99 77 -> 7 under 110 links, 147 -> 8 under 150). Handed on
-    /// where the other link cannot rest on the crest, 16 soak sweeps failed (13 of them placements on
-    /// sinusoids of 20-30 mm crest radius under 40 mm links; soak 603, 1125). Nor does a
-    /// crest pass back to the link that passed it on in this (sub)step: with the crest
-    /// between the two links' lines, each foot past the joint, the joint rides over it, and
-    /// its pair takes the force back even where it is already in the step unloaded (where
-    /// it kept no force, the crest's was lost). Without friction, 150 links along the same
-    /// sinusoid handed a crest between links 124 and 125 in every round of a snap's flow,
-    /// which failed at t = 2.74 s; it now finishes.
+    /// where the other link cannot rest on the crest, 16 soak sweeps failed (13 of them
+    /// placements on sinusoids of 20-30 mm crest radius under 40 mm links; soak 603,
+    /// 1125). Nor does a crest pass back to the link that passed it on in this (sub)step:
+    /// with the crest between the two links' lines, each foot past the joint, the joint
+    /// rides over it, and its pair takes the force back even where it is already in the
+    /// step unloaded (where it kept no force, the crest's was lost). Without friction, 150
+    /// links along the same sinusoid handed a crest between links 124 and 125 in every
+    /// round of a snap's flow, which failed at t = 2.74 s; it now finishes (at a cost under
+    /// 72 links: p99 over 20 s 24 -> 206).
     ///
     /// Each pair hands over at most once in a (sub)step: `handed_over` records them, and a
     /// point pair is not handed to a stand-in recorded there
