@@ -735,18 +735,20 @@ impl QuasiStatic {
     /// handed the crest to joint 73, whose solves stalled at a residual of 1e-9 m, and
     /// after twelve halvings a snap's flow put the crest 1.2% into link 74 (1,229 Newton
     /// iterations; the joints moved 1.3e-4 rad). Handed to link 74's pair, the step takes
-    /// 5. Over 20 s of that sinusoid, under every N from 60 to 150 at most 2 steps of 2,000
-    /// snap (14 to 24 did), and under every N from 30 to 150 at most 8 take more than 40
-    /// Newton iterations (the p99 77 -> 7 under 110 links, 147 -> 8 under 150). Handed on
+    /// 5. Over 20 s of that sinusoid, under every N from 30 to 150 no step snaps (14 to 24
+    /// did from 60 links on) and at most 6 of 2,000 take more than 40 Newton iterations
+    /// (the p99 77 -> 7 under 110 links, 147 -> 7 under 150). Handed on
     /// where the other link cannot rest on the crest, 16 soak sweeps failed (13 of them
     /// placements on sinusoids of 20-30 mm crest radius under 40 mm links; soak 603,
-    /// 1125). Nor does a crest pass back to the link that passed it on in this (sub)step:
-    /// with the crest between the two links' lines, each foot past the joint, the joint
-    /// rides over it, and its pair takes the force back even where it is already in the
-    /// step unloaded (where it kept no force, the crest's was lost). Without friction, 150
-    /// links along the same sinusoid handed a crest between links 124 and 125 in every
-    /// round of a snap's flow, which failed at t = 2.74 s; it now finishes (at a cost under
-    /// 72 links: p99 over 20 s 24 -> 206).
+    /// 1125). A crest pair handed on once in a (sub)step hands on no more: past its link's
+    /// end again (within [`HAND_BACK_FRACTION`]), the crest lies between the two links'
+    /// lines, each foot past the joint, and the joint rides over it; its pair takes the
+    /// force back, even where it is already in the step unloaded (where it kept no force,
+    /// the crest's was lost). Without friction, 150 links along the same sinusoid handed a
+    /// crest between links 124 and 125 in every round of a snap's flow and failed at t =
+    /// 2.74 s; the sweep now finishes (p99 31 over 20 s). Barring the crest's way back to
+    /// the link that handed it on instead cost the frictionless sweep under 72 links a p99
+    /// of 206 (28 this way) and did not help with friction.
     ///
     /// Each pair hands over at most once in a (sub)step: `handed_over` records them, and a
     /// point pair is not handed to a stand-in recorded there
@@ -815,23 +817,26 @@ impl QuasiStatic {
                         };
                         let at_end = (c.geo.s - end_s).abs() <= HAND_BACK_FRACTION;
                         let other_key = PairKey::link(other, feature, c.key.piece);
+                        let is_crest = matches!(feature, ConvexFeature::Crest { .. });
                         if resting.contains(&other_key) {
                             // The joint's other link rests on the corner: its pair takes
                             // the force over (started unloaded, the solve found no way
                             // from one link to the other, soak 1590).
                             taken_over.push((other_key, *c));
-                        } else if self.crest_passes_on(&other_key)
-                            && !handed_over.contains(&c.key)
-                            && !handed_over.contains(&other_key)
+                        } else if self.crest_passes_on(&other_key) && !handed_over.contains(&c.key)
                         {
                             handed_over.push(c.key);
                             let mut h = self.fresh_pair(other_key);
                             carry(&mut h, c);
                             handed.push(h);
-                        } else if at_end && end >= 1 && !handed_over.contains(&c.key) {
+                        } else if at_end && end >= 1 && (!handed_over.contains(&c.key) || is_crest)
+                        {
+                            // (A crest handed on once in this (sub)step and past its link's
+                            // end again goes to the joint: it lies between the two links'
+                            // lines.)
                             handed_over.push(c.key);
                             let point = PairKey::point(ChainPoint::Vertex(end), c.key.piece);
-                            if matches!(feature, ConvexFeature::Crest { .. }) {
+                            if is_crest {
                                 from_crest.push(point);
                             }
                             let mut h = self.fresh_pair(point);
