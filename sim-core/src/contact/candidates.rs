@@ -737,10 +737,10 @@ impl QuasiStatic {
     /// iterations; the joints moved 1.3e-4 rad). Handed to link 74's pair, the step takes
     /// 5. Over 20 s of that sinusoid, under every N from 30 to 150 no step snaps (14 to 24
     /// did from 60 links on) and at most 6 of 2,000 take more than 40 Newton iterations
-    /// (the p99 77 -> 7 under 110 links, 147 -> 7 under 150). Handed on
-    /// where the other link cannot rest on the crest, 16 soak sweeps failed (13 of them
-    /// placements on sinusoids of 20-30 mm crest radius under 40 mm links; soak 603,
-    /// 1125). A crest pair handed on once in a (sub)step hands on no more: past its link's
+    /// (the p99 77 -> 7 under 110 links, 147 -> 7 under 150). Handed on where the other
+    /// link cannot rest on the crest, 16 soak sweeps failed (13 of them placements on
+    /// sinusoids of 20-30 mm crest radius under 40 mm links; soak 603, 1125). A crest
+    /// pair that handed its crest on once in a (sub)step hands it on no more: past its link's
     /// end again (within [`HAND_BACK_FRACTION`]), the crest lies between the two links'
     /// lines, each foot past the joint, and the joint rides over it; its pair takes the
     /// force back, even where it is already in the step unloaded (where it kept no force,
@@ -750,9 +750,9 @@ impl QuasiStatic {
     /// the link that handed it on instead cost the frictionless sweep under 72 links a p99
     /// of 206 (28 this way) and did not help with friction.
     ///
-    /// Each pair hands over at most once in a (sub)step: `handed_over` records them, and a
-    /// point pair is not handed to a stand-in recorded there
-    /// ([`Self::hand_point_pairs_to_stand_ins`]).
+    /// Each pair hands over at most once in a (sub)step (a crest's pair twice: on to the
+    /// other link, and then to its joint): `handed_over` records them, and a point pair is
+    /// not handed to a stand-in recorded there ([`Self::hand_point_pairs_to_stand_ins`]).
     pub(super) fn drop_stale_pairs(
         &self,
         pairs: &mut Vec<Pair>,
