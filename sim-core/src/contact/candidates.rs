@@ -761,10 +761,9 @@ impl QuasiStatic {
         let before = pairs.len();
         let mut active = false;
         let mut handed: Vec<Pair> = Vec::new();
-        // Unloaded pairs of the other link at a joint that take over a corner's force.
+        // Unloaded pairs already in the step that take over a force: the other link's at a
+        // joint (a corner's), or the joint's own (a crest's handed back).
         let mut taken_over: Vec<(PairKey, Pair)> = Vec::new();
-        // The joints' pairs that take a crest's force back.
-        let mut from_crest: Vec<PairKey> = Vec::new();
         // The corners that links rest on at the solution.
         let resting: Vec<PairKey> = pairs
             .iter()
@@ -837,7 +836,9 @@ impl QuasiStatic {
                             handed_over.push(c.key);
                             let point = PairKey::point(ChainPoint::Vertex(end), c.key.piece);
                             if is_crest {
-                                from_crest.push(point);
+                                // Unloaded, the joint's pair would keep no force, and the
+                                // crest's would be lost for the next round.
+                                taken_over.push((point, *c));
                             }
                             let mut h = self.fresh_pair(point);
                             carry(&mut h, c);
@@ -855,13 +856,6 @@ impl QuasiStatic {
             }
         }
         let changed = active && pairs.len() < before;
-        // A joint's pair already in the step takes a crest's force (unloaded, it would
-        // otherwise stay so and the crest's force be lost for the next round).
-        for h in handed.iter().filter(|h| from_crest.contains(&h.key)) {
-            if let Some(p) = pairs.iter_mut().find(|p| p.key == h.key && !p.is_loaded()) {
-                carry(p, h);
-            }
-        }
         handed.retain(|h| !pairs.iter().any(|c| c.key == h.key));
         pairs.extend(handed);
         changed
