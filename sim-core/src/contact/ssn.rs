@@ -55,6 +55,12 @@ pub(crate) struct Ssn {
     /// The part whose other mode settled the last repaired solve, tried first by the next
     /// repair ([`Ssn::repair`]).
     last_repair: Option<RepairedPart>,
+    /// Parts of repairs, counted over the solver's life, whose other mode converged to an
+    /// answer that mode does not keep (a contact stuck beyond its friction cone, or one
+    /// whose plain modes, from where it was let go or stuck, do not converge): a substep
+    /// whose solves add to it has no equilibrium in reach of its start in any mode set the
+    /// repair tried ([`Ssn::refused_repairs`]).
+    refused_repairs: usize,
 }
 
 /// A part of the equations a repair gave its other mode, named so that the next solve (with
@@ -124,11 +130,16 @@ const REPAIR_BELOW_M: f64 = 1e-6;
 /// Newton iterations of each repair.
 const REPAIR_ITERATIONS: usize = 20;
 
-/// Newton iterations a plain solve's repair spends in all before it gives up (the caller
-/// then falls back to the fixed point or refines the step): a chain lying along a wall has
-/// a part to try for each of its contacts, some 14 iterations each (soak 988, 150 links:
-/// 172 parts, 2,463 iterations, none settling it; the fixed point then took 20). A snap's
-/// step keeps trying every part.
+/// Newton iterations a repair spends in all before it gives up (the caller then falls back
+/// to the fixed point or refines the step): a chain lying along a wall has a part to try
+/// for each of its contacts, some 14 iterations each (soak 988, 150 links: 172 parts, 2,463
+/// iterations, none settling it; the fixed point then took 20). A snap's proximal step is
+/// held to it too: one that fails had tried every part, up to some 600 Newton iterations
+/// a failure (soak 375, 150 links with hairs along a line wall with mu = 1: its flows
+/// 21,790 -> 20,668 Newton iterations for the sweep, 7.4 s -> 6.2 s alone; the CI sample
+/// 37,034 -> 36,946). Tried at 40d476c, the same budget failed soak 138's snap ("did not
+/// come to rest"); since a substep at a fold snaps without halving to the end
+/// (`QuasiStatic::advance`), the soak finishes every sweep with it.
 const REPAIR_BUDGET: usize = 100;
 
 /// A repair tries the sliding contacts stuck before letting any go where at most this many
@@ -316,7 +327,7 @@ impl Ssn {
         let residual_stalled = outcome.residual_m;
         let spent_before = outcome.iterations;
         for part in parts {
-            if p.stall_after.is_some() && outcome.iterations - spent_before >= REPAIR_BUDGET {
+            if outcome.iterations - spent_before >= REPAIR_BUDGET {
                 break;
             }
             self.eq.z.clone_from(&z_stalled);
@@ -340,6 +351,7 @@ impl Ssn {
             if let Forced::Stuck(k) = part
                 && self.eq.z[m + c + k].abs() > bound_of(&pairs[k]).0 * (1.0 + CONE_SLACK)
             {
+                self.refused_repairs += 1;
                 continue;
             }
             // The plain modes at the repaired answer: converged there, or a few more
@@ -350,11 +362,20 @@ impl Ssn {
                 self.last_repair = Some(RepairedPart::of(part, &pairs_stalled));
                 return;
             }
+            self.refused_repairs += 1;
         }
         self.eq.z.clone_from(&z_stalled);
         pairs.copy_from_slice(&pairs_stalled);
         self.eq.evaluate(p, pairs);
         outcome.residual_m = residual_stalled;
+    }
+
+    /// How many parts of repairs so far converged in their other mode to an answer that
+    /// mode does not keep (see the field): compared before and after a substep's attempt,
+    /// it tells a step that ends at a fold of its branch of equilibria from one that only
+    /// went too far.
+    pub fn refused_repairs(&self) -> usize {
+        self.refused_repairs
     }
 
     /// The part a repair can force on the row of `Phi` with the largest magnitude: its
