@@ -477,19 +477,20 @@ impl QuasiStatic {
                 }
                 Err(_) => {
                     let d = goal - self.base_m;
-                    // A substep that fails at a fold of its branch (a stalled solve whose
-                    // repair finds each mode set it tries converging to an answer that mode
-                    // refuses: a tip stuck beyond its friction cone, or let go inside its
-                    // wall) fails again however short: the halvings creep towards the fold,
-                    // each failing the same way, and the snap comes at the end all the
-                    // same (soak 375, 150 links with distal hairs on a line wall with
-                    // mu = 1: 14 halvings of some 235 Newton iterations each before each
-                    // of six snaps). After two such failures in a row the snap is followed
-                    // from where the posture stands: soak 375 38,050 -> 21,790 Newton
-                    // iterations, the CI sample 40,577 -> 37,034. At the first such
-                    // failure it was 19,957 and 39,663, but a 4-link sweep along a
-                    // digitized wall with mu = 0.6 (CI sample 38) took 13,440 -> 18,554:
-                    // a stall one halving clears as often as not.
+                    // A substep that fails at a fold of its branch (its stalled solves'
+                    // repairs find other modes that converge, but only to answers those
+                    // modes refuse: a tip stuck beyond its friction cone, or let go where
+                    // its plain modes press it again) fails again however short: the
+                    // halvings creep towards the fold, each failing the same way, and the
+                    // snap comes at the end all the same (soak 375, 150 links with distal
+                    // hairs on a line wall with mu = 1: 14 halvings of some 235 Newton
+                    // iterations each before each of six snaps). After two such failures
+                    // in a row the snap is followed from where the posture stands: soak
+                    // 375 38,050 -> 21,790 Newton iterations, the CI sample 40,577 ->
+                    // 37,034 (before the snap's repair budget, `ssn::REPAIR_BUDGET`). At
+                    // the first such failure it was 19,957 and 39,663, but a 4-link sweep
+                    // along a digitized wall with mu = 0.6 (CI sample 38) took 13,440 ->
+                    // 18,554: a stall one halving clears as often as not.
                     let at_fold = refused_in_a_row >= FOLD_FAILURES;
                     if d.norm() > min_m && d.norm() > 0.0 && !at_fold {
                         goals.push(self.base_m + d * 0.5);

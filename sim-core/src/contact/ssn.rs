@@ -58,8 +58,8 @@ pub(crate) struct Ssn {
     /// Parts of repairs, counted over the solver's life, whose other mode converged to an
     /// answer that mode does not keep (a contact stuck beyond its friction cone, or one
     /// whose plain modes, from where it was let go or stuck, do not converge): a substep
-    /// whose solves add to it has no equilibrium in reach of its start in any mode set the
-    /// repair tried ([`Ssn::refused_repairs`]).
+    /// that fails while adding to it found no equilibrium in reach of its start in any mode
+    /// set its repairs tried ([`Ssn::refused_repairs`]).
     refused_repairs: usize,
 }
 
