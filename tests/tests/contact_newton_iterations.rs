@@ -382,7 +382,7 @@ fn a_crest_sliding_off_a_joint_onto_the_next_link_takes_its_force_with_it() {
 fn a_round_whose_answer_is_inside_a_wall_is_no_start_for_the_next() {
     soak_case_finishes_within(
         1_361,
-        SoakBudget {
+        StressBudget {
             links: 150,
             steps: 127,
             worst: 500,
@@ -406,7 +406,7 @@ fn a_round_whose_answer_is_inside_a_wall_is_no_start_for_the_next() {
 fn a_tip_hooked_on_a_convex_corner_keeps_its_corner_at_full_steps() {
     soak_case_finishes_within(
         628,
-        SoakBudget {
+        StressBudget {
             links: 72,
             steps: 195,
             worst: 40,
@@ -429,7 +429,7 @@ fn a_tip_hooked_on_a_convex_corner_keeps_its_corner_at_full_steps() {
 fn a_tip_wedged_in_a_concave_corner_keeps_both_pieces_at_full_steps() {
     soak_case_finishes_within(
         1_903,
-        SoakBudget {
+        StressBudget {
             links: 72,
             steps: 172,
             worst: 10,
@@ -452,7 +452,7 @@ fn a_tip_wedged_in_a_concave_corner_keeps_both_pieces_at_full_steps() {
 fn a_stuck_tip_on_a_150_link_antenna_neither_creeps_nor_jams() {
     soak_case_finishes_within(
         1_102,
-        SoakBudget {
+        StressBudget {
             links: 150,
             steps: 146,
             worst: 250,
@@ -472,7 +472,7 @@ fn a_stuck_tip_on_a_150_link_antenna_neither_creeps_nor_jams() {
 fn a_corner_crossing_a_joint_hands_its_force_to_the_other_link() {
     soak_case_finishes_within(
         1_590,
-        SoakBudget {
+        StressBudget {
             links: 72,
             steps: 188,
             worst: 250,
@@ -493,7 +493,7 @@ fn a_corner_crossing_a_joint_hands_its_force_to_the_other_link() {
 fn a_slip_that_reverses_passes_through_sticking() {
     soak_case_finishes_within(
         426,
-        SoakBudget {
+        StressBudget {
             links: 150,
             steps: 144,
             worst: 130,
@@ -512,7 +512,7 @@ fn a_slip_that_reverses_passes_through_sticking() {
 fn a_repair_of_a_chain_lying_along_a_wall_stops_within_its_budget() {
     soak_case_finishes_within(
         988,
-        SoakBudget {
+        StressBudget {
             links: 150,
             steps: 149,
             worst: 250,
@@ -529,7 +529,7 @@ fn a_repair_of_a_chain_lying_along_a_wall_stops_within_its_budget() {
 fn a_chain_lying_along_a_wall_lets_go_at_the_ends_of_its_run_first() {
     soak_case_finishes_within(
         1_371,
-        SoakBudget {
+        StressBudget {
             links: 72,
             steps: 125,
             worst: 300,
@@ -549,7 +549,7 @@ fn a_chain_lying_along_a_wall_lets_go_at_the_ends_of_its_run_first() {
 fn a_tip_on_a_convex_corner_pressed_on_the_edge_past_it_settles_and_sweeps() {
     soak_case_finishes_within(
         1_261,
-        SoakBudget {
+        StressBudget {
             links: 4,
             steps: 586,
             worst: 6_000,
@@ -585,10 +585,10 @@ fn a_snap_whose_every_step_is_hard_still_lengthens_its_steps() {
 }
 
 /// CI sample 12 (18 links along a sinusoid of 30 mm amplitude with mu = 1, placed by an
-/// approach): steps whose solves stall where the repair finds no mode set that keeps its
-/// answer (each other mode it tries converges to an answer that mode refuses: a contact
-/// stuck beyond its friction cone, one let go whose plain modes press it again). Such a
-/// step, at a fold of its branch of equilibria, fails however short it is cut: it used to
+/// approach): steps whose stalled solves' repairs find other modes that converge, but only
+/// to answers those modes refuse (a contact stuck beyond its friction cone, one let go
+/// whose plain modes press it again), and none that keeps its answer. Such a step, at a
+/// fold of its branch of equilibria, fails however short it is cut: it used to
 /// be halved down to its smallest substep, each half failing the same way, before the snap
 /// that comes at the end all the same (2,172 Newton iterations for the sweep, the worst
 /// step 2,001). After two such failures in a row the snap is followed from where the
@@ -599,7 +599,7 @@ fn a_step_that_fails_at_a_fold_snaps_without_halving_to_the_end() {
         20_261_122,
         12,
         Sample::Ci,
-        SoakBudget {
+        StressBudget {
             links: 18,
             steps: 87,
             worst: 1_300,
@@ -610,7 +610,7 @@ fn a_step_that_fails_at_a_fold_snaps_without_halving_to_the_end() {
 
 /// What a stress case must stay within: its link count (the generator's), its steps, the
 /// Newton iterations of its worst step and of all its steps.
-struct SoakBudget {
+struct StressBudget {
     links: usize,
     steps: usize,
     worst: u32,
@@ -618,13 +618,13 @@ struct SoakBudget {
 }
 
 /// Runs soak case `index` and asserts that it finishes within `budget`.
-fn soak_case_finishes_within(index: u64, budget: SoakBudget) {
+fn soak_case_finishes_within(index: u64, budget: StressBudget) {
     stress_case_finishes_within(4_221, index, Sample::Soak, budget);
 }
 
 /// Runs case `index` of the stress generator's `sample` drawn with `seed` and asserts that
 /// it finishes within `budget`.
-fn stress_case_finishes_within(seed: u64, index: u64, sample: Sample, budget: SoakBudget) {
+fn stress_case_finishes_within(seed: u64, index: u64, sample: Sample, budget: StressBudget) {
     use antenna_tests::stress::{Case, Outcome, run_case};
     let case = Case::generate(seed, index, sample).unwrap();
     assert_eq!(

@@ -57,9 +57,9 @@ pub struct QuasiStatic {
 /// How many times a step that fails its check is halved before it is refused.
 const CERTIFY_SPLITS: usize = 3;
 
-/// Failed substeps in a row, each of whose repairs found only answers their modes refuse,
-/// after which a substep is not halved again but followed downhill as a snap (see
-/// [`QuasiStatic::advance`]).
+/// Failed substeps in a row whose repairs found other modes converging only to answers
+/// those modes refuse ([`super::ssn::Ssn::refused_repairs`]), after which a substep is not
+/// halved again but followed downhill as a snap (see [`QuasiStatic::advance`]).
 const FOLD_FAILURES: usize = 2;
 
 /// The state a step changes ([`QuasiStatic::step_to`] takes a refused step again from it).
@@ -444,8 +444,8 @@ impl QuasiStatic {
         let min_m = full_m / f64::powi(2.0, self.settings.max_substep_depth as i32);
         let mut goals = vec![base_m];
         let budget = report.iterations + budget_iterations;
-        // Failed substeps in a row whose repairs each found only answers their modes
-        // refuse.
+        // Failed substeps in a row whose repairs found other modes converging only to
+        // answers those modes refuse.
         let mut refused_in_a_row = 0_usize;
         while let Some(&goal) = goals.last() {
             if report.iterations > budget {
