@@ -19,6 +19,7 @@ pub mod outcome;
 pub mod parallel;
 pub mod step_cost;
 pub mod table;
+pub mod trajectory;
 pub mod walls;
 pub mod wire;
 
@@ -30,6 +31,7 @@ pub use parallel::{
 };
 pub use step_cost::{EXPENSIVE_ITERATIONS, StepCost, expensive_by_kind};
 pub use table::{summary_markdown, unfinished_report};
+pub use trajectory::{GOLDEN_FILE, STEP_TOLERANCE, Trajectory, compare, golden_file, parse_golden};
 pub use walls::{Corner, Profile, WallFrame, WallKind, WallSpec};
 
 use rand::SeedableRng;

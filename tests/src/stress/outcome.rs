@@ -15,6 +15,7 @@ use sim_core::sweep::{Sweep, SweepError};
 
 use super::case::{Case, PlacementKind, Sample};
 use super::step_cost::StepCost;
+use super::trajectory::Trajectory;
 use super::walls::WallKind;
 
 /// How a sweep ended.
@@ -216,6 +217,8 @@ pub struct SweepRecord {
     pub placement_note: String,
     /// Wall-clock time of the placement and the steps, seconds.
     pub wall_clock_s: f64,
+    /// The sampled trajectory (the placement and the solved steps).
+    pub trajectory: Trajectory,
 }
 
 impl SweepRecord {
@@ -261,6 +264,7 @@ impl SweepRecord {
             snaps: 0,
             placement_note: String::new(),
             wall_clock_s: 0.0,
+            trajectory: Trajectory::default(),
         }
     }
 
@@ -288,6 +292,7 @@ impl SweepRecord {
             snaps: 0,
             placement_note: String::new(),
             wall_clock_s: 0.0,
+            trajectory: Trajectory::default(),
         }
     }
 }
@@ -441,6 +446,9 @@ fn sweep(case: &Case, rec: &mut SweepRecord, echo: bool) -> Outcome {
         Err(payload) => return panicked(0, payload.as_ref()),
     };
     rec.placement_note = sweep.placement_note().to_owned();
+    if let Some(placed) = sweep.placed() {
+        rec.trajectory.record(&case.scene.chain, placed);
+    }
     if let Some(failures) = recheck(sweep.sim()) {
         return Outcome::Uncertified { step: 0, failures };
     }
@@ -458,6 +466,7 @@ fn sweep(case: &Case, rec: &mut SweepRecord, echo: bool) -> Outcome {
             Err(e) => return classify(&e),
         };
         rec.steps += 1;
+        rec.trajectory.record(&case.scene.chain, &step);
         rec.iterations
             .push(u32::try_from(step.report.iterations).unwrap_or(u32::MAX));
         rec.costs

@@ -8,6 +8,7 @@ use std::fmt::Write as _;
 
 use super::case::{PlacementKind, Sample};
 use super::outcome::{Outcome, SweepRecord};
+use super::trajectory::Trajectory;
 use super::walls::WallKind;
 
 /// The line before a record.
@@ -128,6 +129,8 @@ impl SweepRecord {
         line("iterations", &[iterations.join(",")]);
         line("placement_note", std::slice::from_ref(&self.placement_note));
         line("wall_clock_s", &[format!("{:?}", self.wall_clock_s)]);
+        line("trajectory", &self.trajectory.sample_fields());
+        line("final_theta", &[self.trajectory.theta_field()]);
         line(END, &[]);
         out
     }
@@ -220,6 +223,10 @@ impl SweepRecord {
             snaps: number("snaps")?,
             placement_note: one("placement_note").unwrap_or_default(),
             wall_clock_s: one("wall_clock_s")?.parse().ok()?,
+            trajectory: Trajectory::from_fields(
+                fields.get("trajectory").map_or(&[][..], Vec::as_slice),
+                &one("final_theta").unwrap_or_default(),
+            )?,
         })
     }
 }
