@@ -204,11 +204,26 @@ fn measure(s: &Scenario) -> BoxResult<Measured> {
 fn main() -> BoxResult<()> {
     let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let workspace = manifest.parent().ok_or("no workspace dir")?.to_path_buf();
+    // `SWEEP_BENCH_ONLY=<part of a scene's name>`: measure those scenes only (for a
+    // profiler), print them and leave BENCHMARKS.md alone.
+    let only = std::env::var("SWEEP_BENCH_ONLY").ok();
     let mut rows = Vec::new();
     for s in scenarios()? {
+        if only.as_deref().is_some_and(|o| !s.name.contains(o)) {
+            continue;
+        }
         let m = measure(&s)?;
-        eprintln!("{}: {} ({} steps)", m.name, human(m.sweep_s), m.steps);
+        eprintln!(
+            "{}: {} ({} steps, {} per Newton iteration)",
+            m.name,
+            human(m.sweep_s),
+            m.steps,
+            human(m.sweep_s / m.iterations.max(1) as f64)
+        );
         rows.push(m);
+    }
+    if only.is_some() {
+        return Ok(());
     }
     let mut md = String::new();
     writeln!(md, "{BEGIN}\n## Sweeps: quasi-static contact (sim-core)\n")?;

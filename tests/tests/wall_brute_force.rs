@@ -133,6 +133,18 @@ fn check_segment(wall: &WallShape, a: Vector2<f64>, b: Vector2<f64>, samples: us
     );
     let spacing = (b - a).norm() / samples as f64;
     assert!(c.wall.gap_m >= sampled - 0.5 * spacing - 1e-12);
+    // The broad phase's bound is a lower bound: of the deepest point's gap and of every
+    // sample's (the end points' own bounds too).
+    let bound = wall.segment_gap_lower_bound_m(&a, &b);
+    assert!(
+        bound <= c.wall.gap_m + 1e-15,
+        "lower bound {bound} above the gap {} for {a:?} -> {b:?}",
+        c.wall.gap_m
+    );
+    for p in [a, b] {
+        let gap = wall.signed_distance(&p).gap_m;
+        assert!(wall.gap_lower_bound_m(&p) <= gap + 1e-15);
+    }
     // The early-out agrees with the full answer on both sides of the threshold.
     for margin in [0.0, 0.002, 0.02] {
         let within = wall.segment_contact_within(&a, &b, margin);
@@ -346,4 +358,32 @@ proptest! {
         let wall = Wall::smooth(wall);
         check_segment(&wall.shape, a, b, 1000);
     }
+}
+
+/// The broad phase spares a sinusoid's search where the antenna is not near it: a link 5 mm
+/// clear of the seed's 14.2 cycles/m, 10 mm sinusoid (steepest slope 0.89) inside its band is
+/// bounded above zero, within the `1 / sqrt(1 + 0.89^2)` of its vertical gap the bound
+/// promises; a link beyond the band by its height there; a link through the wall below zero.
+#[test]
+fn the_broad_phase_bounds_links_clear_of_a_sinusoid_above_zero() {
+    let wall = WallShape::from(
+        Sinusoid::new(v(0.0, 0.17), 0.0, 0.01, 14.2, 0.0, SolidSide::Left).unwrap(),
+    );
+    // Free side is below (solid on the left of +x): the crest seen from it is where
+    // sin = -1, the curve at y = 0.16. A link across it, 5 mm below.
+    let crest = 0.75 / 14.2;
+    let (a, b) = (v(crest - 0.01, 0.155), v(crest + 0.01, 0.155));
+    let gap = wall.segment_contact(&a, &b).wall.gap_m;
+    let bound = wall.segment_gap_lower_bound_m(&a, &b);
+    let slope = 0.01 * 2.0 * std::f64::consts::PI * 14.2;
+    assert!(bound > 0.0 && bound <= gap, "bound {bound}, gap {gap}");
+    assert!(bound >= 0.005 / (1.0 + slope * slope).sqrt() - 1e-12);
+    // Beyond the band (y < 0.16) by 30 mm at its nearer end.
+    let (a, b) = (v(0.0, 0.13), v(0.04, 0.125));
+    assert!((wall.segment_gap_lower_bound_m(&a, &b) - 0.03).abs() < 1e-12);
+    // Through the crest by 5 mm: a bound below zero, below the link's gap.
+    let (a, b) = (v(crest - 0.01, 0.165), v(crest + 0.01, 0.165));
+    let bound = wall.segment_gap_lower_bound_m(&a, &b);
+    assert!(bound < 0.0 && bound <= wall.segment_contact(&a, &b).wall.gap_m);
+    assert!(wall.gap_lower_bound_m(&v(f64::NAN, 0.0)).is_nan());
 }

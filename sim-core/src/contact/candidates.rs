@@ -164,6 +164,10 @@ impl QuasiStatic {
                 real.clear();
                 real.resize(self.walls.len(), None);
                 for (w, piece) in self.pieces.walls.iter().enumerate() {
+                    // The broad phase: a piece the point cannot come within `within_m` of.
+                    if piece.gap_lower_bound_m(&x) >= within_m {
+                        continue;
+                    }
                     let real_point = if self.pieces.cut[w] {
                         let wall = self.pieces.piece_of[w];
                         let at =

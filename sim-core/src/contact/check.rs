@@ -310,12 +310,22 @@ impl QuasiStatic {
         }
         // Non-penetration of every link and hair tip.
         for wall in self.walls() {
+            // A link or hair tip whose broad-phase bound is not below zero cannot be in the
+            // wall (the penetration is at least zero below), and is not searched.
             for (link, end) in ends.iter().enumerate() {
-                let sc = wall.segment_contact(&start_of(link), end);
+                let start = start_of(link);
+                if wall.segment_gap_lower_bound_m(&start, end) >= 0.0 {
+                    continue;
+                }
+                let sc = wall.segment_contact(&start, end);
                 out.penetration_m = worst(out.penetration_m, -sc.wall.gap_m);
             }
             for h in &hairs {
-                let gap = wall.signed_distance(&(base + h.tip_m)).gap_m;
+                let tip = base + h.tip_m;
+                if wall.gap_lower_bound_m(&tip) >= 0.0 {
+                    continue;
+                }
+                let gap = wall.signed_distance(&tip).gap_m;
                 out.penetration_m = worst(out.penetration_m, -gap);
             }
         }

@@ -133,6 +133,9 @@ impl Pieces {
     /// `point_m` (zones are laid out along the whole wall).
     pub fn surface_at(&self, walls: &[Wall], piece: usize, point_m: &Vector2<f64>) -> Surface {
         let wall = &walls[self.piece_of[piece]];
+        if let Some(surface) = wall.surfaces.uniform_surface() {
+            return surface;
+        }
         wall.surface_at(&wall.signed_distance(point_m))
     }
 }

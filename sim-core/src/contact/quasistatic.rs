@@ -594,8 +594,12 @@ impl QuasiStatic {
         posture: &Posture,
         base_m: Vector2<f64>,
     ) -> Result<(), ContactError> {
+        let tol = self.settings.penetration_tolerance_m;
+        if wall.segment_gap_lower_bound_m(&posture.base_m, &posture.end_m[0]) >= -tol {
+            return Ok(());
+        }
         let sc = wall.segment_contact(&posture.base_m, &posture.end_m[0]);
-        if sc.wall.gap_m < -self.settings.penetration_tolerance_m {
+        if sc.wall.gap_m < -tol {
             return Err(ContactError::BaseInsideWall {
                 wall: w,
                 depth_m: -sc.wall.gap_m,

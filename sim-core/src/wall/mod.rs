@@ -282,18 +282,42 @@ impl WallShape {
         }
     }
 
+    /// The broad phase: a lower bound of the signed distance of every point of the segment
+    /// `a -> b` (so of [`Self::segment_contact`]'s gap) that costs no nearest-point search:
+    /// a line's smaller end gap (exact), a sinusoid's height beyond its amplitude band on the
+    /// free side, a polyline's distance to the boxes of its edges where the segment is on the
+    /// free side of its end rays' lines; `-inf` where it has none (a segment in the band or
+    /// among the edges). A NaN end gives NaN, which no bound comparison passes.
+    pub fn segment_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
+        if !(a_m.x.is_finite() && a_m.y.is_finite() && b_m.x.is_finite() && b_m.y.is_finite()) {
+            return f64::NAN;
+        }
+        match self {
+            WallShape::Line(w) => w
+                .signed_distance(a_m)
+                .gap_m
+                .min(w.signed_distance(b_m).gap_m),
+            WallShape::Polyline(w) => w.segment_gap_lower_bound_m(a_m, b_m),
+            WallShape::Sinusoid(w) => w.segment_gap_lower_bound_m(a_m, b_m),
+        }
+    }
+
+    /// [`Self::segment_gap_lower_bound_m`] of a point.
+    pub fn gap_lower_bound_m(&self, p_m: &Vector2<f64>) -> f64 {
+        self.segment_gap_lower_bound_m(p_m, p_m)
+    }
+
     /// [`Self::segment_contact`] if the segment comes within `max_gap_m` of the wall (its
-    /// smallest gap `<= max_gap_m`), else `None`; a sinusoid answers a segment beyond its
-    /// amplitude band by more than `max_gap_m` without searching.
+    /// smallest gap `<= max_gap_m`), else `None`; a segment whose
+    /// [`Self::segment_gap_lower_bound_m`] is above `max_gap_m` is answered without a
+    /// search.
     pub fn segment_contact_within(
         &self,
         a_m: &Vector2<f64>,
         b_m: &Vector2<f64>,
         max_gap_m: f64,
     ) -> Option<SegmentContact> {
-        if let WallShape::Sinusoid(w) = self
-            && w.segment_gap_lower_bound_m(a_m, b_m) > max_gap_m
-        {
+        if self.segment_gap_lower_bound_m(a_m, b_m) > max_gap_m {
             return None;
         }
         let contact = self.segment_contact(a_m, b_m);
@@ -430,6 +454,16 @@ impl Wall {
     /// sinusoid crest inside the segment is found.
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
         self.shape.segment_contact(a_m, b_m)
+    }
+
+    /// [`WallShape::segment_gap_lower_bound_m`]: the broad phase, no search.
+    pub fn segment_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
+        self.shape.segment_gap_lower_bound_m(a_m, b_m)
+    }
+
+    /// [`WallShape::gap_lower_bound_m`]: the broad phase, no search.
+    pub fn gap_lower_bound_m(&self, p_m: &Vector2<f64>) -> f64 {
+        self.shape.gap_lower_bound_m(p_m)
     }
 
     /// See [`WallShape::segment_interior_contact`]; no allocation.

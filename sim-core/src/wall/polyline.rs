@@ -411,6 +411,16 @@ impl Polyline {
         [self.normals[vertex - 1], self.normals[vertex]]
     }
 
+    /// A lower bound of the signed distance of every point of `a -> b`, without a search:
+    /// none yet (`-inf`); see [`crate::WallShape::segment_gap_lower_bound_m`].
+    pub(crate) fn segment_gap_lower_bound_m(
+        &self,
+        _a_m: &Vector2<f64>,
+        _b_m: &Vector2<f64>,
+    ) -> f64 {
+        f64::NEG_INFINITY
+    }
+
     /// The signed distance and nearest point (see [`WallPoint`]); `O(edges)`, no allocation.
     pub fn signed_distance(&self, p_m: &Vector2<f64>) -> WallPoint {
         match self.nearest(p_m) {

@@ -47,6 +47,13 @@ const MAX_SCAN_STEPS: u32 = 1 << 16;
 /// its samples ([`Sinusoid::nearest`]); below it `D` is convex over the search's bracket.
 const TWO_MINIMA_FRACTION: f64 = 0.5;
 
+/// Three-point Gauss-Legendre nodes and weights on `[-1, 1]`.
+const GAUSS_3: [(f64, f64); 3] = [
+    (0.0, 0.888_888_888_888_889),
+    (-0.774_596_669_241_483_4, 0.555_555_555_555_556),
+    (0.774_596_669_241_483_4, 0.555_555_555_555_556),
+];
+
 /// Five-point Gauss-Legendre nodes and weights on `[-1, 1]`.
 const GAUSS_5: [(f64, f64); 5] = [
     (0.0, 0.568_888_888_888_888_9),
@@ -120,7 +127,7 @@ impl Sinusoid {
         wall.arclength_table_m.push(0.0);
         for j in 0..ARCLENGTH_TABLE_INTERVALS {
             let t0 = j as f64 * step;
-            total_m += wall.arclength_between(t0, t0 + step);
+            total_m += wall.arclength_between(&GAUSS_5, t0, t0 + step);
             wall.arclength_table_m.push(total_m);
         }
         Ok(wall)
@@ -176,7 +183,7 @@ impl Sinusoid {
         let period_m = self.arclength_table_m[ARCLENGTH_TABLE_INTERVALS];
         periods * period_m
             + self.arclength_table_m[j]
-            + self.arclength_between(j as f64 * step, rest_m)
+            + self.arclength_between(&GAUSS_3, j as f64 * step, rest_m)
     }
 
     /// `g(t) = A sin(k t + phase)`.
@@ -192,13 +199,16 @@ impl Sinusoid {
         (a * sin, a * k * cos, -a * k * k * sin)
     }
 
-    /// `int_t0^t1 sqrt(1 + g'^2) dt` by five-point Gauss-Legendre (for short intervals).
-    fn arclength_between(&self, t0: f64, t1: f64) -> f64 {
+    /// `int_t0^t1 sqrt(1 + g'^2) dt` by the Gauss-Legendre rule `rule` (for short
+    /// intervals: [`GAUSS_5`] for the table's, [`GAUSS_3`] within one of them, whose
+    /// `1 / 256` of a period leaves it an error of order `1e-20` m).
+    fn arclength_between(&self, rule: &[(f64, f64)], t0: f64, t1: f64) -> f64 {
         let (mid, half) = (0.5 * (t0 + t1), 0.5 * (t1 - t0));
-        GAUSS_5
-            .iter()
+        rule.iter()
             .map(|&(x, w)| {
-                let (_, slope, _) = self.g_derivatives(mid + half * x);
+                // g' alone: a cos, not a sin_cos.
+                let k = self.wavenumber_rad_per_m;
+                let slope = self.amplitude_m * k * (k * (mid + half * x) + self.phase_rad).cos();
                 w * (1.0 + slope * slope).sqrt()
             })
             .sum::<f64>()
@@ -243,6 +253,13 @@ impl Sinusoid {
         // is next to its samples' discrete minimum.
         let (a, k) = (self.amplitude_m, self.wavenumber_rad_per_m);
         let two_minima = r0 * (1.0 + a * k) * a * k * k > TWO_MINIMA_FRACTION;
+        if !two_minima {
+            // `D` is convex over the bracket, which holds its one minimum (`D(x) = r0^2` and
+            // `D > r0^2` outside): Newton's method from `x`, safeguarded by the bracket,
+            // without a scan (a point near the wall: every contact's).
+            let t = self.refine_bracketed(x, y, x - r0, x + r0, x, true);
+            return (t, d2(t));
+        }
         // `D(t)` and, where two minima can be near, `D'(t) / 2` (else `0`).
         let sample = |t: f64| {
             if two_minima {
@@ -308,12 +325,35 @@ impl Sinusoid {
 
     /// Newton's method on `D'(t) = 2 ((t - x) + (g - y) g')` in `[lo, hi]` from `t`,
     /// safeguarded by bisection when `D'` changes sign over the bracket.
-    fn refine(&self, x: f64, y: f64, mut lo: f64, mut hi: f64, mut t: f64) -> f64 {
+    fn refine(&self, x: f64, y: f64, lo: f64, hi: f64, t: f64) -> f64 {
+        self.refine_bracketed(x, y, lo, hi, t, false)
+    }
+
+    /// [`Self::refine`]; with `convex`, `D` is known to be convex over `[lo, hi]` with its
+    /// minimum inside, so that `D'` changes sign over it without evaluating it at the ends.
+    fn refine_bracketed(
+        &self,
+        x: f64,
+        y: f64,
+        mut lo: f64,
+        mut hi: f64,
+        mut t: f64,
+        convex: bool,
+    ) -> f64 {
         let derivative = |t: f64| {
             let (g, g1, g2) = self.g_derivatives(t);
             ((t - x) + (g - y) * g1, 1.0 + g1 * g1 + (g - y) * g2)
         };
-        let bracketed = derivative(lo).0 < 0.0 && derivative(hi).0 > 0.0;
+        // `D'` at the bracket's ends where evaluated (NaN where only known by sign): a
+        // rejected Newton step takes the secant between them before halving, so that a root
+        // at an end of the bracket (a scan sample on the minimum) is not approached by
+        // halvings alone (40 of them were seen).
+        let (mut f_lo, mut f_hi) = if convex {
+            (f64::NAN, f64::NAN)
+        } else {
+            (derivative(lo).0, derivative(hi).0)
+        };
+        let bracketed = convex || (f_lo < 0.0 && f_hi > 0.0);
         for _ in 0..100 {
             let (f, fp) = derivative(t);
             if f == 0.0 {
@@ -321,16 +361,29 @@ impl Sinusoid {
             }
             if bracketed {
                 if f < 0.0 {
-                    lo = t;
+                    (lo, f_lo) = (t, f);
                 } else {
-                    hi = t;
+                    (hi, f_hi) = (t, f);
                 }
             }
             let newton = t - f / fp;
+            if fp > 0.0 && (newton - t).abs() <= 1e-15 * (1.0 + t.abs()) {
+                // Converged: the step is below the resolution of `t`. (Tested before the
+                // bracket: a root found with `f` rounded to the bracket's side is the
+                // bracket's end, and a step "outside" it sent the search back to halvings,
+                // some 20 of them, in most queries.)
+                t = newton;
+                break;
+            }
             let next = if fp > 0.0 && newton > lo && newton < hi {
                 newton
             } else if bracketed {
-                0.5 * (lo + hi)
+                let secant = lo - f_lo * (hi - lo) / (f_hi - f_lo);
+                if secant > lo && secant < hi {
+                    secant
+                } else {
+                    0.5 * (lo + hi)
+                }
             } else {
                 // No sign change to trust: keep the sample.
                 return t;
@@ -399,6 +452,18 @@ impl Sinusoid {
         a_m: &Vector2<f64>,
         b_m: &Vector2<f64>,
     ) -> Option<FeatureContact> {
+        self.crest_feature_contact_where(index, a_m, b_m, |_, _| true)
+    }
+
+    /// [`Self::crest_feature_contact`] if `keep(gap_m, s)`, else `None`, the rest of the
+    /// contact (its arclength, its roll) measured only for a crest kept.
+    fn crest_feature_contact_where(
+        &self,
+        index: i64,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        keep: impl Fn(f64, f64) -> bool,
+    ) -> Option<FeatureContact> {
         let d = b_m - a_m;
         let length2 = d.norm_squared();
         if !(length2 > 0.0 && length2.is_finite()) {
@@ -417,6 +482,10 @@ impl Sinusoid {
         let point_m = a_m + d * s;
         let tangent_curve = (self.u + self.v * slope).normalize();
         let normal = self.solid.free_normal(&tangent_curve);
+        let gap_m = normal.dot(&(point_m - wall_m));
+        if !keep(gap_m, s) {
+            return None;
+        }
         // The tangent point rolls along the curve as the segment turns: with nu = -normal
         // (toward the wall) = sigma R90 dir, dt/dphi = sigma (dir . w') / (nu . w'').
         let dir = d / length2.sqrt();
@@ -436,7 +505,7 @@ impl Sinusoid {
             s,
             point_m,
             wall_m,
-            gap_m: normal.dot(&(point_m - wall_m)),
+            gap_m,
             normal,
             tangent: self.solid.tangent_from_normal(&normal),
             arclength_m: self.arclength_at_m(t),
@@ -456,7 +525,7 @@ impl Sinusoid {
         within_m: f64,
         out: &mut Vec<FeatureContact>,
     ) {
-        if self.amplitude_m == 0.0 || self.segment_gap_lower_bound_m(a_m, b_m) > within_m {
+        if self.amplitude_m == 0.0 || self.band_gap_lower_bound_m(a_m, b_m) > within_m {
             return;
         }
         let (xa, _) = self.local(a_m);
@@ -469,11 +538,9 @@ impl Sinusoid {
         let last = (u_hi / TAU).ceil() as i64 + 1;
         let mut index = first;
         while index <= last && index - first < i64::from(MAX_SCAN_STEPS) {
-            if let Some(c) = self.crest_feature_contact(index, a_m, b_m)
-                && c.gap_m < within_m
-                && c.s > -1.0
-                && c.s < 2.0
-            {
+            if let Some(c) = self.crest_feature_contact_where(index, a_m, b_m, |gap_m, s| {
+                gap_m < within_m && s > -1.0 && s < 2.0
+            }) {
                 out.push(c);
             }
             index += 1;
@@ -490,9 +557,36 @@ impl Sinusoid {
 
     /// The deepest (or closest) point of `a -> b` (see the module docs); no allocation.
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
-        let ends = better(self.at(a_m, b_m, 0.0), self.at(a_m, b_m, 1.0));
+        // The end that may be nearer first; the other is searched only if its lower bound
+        // does not already put it farther (strictly: a tie goes to `better`).
+        let bound_a = self.point_gap_lower_bound_m(a_m);
+        let bound_b = self.point_gap_lower_bound_m(b_m);
+        let (first, second, second_bound) = if bound_b < bound_a {
+            (1.0, 0.0, bound_a)
+        } else {
+            (0.0, 1.0, bound_b)
+        };
+        let near = self.at(a_m, b_m, first);
+        let ends = if second_bound > near.wall.gap_m {
+            near
+        } else {
+            better(near, self.at(a_m, b_m, second))
+        };
         self.interior_candidates(a_m, b_m, ends.wall.gap_m, false)
             .map_or(ends, |inner| better(ends, inner))
+    }
+
+    /// A lower bound of the signed distance of `p_m` from its vertical gap (see
+    /// [`Self::segment_gap_lower_bound_m`]); one `sin`.
+    fn point_gap_lower_bound_m(&self, p_m: &Vector2<f64>) -> f64 {
+        let (x, y) = self.local(p_m);
+        let r = self.free_sign() * (y - self.g(x));
+        if r > 0.0 {
+            let slope_amplitude = self.amplitude_m * self.wavenumber_rad_per_m;
+            r / (1.0 + slope_amplitude * slope_amplitude).sqrt()
+        } else {
+            r
+        }
     }
 
     /// The deepest of the segment's interior candidate points (`0 < s < 1`: crest crossings
@@ -543,18 +637,11 @@ impl Sinusoid {
         let (dx, dy) = (xb - xa, yb - ya);
         let (x_min, x_max) = (xa.min(xb), xa.max(xb));
         let k = self.wavenumber_rad_per_m;
-        let (a, phase) = (self.amplitude_m, self.phase_rad);
+        let a = self.amplitude_m;
         let slope_amplitude = a * k;
         let slope = if dx != 0.0 { dy / dx } else { f64::INFINITY };
-        // Parameters t in [lo, hi] with k t + phase = base + 2 pi j.
         let each = |lo: f64, hi: f64, base: f64, f: &mut dyn FnMut(f64)| {
-            let j0 = ((k * lo + phase - base) / TAU).ceil();
-            let j1 = ((k * hi + phase - base) / TAU).floor();
-            let mut j = j0;
-            while j <= j1 && j - j0 < f64::from(MAX_SCAN_STEPS) {
-                f((base + TAU * j - phase) / k);
-                j += 1.0;
-            }
+            self.each_phase(lo, hi, base, f);
         };
         let roots = if slope.abs() <= slope_amplitude {
             let theta = (slope / slope_amplitude).clamp(-1.0, 1.0).acos();
@@ -564,17 +651,7 @@ impl Sinusoid {
         };
         // Lowest vertical gap along the segment (sign-equivalent to the signed distance): its
         // candidates are the ends and the vertical points where g' = slope.
-        let free = self.free_sign();
-        let vertical = |x: f64, y: f64| free * (y - self.g(x));
-        let mut lowest = vertical(xa, ya).min(vertical(xb, yb));
-        if dx != 0.0 {
-            for root in roots.iter().flatten() {
-                each(x_min, x_max, *root, &mut |t| {
-                    let y = ya + (t - xa) * slope;
-                    lowest = lowest.min(vertical(t, y));
-                });
-            }
-        }
+        let lowest = self.lowest_vertical_gap((xa, ya), (xb, yb));
         // The nearest parameter of any segment point s* that beats the ends lies within
         // |t - x(s*)| <= |F(s*)|: at most the best end gap if the segment stays free, at most
         // the deepest vertical penetration otherwise.
@@ -585,12 +662,22 @@ impl Sinusoid {
         };
         let (lo, hi) = (x_min - reach, x_max + reach);
         let d_len2 = dx * dx + dy * dy;
+        // Without `local_foot` every candidate's gap is its nearest point's: one whose lower
+        // bound is above the ends' gap and the best candidate's so far cannot be the
+        // deepest (strictly: ties are `better`'s), and is not searched.
+        let beyond = |best: &Option<SegmentContact>, p_m: &Vector2<f64>| {
+            let above = best.map_or(ends_gap_m, |b| b.wall.gap_m.min(ends_gap_m));
+            !local_foot && self.point_gap_lower_bound_m(p_m) > above
+        };
         // Crests: segment crossings of the vertical lines through the extrema.
         if dx != 0.0 {
             for base in [FRAC_PI_2, FRAC_PI_2 + PI] {
                 each(lo.max(x_min), hi.min(x_max), base, &mut |t| {
                     let s = (t - xa) / dx;
                     if s > 0.0 && s < 1.0 {
+                        if beyond(&best, &lerp(a_m, b_m, s)) {
+                            return;
+                        }
                         let c = self.at(a_m, b_m, s);
                         best = Some(best.map_or(c, |b| better(b, c)));
                     }
@@ -608,6 +695,9 @@ impl Sinusoid {
                     if denom != 0.0 && d_len2 > 0.0 {
                         let s = (cx * ny - cy * nx) / denom;
                         if s > 0.0 && s < 1.0 {
+                            if !local_foot && beyond(&best, &lerp(a_m, b_m, s)) {
+                                return;
+                            }
                             let c = if local_foot {
                                 let point_m = lerp(a_m, b_m, s);
                                 let (x, y) = self.local(&point_m);
@@ -629,9 +719,32 @@ impl Sinusoid {
         best
     }
 
-    /// A lower bound on the gap of every point of `a -> b`: its height beyond the band
-    /// `|y| <= A` on the free side (`-inf` if it reaches into the band).
+    /// A lower bound on the gap of every point of `a -> b`, without a nearest-point search:
+    /// the larger of its height beyond the band `|y| <= A` on the free side and its lowest
+    /// vertical gap `r` along it (at its ends or where the curve's slope is the segment's),
+    /// as a distance: a point `r > 0` above the graph of a function of slope at most
+    /// `L = A k` is at least `r / sqrt(1 + L^2)` from it, and one `r < 0` below it at most
+    /// `|r|` into it.
     pub(crate) fn segment_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
+        let free = self.free_sign();
+        let (xa, ya) = self.local(a_m);
+        let (xb, yb) = self.local(b_m);
+        let beyond = (free * ya).min(free * yb) - self.amplitude_m;
+        if beyond > 0.0 {
+            return beyond;
+        }
+        let lowest = self.lowest_vertical_gap((xa, ya), (xb, yb));
+        if lowest > 0.0 {
+            let slope_amplitude = self.amplitude_m * self.wavenumber_rad_per_m;
+            lowest / (1.0 + slope_amplitude * slope_amplitude).sqrt()
+        } else {
+            lowest
+        }
+    }
+
+    /// The height of `a -> b` beyond the band `|y| <= A` on the free side (`-inf` if it
+    /// reaches into the band): a lower bound of the gap of the segment's line near it.
+    fn band_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
         let free = self.free_sign();
         let (_, ya) = self.local(a_m);
         let (_, yb) = self.local(b_m);
@@ -640,6 +753,51 @@ impl Sinusoid {
             beyond
         } else {
             f64::NEG_INFINITY
+        }
+    }
+
+    /// The lowest vertical gap `free (y - g(x))` along the baseline-frame segment `a -> b`:
+    /// at its ends or where `g'` is the segment's slope (NaN for a NaN end).
+    fn lowest_vertical_gap(&self, (xa, ya): (f64, f64), (xb, yb): (f64, f64)) -> f64 {
+        let free = self.free_sign();
+        let vertical = |x: f64, y: f64| free * (y - self.g(x));
+        let ends = vertical(xa, ya);
+        let end_b = vertical(xb, yb);
+        if ends.is_nan() || end_b.is_nan() {
+            return f64::NAN;
+        }
+        let mut lowest = ends.min(end_b);
+        let dx = xb - xa;
+        if dx == 0.0 || self.amplitude_m == 0.0 {
+            return lowest;
+        }
+        let slope = (yb - ya) / dx;
+        let slope_amplitude = self.amplitude_m * self.wavenumber_rad_per_m;
+        // (A NaN slope has no roots either.)
+        if slope.is_nan() || slope.abs() > slope_amplitude {
+            return lowest;
+        }
+        let theta = (slope / slope_amplitude).clamp(-1.0, 1.0).acos();
+        let (x_min, x_max) = (xa.min(xb), xa.max(xb));
+        for root in [theta, -theta] {
+            self.each_phase(x_min, x_max, root, &mut |t| {
+                let y = ya + (t - xa) * slope;
+                lowest = lowest.min(vertical(t, y));
+            });
+        }
+        lowest
+    }
+
+    /// Calls `f` with every parameter `t` in `[lo, hi]` where `k t + phase = base + 2 pi j`
+    /// (at most [`MAX_SCAN_STEPS`] of them).
+    fn each_phase(&self, lo: f64, hi: f64, base: f64, f: &mut dyn FnMut(f64)) {
+        let (k, phase) = (self.wavenumber_rad_per_m, self.phase_rad);
+        let j0 = ((k * lo + phase - base) / TAU).ceil();
+        let j1 = ((k * hi + phase - base) / TAU).floor();
+        let mut j = j0;
+        while j <= j1 && j - j0 < f64::from(MAX_SCAN_STEPS) {
+            f((base + TAU * j - phase) / k);
+            j += 1.0;
         }
     }
 

@@ -157,6 +157,12 @@ impl SurfaceMap {
         &self.boundaries
     }
 
+    /// The surface, if it is the same everywhere (no zones): then no point of the wall need
+    /// be found to know it.
+    pub fn uniform_surface(&self) -> Option<Surface> {
+        self.boundaries.is_empty().then_some(self.first)
+    }
+
     /// Whether any zone has friction or anchors hairs (`mu > 0` or rough).
     pub fn has_friction(&self) -> bool {
         std::iter::once(&self.first)

@@ -244,6 +244,11 @@ pub fn parse_golden(text: &str) -> Result<BTreeMap<u64, GoldenSweep>, String> {
     Ok(out)
 }
 
+/// `difference <= tolerance`, false for a NaN difference.
+fn within(difference: f64, tolerance: f64) -> bool {
+    difference <= tolerance
+}
+
 /// What the largest differences of a run from the golden one were, over the compared sweeps.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Deviation {
@@ -299,7 +304,7 @@ pub fn compare(
         for (ws, gs) in w.samples.iter().zip(&g.samples) {
             let tip = (ws.tip_m - gs.tip_m).norm();
             deviation.tip_m = deviation.tip_m.max(tip);
-            if !(tip <= tolerance.position_m) || ws.step != gs.step {
+            if !within(tip, tolerance.position_m) || ws.step != gs.step {
                 differ(format!(
                     "step {}: the tip at {:?} against {:?} ({tip:.2e} m apart)",
                     gs.step, gs.tip_m, ws.tip_m
@@ -310,7 +315,7 @@ pub fn compare(
                 (Some(a), Some(b)) => {
                     let d = (a - b).abs();
                     deviation.preview_m = deviation.preview_m.max(d);
-                    if !(d <= tolerance.position_m) {
+                    if !within(d, tolerance.position_m) {
                         differ(format!("step {}: preview {b:?} against {a:?}", gs.step));
                     }
                 }
@@ -333,7 +338,7 @@ pub fn compare(
         for (joint, (a, b)) in w.final_theta_rad.iter().zip(&g.final_theta_rad).enumerate() {
             let d = (a - b).abs();
             deviation.angle_rad = deviation.angle_rad.max(d);
-            if !(d <= tolerance.angle_rad) {
+            if !within(d, tolerance.angle_rad) {
                 differ(format!("final angle {joint}: {b:?} against {a:?}"));
             }
         }
