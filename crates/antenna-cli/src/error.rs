@@ -74,6 +74,17 @@ pub enum SceneErrorKind {
         /// The table both are in.
         table: String,
     },
+    /// A key naming a file whose contents are wrong (a wall's `points_file`): the file's own
+    /// error names the file and its line.
+    #[error("`{key}` in {table}: {error}")]
+    PointsFile {
+        /// The key.
+        key: String,
+        /// The table it is in.
+        table: String,
+        /// What is wrong in the file, and where.
+        error: crate::scene::points_file::PointsFileError,
+    },
     /// A key with a value out of its domain (a NaN, a list of the wrong length, min > max, an
     /// unknown profile name, ...).
     #[error("`{key}` in {table}: {reason}")]

@@ -1,13 +1,15 @@
 //! The `antenna` command's library: scene files ([`scene`], errors in [`error`]), their
 //! equilibria ([`solve`], and [`solve_walls`] for scenes with walls), sweeps along walls
 //! ([`sweep`]), studies of many sweeps ([`study`]), Nitinol wire designs ([`design`]),
-//! stiffness identification from recordings ([`recording`], [`identify`]) and the export of
-//! recorded trials ([`export`]); what every figure shares ([`figure`]: its font, PNG files).
+//! stiffness identification from recordings ([`recording`], [`identify`]), the export of
+//! recorded trials ([`export`]) and digitized walls drawn from a polyline ([`digitize`]);
+//! what every figure shares ([`figure`]: its font, PNG files).
 //!
 //! The binary (`src/bin/antenna/`) parses the command line, prints and picks the exit status;
 //! everything it computes is here so that it can be tested and documented.
 
 pub mod design;
+pub mod digitize;
 pub mod error;
 pub mod export;
 pub mod figure;

@@ -249,8 +249,8 @@ fn walls_table_errors() {
         "wall_unknown.toml",
         &WALL_SCENE.replace("solid = \"left\"", "solid = \"left\"\nradius_m = 1.0"),
         "16:1: unknown key `radius_m` in [[walls]] (wall 0); allowed: shape, solid, point_m, \
-         angle_deg, vertices_m, amplitude_m, frequency_per_m, phase_deg, surface, mu, \
-         hold_shear_n, hold_tension_n, zones_along, zones",
+         angle_deg, vertices_m, points_file, amplitude_m, frequency_per_m, phase_deg, surface, \
+         mu, hold_shear_n, hold_tension_n, zones_along, zones",
     );
     expect(
         "wall_shape.toml",

@@ -50,6 +50,7 @@ pub const WALL_KEYS: &[&str] = &[
     "point_m",
     "angle_deg",
     "vertices_m",
+    "points_file",
     "amplitude_m",
     "frequency_per_m",
     "phase_deg",

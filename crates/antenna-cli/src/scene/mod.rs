@@ -8,7 +8,8 @@
 //! see [`SceneError`]. Unknown keys are errors that list the keys allowed in their table.
 //!
 //! One file per table: [`keys`] (what each table allows), `antenna.rs` (`[antenna]`,
-//! `[antenna.stiffness]`), [`hairs`], [`walls`] with [`surface`], [`motion`] (`[sweep]`),
+//! `[antenna.stiffness]`), [`hairs`], [`walls`] with [`surface`] and [`points_file`] (a
+//! digitized wall's CSV file of points), [`motion`] (`[sweep]`),
 //! [`start`], [`contact`], `solver.rs` (`[solver]`), `sweep_scene.rs` (the conversion) and
 //! `source.rs` (located errors).
 //!
@@ -82,6 +83,7 @@ pub mod contact;
 pub mod hairs;
 pub mod keys;
 pub mod motion;
+pub mod points_file;
 mod solver;
 pub(crate) mod source;
 pub mod start;
@@ -209,7 +211,8 @@ pub struct SceneLocations {
 }
 
 impl Scene {
-    /// Reads and validates a scene file; errors carry `path` as given.
+    /// Reads and validates a scene file; errors carry `path` as given, and a wall's
+    /// `points_file` is read relative to the file's folder.
     ///
     /// # Errors
     /// [`SceneError`] when the file cannot be read or is not a valid scene.
@@ -220,17 +223,32 @@ impl Scene {
             location: None,
             kind: Box::new(SceneErrorKind::Io(e)),
         })?;
-        Scene::parse(&text, &label)
+        Scene::parse_in(
+            &text,
+            &label,
+            path.parent().unwrap_or_else(|| Path::new("")),
+        )
     }
 
-    /// Parses and validates scene text; `path` is only used in error messages.
+    /// Parses and validates scene text; `path` names the scene in error messages, and a
+    /// wall's `points_file` is read relative to `path`'s folder (the current folder for a
+    /// bare file name).
     ///
     /// # Errors
     /// [`SceneError`] naming the key and, where known, its line and column.
     pub fn parse(text: &str, path: &str) -> Result<Scene, SceneError> {
+        let folder = Path::new(path).parent().unwrap_or_else(|| Path::new(""));
+        Scene::parse_in(text, path, folder)
+    }
+
+    /// [`Self::parse`] with the folder that a wall's relative `points_file` is read from.
+    ///
+    /// # Errors
+    /// As [`Self::parse`].
+    pub fn parse_in(text: &str, path: &str, folder: &Path) -> Result<Scene, SceneError> {
         let source = Source { text, path };
         let raw: RawScene = toml::from_str(text).map_err(|e| source.toml_error(&e))?;
-        raw.validate(&source)
+        raw.validate(&source, folder)
     }
 
     /// Number of flexible joints `n` (`links - 1`).
@@ -286,7 +304,7 @@ struct RawTipPin {
 }
 
 impl RawScene {
-    fn validate(self, source: &Source<'_>) -> Result<Scene, SceneError> {
+    fn validate(self, source: &Source<'_>, folder: &Path) -> Result<Scene, SceneError> {
         let antenna_span = self.antenna.span();
         let antenna = self.antenna.into_inner().validate(source, antenna_span)?;
         let chain = antenna.chain;
@@ -304,7 +322,7 @@ impl RawScene {
             .iter()
             .flatten()
             .enumerate()
-            .map(|(i, w)| w.get_ref().validate(source, i, w.span()))
+            .map(|(i, w)| w.get_ref().validate(source, i, w.span(), folder))
             .collect::<Result<Vec<Wall>, SceneError>>()?;
 
         let tip_pin_m = match &self.tip_pin {

@@ -1,19 +1,21 @@
 //! `[[walls]]` (any number, wall 0 first) with their `[[walls.zones]]`: a line, a polyline
-//! (the seed's trapezoid) or a sinusoid, solid on one side, with a surface or surface zones
-//! (model.md 6).
+//! (the seed's trapezoid; its vertices in `vertices_m` or, digitized, in a `points_file`) or a
+//! sinusoid, solid on one side, with a surface or surface zones (model.md 6).
 
 use std::ops::Range;
+use std::path::Path;
 
 use nalgebra::Vector2;
 use serde::Deserialize;
 use sim_core::{Line, Polyline, Sinusoid, SolidSide, SurfaceMap, Wall, WallError, ZoneAxis};
 use toml::Spanned;
 
+use super::points_file::read_polyline;
 use super::source::{
     Source, finite, non_negative, not_for, one_of, point, positive, wall_table, zone_table,
 };
 use super::surface::RawSurfaceKeys;
-use crate::error::SceneError;
+use crate::error::{SceneError, SceneErrorKind};
 
 /// The names `shape` accepts.
 pub const WALL_SHAPE_NAMES: &[&str] = &["line", "polyline", "sinusoid"];
@@ -25,7 +27,7 @@ pub const ZONE_AXIS_NAMES: &[&str] = &["arclength", "x"];
 /// The keys each shape takes, in [`WALL_SHAPE_NAMES`] order.
 const SHAPE_KEYS: [&[&str]; 3] = [
     &["point_m", "angle_deg"],
-    &["vertices_m"],
+    &["vertices_m", "points_file"],
     &[
         "point_m",
         "angle_deg",
@@ -43,6 +45,7 @@ pub(crate) struct RawWall {
     point_m: Option<Spanned<Vec<f64>>>,
     angle_deg: Option<Spanned<f64>>,
     vertices_m: Option<Spanned<Vec<Vec<f64>>>>,
+    points_file: Option<Spanned<String>>,
     amplitude_m: Option<Spanned<f64>>,
     frequency_per_m: Option<Spanned<f64>>,
     phase_deg: Option<Spanned<f64>>,
@@ -65,12 +68,14 @@ struct RawZone {
 }
 
 impl RawWall {
-    /// The wall numbered `index` (0-based, file order).
+    /// The wall numbered `index` (0-based, file order); a `points_file` is resolved against
+    /// `folder` (the scene file's).
     pub(crate) fn validate(
         &self,
         source: &Source<'_>,
         index: usize,
         span: Range<usize>,
+        folder: &Path,
     ) -> Result<Wall, SceneError> {
         let table = wall_table(index);
         let table = table.as_str();
@@ -80,10 +85,11 @@ impl RawWall {
         let shape_index = one_of(source, table, "shape", shape, WALL_SHAPE_NAMES)?;
         let shape_name = WALL_SHAPE_NAMES[shape_index];
         let takes = SHAPE_KEYS[shape_index];
-        let shape_keys: [(&str, Option<Range<usize>>); 6] = [
+        let shape_keys: [(&str, Option<Range<usize>>); 7] = [
             ("point_m", self.point_m.as_ref().map(Spanned::span)),
             ("angle_deg", self.angle_deg.as_ref().map(Spanned::span)),
             ("vertices_m", self.vertices_m.as_ref().map(Spanned::span)),
+            ("points_file", self.points_file.as_ref().map(Spanned::span)),
             ("amplitude_m", self.amplitude_m.as_ref().map(Spanned::span)),
             (
                 "frequency_per_m",
@@ -127,30 +133,66 @@ impl RawWall {
             0 => Line::new(required_point()?, angle_rad, solid)
                 .map_err(|e| geometry_error("point_m", span.clone(), e))?
                 .into(),
-            1 => {
-                let Some(list) = &self.vertices_m else {
-                    return Err(source.missing(span, table, "vertices_m"));
-                };
-                let mut vertices = Vec::with_capacity(list.get_ref().len());
-                for (i, v) in list.get_ref().iter().enumerate() {
-                    let ok = v.len() == 2 && v.iter().all(|x| x.is_finite());
-                    if !ok {
-                        return Err(source.invalid(
-                            list.span(),
-                            table,
-                            "vertices_m",
-                            format!(
-                                "vertex #{} is {v:?}; every vertex is [x, y] in finite metres",
-                                i + 1
-                            ),
-                        ));
+            1 => match (&self.vertices_m, &self.points_file) {
+                (Some(list), None) => {
+                    let mut vertices = Vec::with_capacity(list.get_ref().len());
+                    for (i, v) in list.get_ref().iter().enumerate() {
+                        let ok = v.len() == 2 && v.iter().all(|x| x.is_finite());
+                        if !ok {
+                            return Err(source.invalid(
+                                list.span(),
+                                table,
+                                "vertices_m",
+                                format!(
+                                    "vertex #{} is {v:?}; every vertex is [x, y] in finite metres",
+                                    i + 1
+                                ),
+                            ));
+                        }
+                        vertices.push(Vector2::new(v[0], v[1]));
                     }
-                    vertices.push(Vector2::new(v[0], v[1]));
+                    Polyline::new(vertices, solid)
+                        .map_err(|e| geometry_error("vertices_m", list.span(), e))?
+                        .into()
                 }
-                Polyline::new(vertices, solid)
-                    .map_err(|e| geometry_error("vertices_m", list.span(), e))?
-                    .into()
-            }
+                (None, Some(file)) => read_polyline(&folder.join(file.get_ref()), solid)
+                    .map_err(|error| {
+                        source.error(
+                            Some(file.span()),
+                            SceneErrorKind::PointsFile {
+                                key: "points_file".to_string(),
+                                table: table.to_string(),
+                                error,
+                            },
+                        )
+                    })?
+                    .into(),
+                (Some(list), Some(file)) => {
+                    // Report the later of the two in the file.
+                    let (key, other, at) = if file.span().start > list.span().start {
+                        ("points_file", "vertices_m", file.span())
+                    } else {
+                        ("vertices_m", "points_file", list.span())
+                    };
+                    return Err(source.error(
+                        Some(at),
+                        SceneErrorKind::Conflict {
+                            key: key.to_string(),
+                            other: other.to_string(),
+                            table: table.to_string(),
+                        },
+                    ));
+                }
+                (None, None) => {
+                    return Err(source.error(
+                        Some(span),
+                        SceneErrorKind::MissingKey {
+                            key: "vertices_m` or `points_file".to_string(),
+                            table: table.to_string(),
+                        },
+                    ));
+                }
+            },
             _ => {
                 let baseline = required_point()?;
                 let amplitude_m = match &self.amplitude_m {
