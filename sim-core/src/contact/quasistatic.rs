@@ -354,18 +354,20 @@ impl QuasiStatic {
     /// One step to `base_m`, certified (see [`Self::step_to`]).
     fn step_once(&mut self, base_m: Vector2<f64>) -> Result<StepReport, ContactError> {
         let mut report = StepReport::default();
-        if self.walls.is_empty() {
-            // No wall, no contact: the posture is the free equilibrium under the tip load,
-            // which the base's translation does not change.
+        // No wall, no contact: the posture is the free equilibrium under the tip load, which
+        // the base's translation does not change. So too where every wall is clear of the
+        // unloaded antenna at rest by more than the candidate margin at the new base (the
+        // broad phase: a wall never reached costs a bound per link, not a solve).
+        let unloaded_at_rest =
+            self.tip_force_n == Vector2::zeros() && self.hand_offset_m.is_none() && self.at_rest();
+        if unloaded_at_rest && (self.walls.is_empty() || self.clear_of_walls(base_m)) {
             self.base_m = base_m;
-            if self.tip_force_n == Vector2::zeros()
-                && self.hand_offset_m.is_none()
-                && self.at_rest()
-            {
-                report.substeps = 1;
-                self.certify(&mut report)?;
-                return Ok(report);
-            }
+            report.substeps = 1;
+            self.certify(&mut report)?;
+            return Ok(report);
+        }
+        if self.walls.is_empty() {
+            self.base_m = base_m;
         }
         let dense_before = self.ssn.system.dense_solves;
         // Where friction locked the antenna in the last step, one plain solve with friction
@@ -537,6 +539,36 @@ impl QuasiStatic {
 
     /// Whether every joint sits at its rest angle within its limits (the free equilibrium
     /// without loads).
+    /// Whether, with no pair standing and every hair open, every link and hair tip at
+    /// `base_m` is farther than the candidate margin from every wall by the broad phase's
+    /// bound ([`crate::WallShape::segment_gap_lower_bound_m`]).
+    fn clear_of_walls(&mut self, base_m: Vector2<f64>) -> bool {
+        if !self.pairs.is_empty() {
+            return false;
+        }
+        let hairs_open = self
+            .chain
+            .hairs()
+            .iter()
+            .zip(&self.beta)
+            .all(|(h, &b)| h.is_none_or(|h| b == h.open_angle_rad));
+        if !hairs_open {
+            return false;
+        }
+        let margin_m = self.settings.margin_m;
+        self.probe.update(&self.chain, base_m, &self.theta);
+        let probe = &self.probe;
+        self.walls.iter().all(|wall| {
+            (0..=self.chain.n()).all(|link| {
+                wall.segment_gap_lower_bound_m(&probe.start_of(link), &probe.end_m[link]) > margin_m
+            }) && self.chain.hairs().iter().enumerate().all(|(link, hair)| {
+                hair.as_ref().is_none_or(|hair| {
+                    wall.gap_lower_bound_m(&probe.hair_tip(hair, link, self.beta[link])) > margin_m
+                })
+            })
+        })
+    }
+
     fn at_rest(&self) -> bool {
         self.chain
             .rest_theta()
