@@ -32,9 +32,8 @@ use std::time::Instant;
 use bench_common::{date, human, median, write_section};
 use nalgebra::Vector2;
 use sim_core::contact::ContactSettings;
-use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
-use sim_core::{Chain, InitialGuess, JointLimit, Line, SolidSide, Surface, SurfaceMap, Wall};
+use sim_core::{Chain, InitialGuess, Line, SolidSide, Surface, SurfaceMap, Wall};
 
 type BoxResult<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -44,10 +43,6 @@ const END: &str = "<!-- sweep-scaling:end -->";
 const ROUNDS: usize = 7;
 /// Links (the base link included).
 const LINKS: [usize; 5] = [9, 18, 36, 72, 150];
-/// The antenna's length, metres.
-const LENGTH_M: f64 = 0.36;
-/// The seed's link, metres (the stiffness bounds are its).
-const SEED_LINK_M: f64 = 0.04;
 /// The sweep, seconds, and its step.
 const DURATION_S: f64 = 10.0;
 const STEP_S: f64 = 0.01;
@@ -57,37 +52,13 @@ const MIN_MEASURE_S: f64 = 0.05;
 /// The goal: N = 150 within this factor of N = 9, per step.
 const GOAL_RATIO: f64 = 40.0;
 
-/// The antenna cut into `links` links.
 fn antenna(links: usize) -> BoxResult<Chain> {
-    let n = links - 1;
-    let l = LENGTH_M / links as f64;
-    let lengths = vec![l; links];
-    let scale = SEED_LINK_M / l;
-    let k = StiffnessProfile::FastExponential.stiffness_n_m_per_rad(
-        &lengths,
-        SEED_K_MIN_N_M_PER_RAD * scale,
-        SEED_K_MAX_N_M_PER_RAD * scale,
-    )?;
-    Ok(Chain::builder(n)
-        .link_length_m(l)
-        .base_angle_rad(30f64.to_radians())
-        .stiffnesses_nm_per_rad(k)
-        .joint_limit(JointLimit::new((-90f64).to_radians(), 90f64.to_radians()))
-        .build()?)
+    bench_common::scaled_antenna(links)
 }
 
-/// The solver's settings: the defaults, or with the jump threshold scaled to the link
-/// (`jump_rad` x link / 40 mm: the same change of curvature flags a jump at every N).
+/// The solver's settings (see [`bench_common::scaled_settings`]).
 fn settings(links: usize, scaled_jump: bool) -> ContactSettings {
-    let default = ContactSettings::default();
-    if scaled_jump {
-        ContactSettings {
-            jump_rad: default.jump_rad * (LENGTH_M / links as f64) / SEED_LINK_M,
-            ..default
-        }
-    } else {
-        default
-    }
+    bench_common::scaled_settings(links, scaled_jump)
 }
 
 /// The 4.2.1 wall: through (0, 0.2) m, closing in at 8 deg, mu = 0.3.

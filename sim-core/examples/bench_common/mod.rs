@@ -103,3 +103,47 @@ pub fn sinusoid_14_2(mu: f64) -> Result<sim_core::Wall, Box<dyn std::error::Erro
         sim_core::SurfaceMap::uniform(sim_core::Surface::Smooth { mu })?,
     ))
 }
+
+/// The seed's 0.36 m antenna cut into `links` equal links (`links - 1` flexible joints), base
+/// angle 30 deg, joint limits +-90 deg, the fast-exponential profile scaled to stay the same
+/// beam (the seed's 0.004..0.082 N m/rad for 40 mm links times 40 mm / link).
+pub fn scaled_antenna(links: usize) -> Result<sim_core::Chain, Box<dyn std::error::Error>> {
+    use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
+    let n = links - 1;
+    let l = ANTENNA_LENGTH_M / links as f64;
+    let lengths = vec![l; links];
+    let scale = SEED_LINK_M / l;
+    let k = StiffnessProfile::FastExponential.stiffness_n_m_per_rad(
+        &lengths,
+        SEED_K_MIN_N_M_PER_RAD * scale,
+        SEED_K_MAX_N_M_PER_RAD * scale,
+    )?;
+    Ok(sim_core::Chain::builder(n)
+        .link_length_m(l)
+        .base_angle_rad(30f64.to_radians())
+        .stiffnesses_nm_per_rad(k)
+        .joint_limit(sim_core::JointLimit::new(
+            (-90f64).to_radians(),
+            90f64.to_radians(),
+        ))
+        .build()?)
+}
+
+/// The seed's antenna, metres.
+pub const ANTENNA_LENGTH_M: f64 = 0.36;
+/// The seed's link, metres.
+pub const SEED_LINK_M: f64 = 0.04;
+
+/// The solver's settings for `links` links: the defaults, or with the jump threshold scaled to
+/// the link (`jump_rad` x link / 40 mm: the same change of curvature flags a jump at every N).
+pub fn scaled_settings(links: usize, scaled_jump: bool) -> sim_core::contact::ContactSettings {
+    let default = sim_core::contact::ContactSettings::default();
+    if scaled_jump {
+        sim_core::contact::ContactSettings {
+            jump_rad: default.jump_rad * (ANTENNA_LENGTH_M / links as f64) / SEED_LINK_M,
+            ..default
+        }
+    } else {
+        default
+    }
+}
