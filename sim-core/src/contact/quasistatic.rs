@@ -537,8 +537,6 @@ impl QuasiStatic {
         }
     }
 
-    /// Whether every joint sits at its rest angle within its limits (the free equilibrium
-    /// without loads).
     /// Whether, with no pair standing and every hair open, every link and hair tip at
     /// `base_m` is farther than the candidate margin from every wall by the broad phase's
     /// bound ([`crate::WallShape::segment_gap_lower_bound_m`]).
@@ -569,6 +567,8 @@ impl QuasiStatic {
         })
     }
 
+    /// Whether every joint sits at its rest angle within its limits (the free equilibrium
+    /// without loads).
     fn at_rest(&self) -> bool {
         self.chain
             .rest_theta()

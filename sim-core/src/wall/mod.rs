@@ -284,10 +284,11 @@ impl WallShape {
 
     /// The broad phase: a lower bound of the signed distance of every point of the segment
     /// `a -> b` (so of [`Self::segment_contact`]'s gap) that costs no nearest-point search:
-    /// a line's smaller end gap (exact), a sinusoid's height beyond its amplitude band on the
-    /// free side, a polyline's distance to the boxes of its edges where the segment is on the
-    /// free side of its end rays' lines; `-inf` where it has none (a segment in the band or
-    /// among the edges). A NaN end gives NaN, which no bound comparison passes.
+    /// a line's smaller end gap (exact); a sinusoid's height beyond its amplitude band on the
+    /// free side, or within the band its lowest vertical gap as a distance (below zero where
+    /// the segment dips into the wall); none yet for a polyline (`-inf`: every query of a
+    /// polyline searches, by runs of edges with their boxes). A non-finite end gives NaN,
+    /// which no bound comparison passes.
     pub fn segment_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
         if !(a_m.x.is_finite() && a_m.y.is_finite() && b_m.x.is_finite() && b_m.y.is_finite()) {
             return f64::NAN;

@@ -720,11 +720,11 @@ impl Sinusoid {
     }
 
     /// A lower bound on the gap of every point of `a -> b`, without a nearest-point search:
-    /// the larger of its height beyond the band `|y| <= A` on the free side and its lowest
-    /// vertical gap `r` along it (at its ends or where the curve's slope is the segment's),
-    /// as a distance: a point `r > 0` above the graph of a function of slope at most
-    /// `L = A k` is at least `r / sqrt(1 + L^2)` from it, and one `r < 0` below it at most
-    /// `|r|` into it.
+    /// its height beyond the band `|y| <= A` on the free side where it is beyond the band,
+    /// else its lowest vertical gap `r` along it (at its ends or where the curve's slope is
+    /// the segment's) as a distance: a point `r > 0` above the graph of a function of slope
+    /// at most `L = A k` is at least `r / sqrt(1 + L^2)` from it, and one `r < 0` below it
+    /// at most `|r|` into it.
     pub(crate) fn segment_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
         let free = self.free_sign();
         let (xa, ya) = self.local(a_m);
