@@ -214,11 +214,21 @@ impl QuasiStatic {
                     // link's reach), or just past the link's end (the line run on past a
                     // bent joint cuts into a corner that rests on the joint's other link),
                     // is not what the link touches.
+                    // A thin spike of a rough wall (a digitized one's noise) can poke through
+                    // the link with the link's point at the foot outside it, the link
+                    // passing through the spike's flank beside the foot: the link's deepest
+                    // point near the foot ([`THROUGH_LINE_WINDOW`]) counts too.
                     let tol = self.settings.penetration_tolerance_m;
+                    let shallow = |gap_m: f64| gap_m > THROUGH_LINE_DEPTH_FRACTION * fc.gap_m;
                     let through_line_only = past_end_through_line(fc, tol)
                         || (fc.gap_m < -tol
-                            && piece.signed_distance(&fc.point_m).gap_m
-                                > THROUGH_LINE_DEPTH_FRACTION * fc.gap_m);
+                            && shallow(piece.signed_distance(&fc.point_m).gap_m)
+                            && shallow(self.depth_near_foot(
+                                piece,
+                                &posture.start_of(link),
+                                &posture.end_m[link],
+                                fc,
+                            )));
                     if fc.supported
                         && !through_line_only
                         && fc.s >= -foot_tolerance
@@ -937,6 +947,37 @@ fn past_end_through_line(fc: &FeatureContact, tolerance_m: f64) -> bool {
     fc.gap_m < -tolerance_m && !(0.0..=1.0).contains(&fc.s)
 }
 
+/// The window about a feature's foot on a link, in multiples of the feature's depth through
+/// the link's line, within which the link's own deepest point shows that the feature is in
+/// the link: a spike of half-angle `a` pushed `d` through the line holds the line's points
+/// within `d tan(a)` of its foot, and a leaning one holds them off the foot by as much
+/// again (noise of 0.1 mm every 0.1 mm: flanks of up to 80 degrees, `tan = 5.7`).
+const THROUGH_LINE_WINDOW: f64 = 10.0;
+
+impl QuasiStatic {
+    /// The gap of the deepest point of the link `a -> b` against `piece` within
+    /// [`THROUGH_LINE_WINDOW`] times the depth of feature `fc` of its foot.
+    fn depth_near_foot(
+        &self,
+        piece: &crate::Wall,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        fc: &FeatureContact,
+    ) -> f64 {
+        let length_m = (b_m - a_m).norm();
+        if length_m.is_nan() || length_m <= 0.0 {
+            return f64::INFINITY;
+        }
+        let half = THROUGH_LINE_WINDOW * fc.gap_m.abs() / length_m;
+        let (s0, s1) = ((fc.s - half).max(0.0), (fc.s + half).min(1.0));
+        if s0.is_nan() || s1.is_nan() || s0 >= s1 {
+            return f64::INFINITY;
+        }
+        let (p0, p1) = (a_m + (b_m - a_m) * s0, a_m + (b_m - a_m) * s1);
+        piece.segment_contact(&p0, &p1).wall.gap_m
+    }
+}
+
 /// Whether pair `c` is a corner-edge pair of the same chain point and piece as the point
 /// pair `key` (which it stands for).
 fn held_by_corner(c: &Pair, key: &PairKey) -> bool {
@@ -1007,4 +1048,63 @@ fn carry(c: &mut Pair, old: &Pair) {
     c.law = old.law;
     c.normal_active = old.normal_active;
     c.slip = old.slip;
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use nalgebra::Vector2;
+
+    use super::super::pair::PairKind;
+    use super::super::settings::ContactSettings;
+    use crate::contact::QuasiStatic;
+    use crate::{Chain, Polyline, SolidSide, Wall};
+
+    /// A thin spike of a rough wall, leaning, poked 0.5 mm through a link: the link crosses
+    /// the spike's flank 0.4 mm from the foot of its tip, where the link's point is outside
+    /// the spike (as at step 1,745 of `examples/wall_digitized.toml`, where the step's
+    /// answer left the link 15 um inside the wall with no pair to hold it). The spike's
+    /// corner is still a pair of the link.
+    #[test]
+    fn a_leaning_spike_through_a_link_beside_its_foot_is_a_pair_of_the_link() {
+        let chain = Chain::builder(2)
+            .link_length_m(0.04)
+            .stiffness_nm_per_rad(0.02)
+            .build()
+            .unwrap();
+        let spike = Polyline::new(
+            vec![
+                Vector2::new(0.0, 0.1),
+                Vector2::new(0.059, 0.1),
+                Vector2::new(0.0605, 0.0985),
+                Vector2::new(0.0592, 0.1),
+                Vector2::new(0.2, 0.1),
+            ],
+            SolidSide::Left,
+        )
+        .unwrap();
+        let theta = chain.rest_theta();
+        // Placed clear of the wall, then probed with link 1 along y = 0.099 m.
+        let mut sim = QuasiStatic::new(
+            chain,
+            vec![Wall::smooth(spike)],
+            Vector2::new(0.0, 0.09),
+            &theta,
+            ContactSettings::default(),
+        )
+        .unwrap();
+        let across = Vector2::new(0.0, 0.099);
+        sim.probe.update(&sim.chain, across, &sim.theta);
+        let tol = sim.settings.penetration_tolerance_m;
+        let keys = sim.touching(&sim.probe, &sim.beta, -tol);
+        assert!(
+            keys.iter()
+                .any(|k| k.link == 1 && matches!(k.kind, PairKind::Link { .. })),
+            "the spike's corner is not a pair of link 1: {keys:?}"
+        );
+        // The link is inside the wall there, as the certification sees it.
+        let deepest = sim.walls[0].segment_contact(&sim.probe.end_m[0], &sim.probe.end_m[1]);
+        assert!(deepest.wall.gap_m < -1e-5, "{deepest:?}");
+    }
 }
