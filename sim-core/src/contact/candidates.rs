@@ -19,6 +19,7 @@ use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
 use super::posture::Posture;
 use super::quasistatic::{QuasiStatic, theta_of};
+use crate::wall::lerp;
 use crate::{ConvexFeature, FeatureContact, WallPoint};
 
 /// How many pieces per chain point, and corners or crests per link, the broad phase keeps
@@ -223,7 +224,7 @@ impl QuasiStatic {
                     let through_line_only = past_end_through_line(fc, tol)
                         || (fc.gap_m < -tol
                             && shallow(piece.signed_distance(&fc.point_m).gap_m)
-                            && shallow(self.depth_near_foot(
+                            && shallow(depth_near_foot(
                                 piece,
                                 &posture.start_of(link),
                                 &posture.end_m[link],
@@ -954,28 +955,28 @@ fn past_end_through_line(fc: &FeatureContact, tolerance_m: f64) -> bool {
 /// again (noise of 0.1 mm every 0.1 mm: flanks of up to 80 degrees, `tan = 5.7`).
 const THROUGH_LINE_WINDOW: f64 = 10.0;
 
-impl QuasiStatic {
-    /// The gap of the deepest point of the link `a -> b` against `piece` within
-    /// [`THROUGH_LINE_WINDOW`] times the depth of feature `fc` of its foot.
-    fn depth_near_foot(
-        &self,
-        piece: &crate::Wall,
-        a_m: &Vector2<f64>,
-        b_m: &Vector2<f64>,
-        fc: &FeatureContact,
-    ) -> f64 {
-        let length_m = (b_m - a_m).norm();
-        if length_m.is_nan() || length_m <= 0.0 {
-            return f64::INFINITY;
-        }
-        let half = THROUGH_LINE_WINDOW * fc.gap_m.abs() / length_m;
-        let (s0, s1) = ((fc.s - half).max(0.0), (fc.s + half).min(1.0));
-        if s0.is_nan() || s1.is_nan() || s0 >= s1 {
-            return f64::INFINITY;
-        }
-        let (p0, p1) = (a_m + (b_m - a_m) * s0, a_m + (b_m - a_m) * s1);
-        piece.segment_contact(&p0, &p1).wall.gap_m
+/// The gap of the deepest point of the link `a -> b` against `piece` within
+/// [`THROUGH_LINE_WINDOW`] times the depth of feature `fc` of its foot (`+inf` for a link of
+/// no length).
+fn depth_near_foot(
+    piece: &crate::Wall,
+    a_m: &Vector2<f64>,
+    b_m: &Vector2<f64>,
+    fc: &FeatureContact,
+) -> f64 {
+    let length_m = (b_m - a_m).norm();
+    if length_m.is_nan() || length_m <= 0.0 {
+        return f64::INFINITY;
     }
+    let half = THROUGH_LINE_WINDOW * fc.gap_m.abs() / length_m;
+    let (s0, s1) = ((fc.s - half).max(0.0), (fc.s + half).min(1.0));
+    if s0.is_nan() || s1.is_nan() || s0 >= s1 {
+        return f64::INFINITY;
+    }
+    piece
+        .segment_contact(&lerp(a_m, b_m, s0), &lerp(a_m, b_m, s1))
+        .wall
+        .gap_m
 }
 
 /// Whether pair `c` is a corner-edge pair of the same chain point and piece as the point

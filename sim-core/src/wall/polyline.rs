@@ -143,6 +143,16 @@ impl Polyline {
     /// [`WallError::ZeroLengthEdge`], [`WallError::EdgeDoublesBack`] (a 180 degree turn),
     /// [`WallError::EdgesCross`] (two non-adjacent edges, end rays included, meet).
     pub fn new(vertices_m: Vec<Vector2<f64>>, solid: SolidSide) -> Result<Polyline, WallError> {
+        let polyline = Polyline::build(vertices_m, solid)?;
+        if let Some((first, second)) = polyline.first_crossing() {
+            return Err(WallError::EdgesCross { first, second });
+        }
+        Ok(polyline)
+    }
+
+    /// [`Self::new`] without the check for crossing edges: the edges' frames, lengths,
+    /// arclengths and runs.
+    fn build(vertices_m: Vec<Vector2<f64>>, solid: SolidSide) -> Result<Polyline, WallError> {
         if vertices_m.len() < 2 {
             return Err(WallError::TooFewVertices {
                 count: vertices_m.len(),
@@ -186,9 +196,6 @@ impl Polyline {
             solid,
             chunks,
         };
-        if let Some((first, second)) = polyline.first_crossing() {
-            return Err(WallError::EdgesCross { first, second });
-        }
         Ok(polyline)
     }
 
@@ -1130,30 +1137,9 @@ mod tests {
         }
     }
 
-    /// The polyline through `vertices` with the fields `Polyline::new` derives from them
-    /// (tangents, normals, lengths, arclengths, runs), without its checks.
+    /// The polyline through `vertices`, not checked for crossing edges.
     fn unchecked(vertices: Vec<Vector2<f64>>, solid: SolidSide) -> Polyline {
-        let mut tangents = Vec::new();
-        let mut normals = Vec::new();
-        let mut lengths_m = Vec::new();
-        let mut arclengths_m = vec![0.0];
-        for pair in vertices.windows(2) {
-            let d = pair[1] - pair[0];
-            let length = d.norm();
-            tangents.push(d / length);
-            normals.push(solid.free_normal(&(d / length)));
-            arclengths_m.push(arclengths_m[arclengths_m.len() - 1] + length);
-            lengths_m.push(length);
-        }
-        Polyline {
-            chunks: edge_chunks(&vertices),
-            vertices_m: vertices,
-            tangents,
-            normals,
-            lengths_m,
-            arclengths_m,
-            solid,
-        }
+        Polyline::build(vertices, solid).unwrap()
     }
 
     /// A spiral of 100 edges, turning 20 degrees an edge, crosses itself; the search by runs

@@ -580,13 +580,7 @@ impl Sinusoid {
     /// [`Self::segment_gap_lower_bound_m`]); one `sin`.
     fn point_gap_lower_bound_m(&self, p_m: &Vector2<f64>) -> f64 {
         let (x, y) = self.local(p_m);
-        let r = self.free_sign() * (y - self.g(x));
-        if r > 0.0 {
-            let slope_amplitude = self.amplitude_m * self.wavenumber_rad_per_m;
-            r / (1.0 + slope_amplitude * slope_amplitude).sqrt()
-        } else {
-            r
-        }
+        self.gap_bound_of_vertical(self.free_sign() * (y - self.g(x)))
     }
 
     /// The deepest of the segment's interior candidate points (`0 < s < 1`: crest crossings
@@ -695,7 +689,7 @@ impl Sinusoid {
                     if denom != 0.0 && d_len2 > 0.0 {
                         let s = (cx * ny - cy * nx) / denom;
                         if s > 0.0 && s < 1.0 {
-                            if !local_foot && beyond(&best, &lerp(a_m, b_m, s)) {
+                            if beyond(&best, &lerp(a_m, b_m, s)) {
                                 return;
                             }
                             let c = if local_foot {
@@ -721,10 +715,8 @@ impl Sinusoid {
 
     /// A lower bound on the gap of every point of `a -> b`, without a nearest-point search:
     /// its height beyond the band `|y| <= A` on the free side where it is beyond the band,
-    /// else its lowest vertical gap `r` along it (at its ends or where the curve's slope is
-    /// the segment's) as a distance: a point `r > 0` above the graph of a function of slope
-    /// at most `L = A k` is at least `r / sqrt(1 + L^2)` from it, and one `r < 0` below it
-    /// at most `|r|` into it.
+    /// else its lowest vertical gap along it (at its ends or where the curve's slope is the
+    /// segment's) as a distance ([`Self::gap_bound_of_vertical`]).
     pub(crate) fn segment_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
         let free = self.free_sign();
         let (xa, ya) = self.local(a_m);
@@ -733,12 +725,18 @@ impl Sinusoid {
         if beyond > 0.0 {
             return beyond;
         }
-        let lowest = self.lowest_vertical_gap((xa, ya), (xb, yb));
-        if lowest > 0.0 {
+        self.gap_bound_of_vertical(self.lowest_vertical_gap((xa, ya), (xb, yb)))
+    }
+
+    /// A lower bound of the signed distance of a point at vertical gap `r`: a point `r > 0`
+    /// above the graph of a function of slope at most `L = A k` is at least
+    /// `r / sqrt(1 + L^2)` from it, and one `r < 0` below it at most `|r|` into it.
+    fn gap_bound_of_vertical(&self, r: f64) -> f64 {
+        if r > 0.0 {
             let slope_amplitude = self.amplitude_m * self.wavenumber_rad_per_m;
-            lowest / (1.0 + slope_amplitude * slope_amplitude).sqrt()
+            r / (1.0 + slope_amplitude * slope_amplitude).sqrt()
         } else {
-            lowest
+            r
         }
     }
 
