@@ -1,6 +1,7 @@
 //! The `antenna` command's library: scene files ([`scene`], errors in [`error`]), their
 //! equilibria ([`solve`], and [`solve_walls`] for scenes with walls), sweeps along walls
-//! ([`sweep`]), studies of many sweeps ([`study`]), Nitinol wire designs ([`design`]),
+//! ([`sweep`]), studies of many sweeps ([`study`]), the stiffness profile that maximizes a
+//! task's metric ([`optimize`]), Nitinol wire designs ([`design`]),
 //! stiffness identification from recordings ([`recording`], [`identify`]), the export of
 //! recorded trials ([`export`]) and digitized walls drawn from a polyline ([`digitize`]);
 //! what every figure shares ([`figure`]: its font, PNG files).
@@ -14,6 +15,7 @@ pub mod error;
 pub mod export;
 pub mod figure;
 pub mod identify;
+pub mod optimize;
 pub mod progress;
 pub mod recording;
 pub mod scene;

@@ -39,6 +39,11 @@ impl Progress {
 
     /// Shows that `done` units are done (redrawn at most every 100 ms, and at the end).
     pub fn set(&mut self, done: usize) {
+        self.set_noted(done, "");
+    }
+
+    /// As [`Self::set`], with `note` after the bar's text (e.g. `", best 46.3 mm"`).
+    pub fn set_noted(&mut self, done: usize, note: &str) {
         if !self.enabled {
             return;
         }
@@ -52,7 +57,7 @@ impl Progress {
         self.last_drawn = Some(now);
         let line = self.line(done, now.duration_since(self.started));
         let mut err = std::io::stderr().lock();
-        let _ = write!(err, "\r{line}\x1b[K");
+        let _ = write!(err, "\r{line}{note}\x1b[K");
         let _ = err.flush();
     }
 

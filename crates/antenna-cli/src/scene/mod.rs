@@ -217,17 +217,8 @@ impl Scene {
     /// # Errors
     /// [`SceneError`] when the file cannot be read or is not a valid scene.
     pub fn from_path(path: &Path) -> Result<Scene, SceneError> {
-        let label = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            path: label.clone(),
-            location: None,
-            kind: Box::new(SceneErrorKind::Io(e)),
-        })?;
-        Scene::parse_in(
-            &text,
-            &label,
-            path.parent().unwrap_or_else(|| Path::new("")),
-        )
+        let (text, label, folder) = source::read_input(path)?;
+        Scene::parse_in(&text, &label, folder)
     }
 
     /// Parses and validates scene text; `path` names the scene in error messages, and a

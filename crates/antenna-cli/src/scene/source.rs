@@ -10,6 +10,24 @@ use toml::Spanned;
 use super::keys::{REQUIRED_KEYS, TABLES};
 use crate::error::{Location, SceneError, SceneErrorKind};
 
+/// Reads an input file (a scene, a study, an optimization): its text, its name as given
+/// (for errors) and its folder (what its relative paths are relative to).
+///
+/// # Errors
+/// [`SceneErrorKind::Io`] naming the file.
+pub(crate) fn read_input(
+    path: &std::path::Path,
+) -> Result<(String, String, &std::path::Path), SceneError> {
+    let label = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+        path: label.clone(),
+        location: None,
+        kind: Box::new(SceneErrorKind::Io(e)),
+    })?;
+    let folder = path.parent().unwrap_or_else(|| std::path::Path::new(""));
+    Ok((text, label, folder))
+}
+
 /// The scene text and its name, for turning spans into located errors.
 pub(crate) struct Source<'a> {
     pub(crate) text: &'a str,

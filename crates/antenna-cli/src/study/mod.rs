@@ -33,8 +33,8 @@ use serde::Deserialize;
 use sim_core::StiffnessProfile;
 use toml::Spanned;
 
-use crate::error::{SceneError, SceneErrorKind};
-use crate::scene::source::{Source, finite_list, list_of_len, non_negative, positive};
+use crate::error::SceneError;
+use crate::scene::source::{Source, finite_list, list_of_len, non_negative, positive, read_input};
 use crate::scene::surface::RawSurfaceKeys;
 use crate::scene::{Scene, StiffnessSpec};
 pub use axes::{HairLayout, SurfaceChoice, Variant, VariantError};
@@ -117,13 +117,7 @@ impl Study {
     /// # Errors
     /// [`SceneError`] naming the study file or the scene file, the key and where.
     pub fn from_path(path: &Path) -> Result<Study, SceneError> {
-        let label = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            path: label.clone(),
-            location: None,
-            kind: Box::new(SceneErrorKind::Io(e)),
-        })?;
-        let folder = path.parent().unwrap_or_else(|| Path::new(""));
+        let (text, label, folder) = read_input(path)?;
         Study::parse(&text, &label, folder)
     }
 

@@ -71,6 +71,62 @@ impl From<FigureError> for PlotError {
     }
 }
 
+/// A figure that draws itself on any plotters backend.
+pub trait Drawing {
+    /// Draws the figure on `root`.
+    ///
+    /// # Errors
+    /// plotters' message.
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>;
+}
+
+/// Draws `figure` (`size`: pixels, or SVG user units) to `path`, an SVG or a PNG by the
+/// file's extension.
+///
+/// # Errors
+/// [`PlotError`] for another extension, a drawing failure or a file that cannot be written.
+pub fn write_drawing(
+    path: &Path,
+    size: (u32, u32),
+    figure: &impl Drawing,
+) -> Result<(), PlotError> {
+    let draw_error = |message: String| PlotError::Draw {
+        path: path.to_path_buf(),
+        message,
+    };
+    register_font().map_err(|e| draw_error(e.to_string()))?;
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match extension.as_deref() {
+        Some("svg") => {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+                figure.draw(&root).map_err(draw_error)?;
+                root.present().map_err(|e| draw_error(e.to_string()))?;
+            }
+            std::fs::write(path, svg).map_err(|source| PlotError::Write {
+                path: path.to_path_buf(),
+                source,
+            })
+        }
+        Some("png") => {
+            let (w, h) = size;
+            let mut rgb = vec![0u8; (w * h * 3) as usize];
+            {
+                let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+                figure.draw(&root).map_err(draw_error)?;
+                root.present().map_err(|e| draw_error(e.to_string()))?;
+            }
+            write_png(path, w, h, &rgb).map_err(PlotError::from)
+        }
+        _ => Err(PlotError::Extension {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
 /// One chain snapshot.
 #[derive(Debug, Clone)]
 struct Snapshot {
@@ -151,42 +207,16 @@ impl SweepPlot {
     /// [`PlotError`] for another extension, a drawing failure or a file that cannot be
     /// written.
     pub fn write(&self, path: &Path, walls: &[Wall], title: &str) -> Result<(), PlotError> {
-        let draw_error = |message: String| PlotError::Draw {
-            path: path.to_path_buf(),
-            message,
-        };
-        register_font().map_err(|e| draw_error(e.to_string()))?;
-        let extension = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        match extension.as_deref() {
-            Some("svg") => {
-                let mut svg = String::new();
-                {
-                    let root = SVGBackend::with_string(&mut svg, FIGURE_SIZE).into_drawing_area();
-                    self.draw(&root, walls, title).map_err(draw_error)?;
-                    root.present().map_err(|e| draw_error(e.to_string()))?;
-                }
-                std::fs::write(path, svg).map_err(|source| PlotError::Write {
-                    path: path.to_path_buf(),
-                    source,
-                })
+        struct Figure<'a>(&'a SweepPlot, &'a [Wall], &'a str);
+        impl Drawing for Figure<'_> {
+            fn draw<DB: DrawingBackend>(
+                &self,
+                root: &DrawingArea<DB, Shift>,
+            ) -> Result<(), String> {
+                self.0.draw(root, self.1, self.2)
             }
-            Some("png") => {
-                let (w, h) = FIGURE_SIZE;
-                let mut rgb = vec![0u8; (w * h * 3) as usize];
-                {
-                    let root =
-                        BitMapBackend::with_buffer(&mut rgb, FIGURE_SIZE).into_drawing_area();
-                    self.draw(&root, walls, title).map_err(draw_error)?;
-                    root.present().map_err(|e| draw_error(e.to_string()))?;
-                }
-                write_png(path, w, h, &rgb).map_err(PlotError::from)
-            }
-            _ => Err(PlotError::Extension {
-                path: path.to_path_buf(),
-            }),
         }
+        write_drawing(path, FIGURE_SIZE, &Figure(self, walls, title))
     }
 
     fn draw<DB: DrawingBackend>(

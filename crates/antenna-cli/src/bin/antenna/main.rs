@@ -1,14 +1,16 @@
 //! `antenna`: solve scene files, sweep them along their walls, run studies of many sweeps,
+//! search the stiffness profile that maximizes a task metric,
 //! design Nitinol wires for a stiffness profile, identify joint stiffness from a
 //! free-oscillation recording, export recorded trials, commission the robot's segments. See the README section "Scene files
 //! and the `antenna` command" and `shared/spec/scene-format.md`.
 //!
 //! Exit status: 0 success; 1 the solver did not converge (`solve`; the JSON is still printed
 //! for a scene without walls), a sweep step failed (`sweep`), a study run failed (`study`;
-//! every row is still written) or the recording did not yield an identification
-//! (`identify`); 2 bad input (a message on stderr that says what and where, nothing on
+//! every row is still written), every evaluation was infeasible (`optimize`) or the recording
+//! did not yield an identification (`identify`); 2 bad input (a message on stderr that says what and where, nothing on
 //! stdout); 3 the solver broke down numerically.
 
+mod optimize;
 mod segments;
 mod segments_config;
 mod study;
@@ -46,6 +48,7 @@ enum Command {
     Solve(SolveArgs),
     Sweep(sweep::SweepArgs),
     Study(study::StudyArgs),
+    Optimize(optimize::OptimizeArgs),
     Design(DesignArgs),
     Identify(IdentifyArgs),
     Export(ExportArgs),
@@ -231,6 +234,7 @@ fn main() -> ExitCode {
         Command::Solve(args) => run_solve(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Study(args) => study::run(&args),
+        Command::Optimize(args) => optimize::run(&args),
         Command::Design(args) => run_design(&args),
         Command::Identify(args) => run_identify(&args),
         Command::Export(args) => run_export(&args),
@@ -544,6 +548,24 @@ fn run_export(args: &ExportArgs) -> Result<(), Failure> {
         std::fs::write(out, text).with_context(|| format!("{}: cannot write", out.display()))?;
     }
     Ok(())
+}
+
+/// `--plot FILE`: an SVG or a PNG, by its extension (checked before any work is done).
+pub(crate) fn check_plot_file(plot: Option<&Path>) -> Result<(), Failure> {
+    let Some(plot) = plot else {
+        return Ok(());
+    };
+    let ext = plot
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if matches!(ext.as_deref(), Some("svg" | "png")) {
+        Ok(())
+    } else {
+        bail_input(format!(
+            "--plot {}: the file name must end in .svg or .png",
+            plot.display()
+        ))
+    }
 }
 
 pub(crate) fn bail_input<T>(message: String) -> Result<T, Failure> {

@@ -13,7 +13,7 @@ use antenna_cli::sweep::{SweepFailure, SweepRun};
 use anyhow::{Context as _, anyhow};
 use clap::Args;
 
-use crate::{Failure, bail_input};
+use crate::{Failure, bail_input, check_plot_file};
 
 /// How often the JSON lines are flushed while a sweep runs.
 const FLUSH_EVERY: Duration = Duration::from_millis(200);
@@ -73,17 +73,7 @@ pub(crate) fn run(args: &SweepArgs) -> Result<(), Failure> {
         }
         scene.motion.duration_s = d;
     }
-    if let Some(plot) = &args.plot {
-        let ext = plot
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        if !matches!(ext.as_deref(), Some("svg" | "png")) {
-            return bail_input(format!(
-                "--plot {}: the file name must end in .svg or .png",
-                plot.display()
-            ));
-        }
-    }
+    check_plot_file(args.plot.as_deref())?;
     let label = args.scene.display().to_string();
     let mut run = SweepRun::start(&scene)?;
     let steps = run.steps();
