@@ -361,3 +361,128 @@ fn bad_input_is_a_located_error_with_exit_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("--plot x.pdf: the file name must end in .svg or .png"));
 }
+
+/// The report without what differs from run to run (the time) or with how it was run (what
+/// came from a log).
+fn comparable(mut report: Value) -> Value {
+    for key in ["elapsed_s", "replayed_evaluations", "file", "scenes"] {
+        report[key] = Value::Null;
+    }
+    report
+}
+
+fn evaluation_lines(log: &Path) -> usize {
+    let text = std::fs::read_to_string(log).unwrap();
+    text.lines()
+        .filter(|l| l.contains("\"type\":\"evaluation\""))
+        .count()
+}
+
+#[test]
+fn a_logged_run_resumes_where_it_stopped_and_ends_as_a_run_that_never_stopped() {
+    let text = |budget: usize| {
+        format!(
+            "[optimize]\nscenes = [\"small.toml\"]\nobjective = \"preview-mean\"\n\
+             parameters = \"per-joint\"\nmethod = \"particle-swarm\"\nbudget = {budget}\nseed = 5\n"
+        )
+    };
+    let fresh_file = write_case("resume-fresh", &text(40));
+    let (code, fresh) = optimize(&fresh_file, &[]);
+    assert_eq!(code, Some(0), "{fresh}");
+
+    let file = write_case("resume", &text(25));
+    let dir = Path::new(&file).parent().unwrap().to_path_buf();
+    let log = dir.join("run.jsonl");
+    let log_arg = log.display().to_string();
+    let (code, first) = optimize(&file, &["--log", &log_arg]);
+    assert_eq!(code, Some(0), "{first}");
+    let first_evaluations = first["evaluations"].as_u64().unwrap() as usize;
+    assert_eq!(evaluation_lines(&log), first_evaluations);
+
+    // the log exists: refused without --resume, and nothing is overwritten
+    let out = run(&["optimize", &file, "--log", &log_arg]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("the log exists: --resume continues"),
+        "{}",
+        stderr(&out)
+    );
+    assert_eq!(evaluation_lines(&log), first_evaluations);
+
+    // a stop cut the last line short: it is dropped and swept again
+    let whole = std::fs::read_to_string(&log).unwrap();
+    std::fs::write(&log, &whole[..whole.len() - 40]).unwrap();
+
+    // a larger budget goes on: the same run as one that never stopped
+    std::fs::write(&file, text(40)).unwrap();
+    let (code, resumed) = optimize(&file, &["--log", &log_arg, "--resume"]);
+    assert_eq!(code, Some(0), "{resumed}");
+    assert_eq!(
+        resumed["replayed_evaluations"].as_u64().unwrap() as usize,
+        first_evaluations - 1
+    );
+    assert_eq!(comparable(resumed.clone()), comparable(fresh));
+    assert_eq!(
+        evaluation_lines(&log),
+        resumed["evaluations"].as_u64().unwrap() as usize
+    );
+
+    // another optimization's log is refused, naming what differs
+    std::fs::write(&file, text(40).replace("seed = 5", "seed = 6")).unwrap();
+    let out = run(&["optimize", &file, "--log", &log_arg, "--resume"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("records another optimization: its seed is 5, this one's is 6"),
+        "{}",
+        stderr(&out)
+    );
+    // so is an edited scene
+    std::fs::write(&file, text(40)).unwrap();
+    std::fs::write(
+        dir.join("small.toml"),
+        SMALL_SCENE.replace("mu = 0.3", "mu = 0.4"),
+    )
+    .unwrap();
+    let out = run(&["optimize", &file, "--log", &log_arg, "--resume"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("digest"), "{}", stderr(&out));
+}
+
+#[test]
+fn ctrl_c_stops_the_search_and_still_reports_what_was_swept() {
+    let dir = folder("interrupt");
+    let log = dir.join("run.jsonl");
+    let child = common::antenna()
+        .args([
+            "optimize",
+            &example("optimize/wall_following.toml"),
+            "--json",
+            "--jobs",
+            "1",
+            "--log",
+            &log.display().to_string(),
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // wait until a few evaluations are on disk, then Ctrl-C
+    let started = std::time::Instant::now();
+    while std::fs::read_to_string(&log).map_or(0, |t| t.lines().count()) < 4 {
+        assert!(started.elapsed().as_secs() < 120, "no evaluation logged");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let status = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("interrupted: the report covers the"));
+    let report: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(report["stopped_by"], "interrupted");
+    let evaluations = report["evaluations"].as_u64().unwrap() as usize;
+    assert!((3..300).contains(&evaluations), "{evaluations}");
+    assert_eq!(evaluation_lines(&log), evaluations);
+}

@@ -4,18 +4,19 @@
 
 use std::collections::HashMap;
 use std::panic::AssertUnwindSafe;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
+use super::log::LogWriter;
 use super::{Objective, OptimizeSpec};
 use crate::progress::Progress;
 use crate::scene::{Scene, StiffnessSpec};
 use crate::sweep::SweepRun;
 
 /// One scene's sweep of an evaluation.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SceneResult {
     /// The scene's index in `scenes`.
     pub scene: usize,
@@ -28,7 +29,7 @@ pub struct SceneResult {
 }
 
 /// One evaluation: the stiffnesses, the objective averaged over the scenes.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Evaluation {
     /// 0-based, in the order evaluated.
     pub index: usize,
@@ -50,12 +51,42 @@ impl Evaluation {
     }
 }
 
-/// The budget of sweeps is spent: argmin's run stops with this error.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("the budget of {budget} sweep(s) is spent")]
-pub struct BudgetSpent {
-    /// The budget, sweeps.
-    pub budget: usize,
+/// The search asked this many times in a row only for stiffness sets swept before (a swarm
+/// whose particles all sit on the same wires, a simplex shrunk below a wire's step): it has
+/// converged on what it can tell apart.
+pub const STALL_CALLS: usize = 200;
+
+/// Why the search stops before its solver does: argmin's run ends with this error.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum Stop {
+    /// The budget of sweeps is spent.
+    #[error("the budget of {budget} sweep(s) is spent")]
+    Budget {
+        /// The budget, sweeps.
+        budget: usize,
+    },
+    /// [`STALL_CALLS`] calls in a row asked only for stiffness sets swept before.
+    #[error("no new stiffness set in {STALL_CALLS} calls")]
+    Stalled,
+    /// Interrupted (Ctrl-C, SIGTERM): the sweeps under way finished, no new one started.
+    #[error("interrupted")]
+    Interrupted,
+    /// The log could not be written (a full disk): the run stops rather than go on
+    /// unrecorded.
+    #[error("the log could not be written: {0}")]
+    Log(String),
+}
+
+impl Stop {
+    /// The report's `stopped_by`.
+    pub fn reason(&self) -> String {
+        match self {
+            Stop::Budget { .. } => "budget".to_string(),
+            Stop::Stalled => "stalled".to_string(),
+            Stop::Interrupted => "interrupted".to_string(),
+            Stop::Log(why) => format!("log failed: {why}"),
+        }
+    }
 }
 
 /// Runs and remembers the evaluations of one optimization.
@@ -63,6 +94,7 @@ pub struct BudgetSpent {
 pub struct Evaluator<'a> {
     spec: &'a OptimizeSpec,
     jobs: usize,
+    interrupt: Option<Arc<AtomicBool>>,
     inner: Mutex<Inner>,
 }
 
@@ -70,7 +102,12 @@ pub struct Evaluator<'a> {
 struct Inner {
     records: Vec<Evaluation>,
     seen: HashMap<Vec<u64>, usize>,
+    /// Evaluations of a resumed run's log, not yet asked for again.
+    logged: HashMap<Vec<u64>, Evaluation>,
+    log: Option<LogWriter>,
     sweeps: usize,
+    replayed: usize,
+    idle_calls: usize,
     best: Option<f64>,
     progress: Progress,
 }
@@ -86,14 +123,40 @@ impl<'a> Evaluator<'a> {
         Evaluator {
             spec,
             jobs: jobs.max(1),
+            interrupt: None,
             inner: Mutex::new(Inner {
                 records: Vec::new(),
                 seen: HashMap::new(),
+                logged: HashMap::new(),
+                log: None,
                 sweeps: 0,
+                replayed: 0,
+                idle_calls: 0,
                 best: None,
                 progress: bar,
             }),
         }
+    }
+
+    /// Writes every new evaluation to `log`; `logged` (a resumed run's) are looked up
+    /// instead of swept when the search asks for them.
+    #[must_use]
+    pub fn with_log(self, log: LogWriter, logged: Vec<Evaluation>) -> Self {
+        {
+            let mut inner = self.lock();
+            inner.log = Some(log);
+            for e in logged {
+                inner.logged.insert(key_of(&e.values_n_m_per_rad), e);
+            }
+        }
+        self
+    }
+
+    /// Starts no new sweep once `flag` is set.
+    #[must_use]
+    pub fn with_interrupt(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.interrupt = Some(flag);
+        self
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
@@ -104,57 +167,102 @@ impl<'a> Evaluator<'a> {
     }
 
     /// The objective of each set of stiffnesses in `batch` (with the named profile it is, if
-    /// any), `None` where infeasible. New sets are swept (every scene, in parallel); sets
-    /// seen before are looked up.
+    /// any), `None` where infeasible. New sets are swept (every scene, in parallel), or taken
+    /// from a resumed run's log; sets seen before are looked up.
     ///
     /// # Errors
-    /// [`BudgetSpent`] when not every new set fits in what is left of the budget: those
-    /// that fit, in order, are swept and recorded first.
+    /// [`Stop::Budget`] when not every new set fits in what is left of the budget (those
+    /// that fit, in order, are evaluated and recorded first); [`Stop::Interrupted`] once the
+    /// interrupt flag is set; [`Stop::Log`] when the log cannot be written; with `stall`,
+    /// [`Stop::Stalled`] after [`STALL_CALLS`] calls in a row with nothing new.
     pub fn evaluate(
         &self,
         batch: &[(Vec<f64>, Option<&str>)],
-    ) -> Result<Vec<Option<f64>>, BudgetSpent> {
+        stall: bool,
+    ) -> Result<Vec<Option<f64>>, Stop> {
         let scenes = self.spec.scenes.len();
-        let mut todo: Vec<(Vec<u64>, &[f64], Option<&str>)> = Vec::new();
-        let mut spent = false;
+        let mut todo: Vec<Pending<'_>> = Vec::new();
+        let mut stop = None;
         {
-            let inner = self.lock();
+            let mut inner = self.lock();
             for (values, profile) in batch {
                 let key = key_of(values);
-                if inner.seen.contains_key(&key) || todo.iter().any(|(k, ..)| *k == key) {
+                if inner.seen.contains_key(&key) || todo.iter().any(|p| p.key == key) {
                     continue;
                 }
                 if inner.sweeps + (todo.len() + 1) * scenes > self.spec.budget {
-                    spent = true;
+                    stop = Some(Stop::Budget {
+                        budget: self.spec.budget,
+                    });
                     break;
                 }
-                todo.push((key, values, *profile));
+                let logged = inner.logged.remove(&key);
+                if logged.is_none() && self.interrupted() {
+                    stop = Some(Stop::Interrupted);
+                    break;
+                }
+                todo.push(Pending {
+                    key,
+                    values,
+                    profile: *profile,
+                    logged,
+                });
+            }
+            if todo.is_empty() && stop.is_none() && stall {
+                inner.idle_calls += 1;
+                if inner.idle_calls >= STALL_CALLS {
+                    return Err(Stop::Stalled);
+                }
+            } else {
+                inner.idle_calls = 0;
             }
         }
-        let results = self.sweep_all(&todo);
+        let fresh: Vec<&[f64]> = todo
+            .iter()
+            .filter(|p| p.logged.is_none())
+            .map(|p| p.values)
+            .collect();
+        let mut swept = self.sweep_all(&fresh).into_iter();
         let mut inner = self.lock();
-        for ((key, values, profile), scene_results) in todo.into_iter().zip(results) {
-            let objective_value = mean_objective(&scene_results);
+        for Pending {
+            key,
+            values,
+            profile,
+            logged,
+        } in todo
+        {
             let index = inner.records.len();
-            inner.records.push(Evaluation {
+            let replayed = logged.is_some();
+            let scene_results = match logged {
+                Some(e) => e.scenes,
+                None => swept.next().unwrap_or_default(),
+            };
+            let objective_value = mean_objective(&scene_results);
+            let evaluation = Evaluation {
                 index,
                 profile: profile.map(str::to_string),
                 values_n_m_per_rad: values.to_vec(),
                 objective_value,
                 scenes: scene_results,
-            });
+            };
+            if !replayed
+                && let Some(log) = inner.log.as_mut()
+                && let Err(why) = log.write(&evaluation)
+            {
+                stop.get_or_insert(Stop::Log(why));
+            }
+            inner.records.push(evaluation);
             inner.seen.insert(key, index);
             inner.sweeps += scenes;
+            inner.replayed += usize::from(replayed);
             if let Some(v) = objective_value
                 && inner.best.is_none_or(|b| v > b)
             {
                 inner.best = Some(v);
             }
         }
-        if spent {
-            return Err(BudgetSpent {
-                budget: self.spec.budget,
-            });
+        if let Some(stop) = stop {
+            return Err(stop);
         }
         Ok(batch
             .iter()
@@ -165,9 +273,34 @@ impl<'a> Evaluator<'a> {
             .collect())
     }
 
+    /// Makes `values` look up the evaluation of `of` (swept before) when they agree to a
+    /// rounding (1e-12 relative): the search's start, whose stiffnesses come back from its
+    /// coordinates within a rounding of the named profile's, is not swept again. Values that
+    /// differ more (a taper through a named profile's ends) are left alone.
+    pub fn alias(&self, values: &[f64], of: &[f64]) {
+        let close = values.len() == of.len()
+            && values
+                .iter()
+                .zip(of)
+                .all(|(a, b)| (a - b).abs() <= 1e-12 * b.abs());
+        if !close {
+            return;
+        }
+        let mut inner = self.lock();
+        if let Some(&index) = inner.seen.get(&key_of(of)) {
+            inner.seen.entry(key_of(values)).or_insert(index);
+        }
+    }
+
+    fn interrupted(&self) -> bool {
+        self.interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
+    }
+
     /// Sweeps every scene with each set of `todo` on the pool of threads; the results by
     /// set, then by scene.
-    fn sweep_all(&self, todo: &[(Vec<u64>, &[f64], Option<&str>)]) -> Vec<Vec<SceneResult>> {
+    fn sweep_all(&self, todo: &[&[f64]]) -> Vec<Vec<SceneResult>> {
         let scenes = self.spec.scenes.len();
         let work = todo.len() * scenes;
         let slots: Vec<Mutex<Option<SceneResult>>> = (0..work).map(|_| Mutex::new(None)).collect();
@@ -185,7 +318,7 @@ impl<'a> Evaluator<'a> {
                             sweep_one(
                                 &self.spec.scenes[scene].1,
                                 scene,
-                                todo[set].1,
+                                todo[set],
                                 self.spec.objective,
                             )
                         }))
@@ -235,15 +368,28 @@ impl<'a> Evaluator<'a> {
         self.lock().records.clone()
     }
 
-    /// Sweeps run so far.
+    /// Sweeps run so far (a resumed run's logged ones included).
     pub fn sweeps(&self) -> usize {
         self.lock().sweeps
+    }
+
+    /// Evaluations taken from a resumed run's log.
+    pub fn replayed(&self) -> usize {
+        self.lock().replayed
     }
 
     /// Clears the progress bar.
     pub fn finish(&self) {
         self.lock().progress.finish();
     }
+}
+
+/// A stiffness set of a batch not looked up: swept, or taken from a resumed run's log.
+struct Pending<'b> {
+    key: Vec<u64>,
+    values: &'b [f64],
+    profile: Option<&'b str>,
+    logged: Option<Evaluation>,
 }
 
 /// A panic's message, when it has one.

@@ -42,7 +42,8 @@
 //! let text = "[optimize]\nscenes = [\"wall.toml\"]\nobjective = \"preview-mean\"\n\
 //!             parameters = \"exponential-taper\"\nmethod = \"nelder-mead\"\nbudget = 12\n";
 //! let spec = OptimizeSpec::parse(text, "opt.toml", &folder)?;
-//! let report = run_optimization(&spec, &OptimizeOptions { jobs: 2, progress: false })?;
+//! let options = OptimizeOptions { jobs: 2, ..OptimizeOptions::default() };
+//! let report = run_optimization(&spec, &options)?;
 //! assert!(report.sweeps <= 12);
 //! let best_named = report
 //!     .best_named_profile
@@ -76,6 +77,7 @@ macro_rules! file_names {
 
 mod best_scene;
 mod evaluator;
+pub mod log;
 mod objective;
 pub mod plot;
 mod report;
@@ -92,7 +94,8 @@ use crate::scene::motion::MAX_SWEEP_STEPS;
 use crate::scene::source::{Source, list_of_len, one_of, positive, read_input};
 use crate::scene::{Scene, StiffnessSpec};
 pub use best_scene::best_scene_text;
-pub use evaluator::{BudgetSpent, Evaluation, Evaluator, SceneResult, with_stiffness};
+pub use evaluator::{Evaluation, Evaluator, STALL_CALLS, SceneResult, Stop, with_stiffness};
+pub use log::{LogError, LogHeader};
 pub use objective::Objective;
 pub use report::{FailedEvaluation, NamedResult, OptimizeReport};
 pub use search::{OptimizeError, OptimizeOptions, TABLE_4_1, run_optimization};

@@ -68,8 +68,10 @@ pub struct OptimizeReport {
     pub named_profiles: Vec<NamedResult>,
     /// Evaluations (distinct stiffness sets, each swept on every scene).
     pub evaluations: usize,
-    /// Sweeps run.
+    /// Sweeps run (with `--resume`, the logged ones the run took from the log included).
     pub sweeps: usize,
+    /// Evaluations taken from the log of a resumed run (`--resume`) instead of swept.
+    pub replayed_evaluations: usize,
     /// Evaluations some sweep made infeasible.
     pub failed_evaluations: usize,
     /// Those evaluations and why.
@@ -79,8 +81,8 @@ pub struct OptimizeReport {
     /// Each evaluation's own objective, metres (`null`: infeasible).
     pub objective_values: Vec<Option<f64>>,
     /// Why the search stopped: `"budget"`, `"converged"` (Nelder-Mead's simplex agreed to
-    /// 1e-9 m), `"stalled"` (200 calls in a row asked only for stiffness sets swept before)
-    /// or `"max iterations"`.
+    /// 1e-9 m), `"stalled"` (200 calls in a row asked only for stiffness sets swept before),
+    /// `"interrupted"` (Ctrl-C), `"log failed: ..."` or `"max iterations"`.
     pub stopped_by: String,
     /// Wall-clock time, seconds.
     pub elapsed_s: f64,
@@ -180,6 +182,7 @@ impl OptimizeReport {
             named_profiles,
             evaluations: records.len(),
             sweeps,
+            replayed_evaluations: 0,
             failed_evaluations: failures.len(),
             failures,
             history,

@@ -3,7 +3,9 @@
 //! sweeps is spent or the solver converges.
 
 use std::borrow::Borrow;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use argmin::core::{CostFunction, Error as ArgminError, Executor, SendAlias, SyncAlias};
@@ -14,7 +16,8 @@ use rand::rngs::StdRng;
 use rand::{Rng as _, SeedableRng as _};
 use sim_core::StiffnessProfile;
 
-use super::evaluator::BudgetSpent;
+use super::evaluator::Stop;
+use super::log::{LogError, open_log};
 use super::{Evaluator, Method, NamedResult, OptimizeReport, OptimizeSpec, Space};
 
 /// The seven profiles of the seed's Table 4.1, in its order.
@@ -34,17 +37,26 @@ const SIMPLEX_STEP: f64 = 0.25;
 const SIMPLEX_TOLERANCE_M: f64 = 1e-9;
 
 /// How to run an optimization.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Default)]
 pub struct OptimizeOptions {
     /// Sweeps at once (at least 1).
     pub jobs: usize,
     /// Whether to draw a progress bar on stderr (when it is a terminal).
     pub progress: bool,
+    /// Write every evaluation to this log as it completes ([`super::log`]).
+    pub log: Option<PathBuf>,
+    /// Continue the run the log records.
+    pub resume: bool,
+    /// Start no new sweep once this is set (Ctrl-C); the report covers what was swept.
+    pub interrupt: Option<Arc<AtomicBool>>,
 }
 
 /// Why an optimization could not run.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum OptimizeError {
+    /// The log cannot be used.
+    #[error(transparent)]
+    Log(#[from] LogError),
     /// A named profile cannot be computed for the first scene's links.
     #[error("the named profile {name} cannot be made for these links: {why}")]
     Profile {
@@ -53,7 +65,7 @@ pub enum OptimizeError {
         /// Why.
         why: String,
     },
-    /// argmin stopped with an error other than the spent budget.
+    /// argmin stopped with an error other than a [`Stop`].
     #[error("the {method} search stopped: {message}")]
     Solver {
         /// The method's name.
@@ -63,37 +75,19 @@ pub enum OptimizeError {
     },
 }
 
-/// The search asked this many times in a row only for stiffness sets swept before (a swarm
-/// whose particles all sit on the same wires, a simplex shrunk below a wire's step): it has
-/// converged on what it can tell apart.
-pub const STALL_CALLS: usize = 200;
-
-/// argmin's run stops with this error when the search has stalled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("no new stiffness set in {STALL_CALLS} calls")]
-struct Stalled;
-
 /// What argmin minimizes: minus the objective, `+inf` where infeasible.
 struct Search<'e, 'a> {
     evaluator: &'e Evaluator<'a>,
     space: &'e Space,
-    /// Calls in a row that swept nothing new.
-    idle_calls: AtomicUsize,
 }
 
 impl Search<'_, '_> {
-    fn costs(&self, points: &[&Vec<f64>]) -> Result<Vec<f64>, ArgminError> {
+    fn costs(&self, points: &[&Vec<f64>]) -> Result<Vec<f64>, Stop> {
         let batch: Vec<(Vec<f64>, Option<&str>)> = points
             .iter()
             .map(|u| (self.space.values(u), None))
             .collect();
-        let before = self.evaluator.sweeps();
-        let objectives = self.evaluator.evaluate(&batch)?;
-        if self.evaluator.sweeps() > before {
-            self.idle_calls.store(0, Ordering::Relaxed);
-        } else if self.idle_calls.fetch_add(1, Ordering::Relaxed) + 1 >= STALL_CALLS {
-            return Err(Stalled.into());
-        }
+        let objectives = self.evaluator.evaluate(&batch, true)?;
         Ok(objectives
             .into_iter()
             .map(|o| o.map_or(f64::INFINITY, |v| -v))
@@ -117,22 +111,29 @@ impl CostFunction for Search<'_, '_> {
         Self: SyncAlias,
     {
         let points: Vec<&Vec<f64>> = params.iter().map(Borrow::borrow).collect();
-        self.costs(&points)
+        Ok(self.costs(&points)?)
     }
 }
 
 /// Runs the optimization `spec` describes.
 ///
 /// # Errors
-/// [`OptimizeError`] when a named profile cannot be made for the links, or argmin fails
-/// other than by spending the budget. A sweep that fails is not an error: its evaluation is
-/// infeasible and reported.
+/// [`OptimizeError`] when the log cannot be used, a named profile cannot be made for the
+/// links, or argmin fails other than by a [`Stop`]. A sweep that fails is not an error: its
+/// evaluation is infeasible and reported.
 pub fn run_optimization(
     spec: &OptimizeSpec,
     options: &OptimizeOptions,
 ) -> Result<OptimizeReport, OptimizeError> {
     let started = Instant::now();
-    let evaluator = Evaluator::new(spec, options.jobs, options.progress);
+    let mut evaluator = Evaluator::new(spec, options.jobs, options.progress);
+    if let Some(path) = &options.log {
+        let (writer, logged) = open_log(path, spec, options.resume)?;
+        evaluator = evaluator.with_log(writer, logged);
+    }
+    if let Some(flag) = &options.interrupt {
+        evaluator = evaluator.with_interrupt(flag.clone());
+    }
     let space = &spec.space;
     let (lo, hi) = space.bounds_n_m_per_rad;
     let lengths = spec.scenes[0].1.chain.link_lengths_m();
@@ -146,9 +147,46 @@ pub fn run_optimization(
             })?;
         named.push((space.made(&values), Some(profile.name())));
     }
-    let named_objectives = evaluator
-        .evaluate(&named)
-        .map_err(|e| solver_error(spec.method, &e))?;
+    let stopped_by = match evaluator.evaluate(&named, false) {
+        Ok(objectives) => search_from_the_best(spec, &evaluator, &named, &objectives)?,
+        // Interrupted, or a log that cannot be written: the report covers what was swept.
+        Err(stop) => stop.reason(),
+    };
+    evaluator.finish();
+    let records = evaluator.records();
+    let named: Vec<NamedResult> = TABLE_4_1
+        .iter()
+        .zip(named)
+        .map(|(profile, (values, _))| NamedResult {
+            name: profile.name().to_string(),
+            objective_value: records
+                .iter()
+                .find(|r| r.values_n_m_per_rad == values)
+                .and_then(|r| r.objective_value),
+            values_n_m_per_rad: values,
+        })
+        .collect();
+    let mut report = OptimizeReport::new(
+        spec,
+        named,
+        &records,
+        evaluator.sweeps(),
+        stopped_by,
+        started.elapsed().as_secs_f64(),
+    );
+    report.replayed_evaluations = evaluator.replayed();
+    Ok(report)
+}
+
+/// The search proper, from the best of the named profiles (the middle of the box if none
+/// is feasible); why it stopped.
+fn search_from_the_best(
+    spec: &OptimizeSpec,
+    evaluator: &Evaluator<'_>,
+    named: &[(Vec<f64>, Option<&str>)],
+    named_objectives: &[Option<f64>],
+) -> Result<String, OptimizeError> {
+    let space = &spec.space;
     let best_named = named_objectives
         .iter()
         .enumerate()
@@ -158,44 +196,26 @@ pub fn run_optimization(
             _ => Some((i, v)),
         });
     let start = match best_named {
-        Some((i, _)) => space.coordinates(&named[i].0),
+        Some((i, _)) => {
+            let start = space.coordinates(&named[i].0);
+            evaluator.alias(&space.values(&start), &named[i].0);
+            start
+        }
         None => vec![0.5; space.dim()],
     };
-    let search = Search {
-        evaluator: &evaluator,
-        space,
-        idle_calls: AtomicUsize::new(0),
-    };
+    let search = Search { evaluator, space };
     let max_iters = (spec.budget as u64).saturating_mul(50).saturating_add(1000);
     let result = match spec.method {
         Method::NelderMead => run_nelder_mead(search, start, max_iters),
         Method::ParticleSwarm => run_particle_swarm(search, start, spec.seed, max_iters),
     };
-    evaluator.finish();
-    let stopped_by = match result {
-        Ok(reason) => reason,
-        Err(e) if e.downcast_ref::<BudgetSpent>().is_some() => "budget".to_string(),
-        Err(e) if e.downcast_ref::<Stalled>().is_some() => "stalled".to_string(),
-        Err(e) => return Err(solver_error(spec.method, &e)),
-    };
-    let named: Vec<NamedResult> = TABLE_4_1
-        .iter()
-        .zip(named)
-        .zip(named_objectives)
-        .map(|((profile, (values, _)), objective_value)| NamedResult {
-            name: profile.name().to_string(),
-            objective_value,
-            values_n_m_per_rad: values,
-        })
-        .collect();
-    Ok(OptimizeReport::new(
-        spec,
-        named,
-        &evaluator.records(),
-        evaluator.sweeps(),
-        stopped_by,
-        started.elapsed().as_secs_f64(),
-    ))
+    match result {
+        Ok(reason) => Ok(reason),
+        Err(e) => match e.downcast_ref::<Stop>() {
+            Some(stop) => Ok(stop.reason()),
+            None => Err(solver_error(spec.method, &e)),
+        },
+    }
 }
 
 fn solver_error(method: Method, e: &dyn std::fmt::Display) -> OptimizeError {

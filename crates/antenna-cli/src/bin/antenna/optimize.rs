@@ -1,11 +1,13 @@
 //! `antenna optimize OPT.toml`: the stiffness profile that maximizes a task's metric.
 
 use std::io::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 use antenna_cli::optimize::plot::write_plot;
 use antenna_cli::optimize::{
-    OptimizeOptions, OptimizeSpec, TABLE_4_1, best_scene_text, run_optimization,
+    OptimizeError, OptimizeOptions, OptimizeSpec, TABLE_4_1, best_scene_text, run_optimization,
 };
 use anyhow::{Context as _, anyhow};
 use clap::Args;
@@ -23,13 +25,21 @@ use crate::{Failure, check_plot_file};
 /// is a certified sweep of each scene; a sweep that fails, jams or never touches the wall
 /// makes its evaluation infeasible, counted in `failed_evaluations` and listed.
 ///
-/// Exit status: 0 a feasible profile was found; 1 every evaluation was infeasible (the
-/// report is still written); 2 bad input (what and where, nothing on stdout).
+/// Ctrl-C (or SIGTERM) stops the search: the sweeps under way finish, and the report covers
+/// what was swept. With --log every evaluation is on disk as it completes, and --resume goes
+/// on from there (a second Ctrl-C exits at once).
+///
+/// Exit status: 0 a feasible profile was found; 1 every evaluation was infeasible, or the run
+/// was interrupted or could not write its log (the report is still written); 2 bad input
+/// (what and where, nothing on stdout; a --log that exists without --resume, or records
+/// another optimization).
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:
   antenna optimize examples/optimize/wall_following.toml
   antenna optimize examples/optimize/wall_following.toml --json -o best.json --plot best.svg
-  antenna optimize examples/optimize/wall_following.toml --scene-out best.toml && antenna sweep best.toml")]
+  antenna optimize examples/optimize/wall_following.toml --scene-out best.toml && antenna sweep best.toml
+  antenna optimize examples/optimize/wall_following.toml --log run.jsonl            # Ctrl-C, then:
+  antenna optimize examples/optimize/wall_following.toml --log run.jsonl --resume")]
 pub(crate) struct OptimizeArgs {
     /// The optimization file (TOML: `[optimize]`; see docs/optimize.md).
     file: PathBuf,
@@ -50,6 +60,27 @@ pub(crate) struct OptimizeArgs {
     /// file, ready for `antenna sweep`.
     #[arg(long, value_name = "FILE")]
     scene_out: Option<PathBuf>,
+    /// Write every evaluation to this JSON-lines file as it completes, so that a stopped run
+    /// loses nothing (refused if the file exists, unless --resume).
+    #[arg(long, value_name = "FILE.jsonl")]
+    log: Option<PathBuf>,
+    /// Continue the run the --log file records: its evaluations are taken from it instead of
+    /// swept again (the same file, seed and scenes; a larger budget goes on past its end).
+    #[arg(long, requires = "log")]
+    resume: bool,
+}
+
+/// The first Ctrl-C (or SIGTERM) sets the flag: no new sweep starts and the report covers
+/// what was swept; a second one exits at once.
+fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let flag = Arc::new(AtomicBool::new(false));
+    for signal in [SIGINT, SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(signal, 130, Arc::clone(&flag))
+            .and_then(|_| signal_hook::flag::register(signal, Arc::clone(&flag)))
+            .context("installing the Ctrl-C handler")?;
+    }
+    Ok(flag)
 }
 
 pub(crate) fn run(args: &OptimizeArgs) -> Result<(), Failure> {
@@ -72,14 +103,27 @@ pub(crate) fn run(args: &OptimizeArgs) -> Result<(), Failure> {
         TABLE_4_1.len(),
         spec.budget,
     );
-    let report = run_optimization(
-        &spec,
-        &OptimizeOptions {
-            jobs,
-            progress: true,
-        },
-    )
-    .map_err(|e| Failure::NoSuccess(Some(anyhow!("{}: {e}", args.file.display()))))?;
+    let options = OptimizeOptions {
+        jobs,
+        progress: true,
+        log: args.log.clone(),
+        resume: args.resume,
+        interrupt: Some(interrupt_flag()?),
+    };
+    let report = run_optimization(&spec, &options).map_err(|e| match e {
+        OptimizeError::Log(e) => Failure::BadInput(anyhow::Error::new(e)),
+        e => Failure::NoSuccess(Some(anyhow!("{}: {e}", args.file.display()))),
+    })?;
+    if report.replayed_evaluations > 0 {
+        eprintln!(
+            "resumed: {} evaluation(s) taken from {}",
+            report.replayed_evaluations,
+            args.log
+                .as_deref()
+                .unwrap_or(Path::new("the log"))
+                .display()
+        );
+    }
     let text = if args.json {
         let mut json = serde_json::to_string(&report).context("writing the report as JSON")?;
         json.push('\n');
@@ -105,6 +149,19 @@ pub(crate) fn run(args: &OptimizeArgs) -> Result<(), Failure> {
         let scene = best_scene_text(&spec, &report).map_err(|e| anyhow!(e))?;
         std::fs::write(path, scene)
             .with_context(|| format!("{}: cannot write the scene", path.display()))?;
+    }
+    if report.stopped_by == "interrupted" || report.stopped_by.starts_with("log failed") {
+        return Err(Failure::NoSuccess(Some(anyhow!(
+            "{}: {}: the report covers the {} evaluation(s) swept{}",
+            args.file.display(),
+            report.stopped_by,
+            report.evaluations,
+            if args.log.is_some() {
+                "; --resume continues from the log"
+            } else {
+                ""
+            }
+        ))));
     }
     if report.objective_value.is_none() {
         return Err(Failure::NoSuccess(Some(anyhow!(
