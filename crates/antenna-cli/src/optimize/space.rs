@@ -9,9 +9,11 @@
 //! ```
 //!
 //! `x_j` is joint `j`'s normalized position along the antenna (model.md 5). A coordinate
-//! outside `[0, 1]` (Nelder-Mead's simplex may step out) is reflected back into the box
-//! (`-0.25` is `0.25`, `1.5` is `0.5`): clamping it would make the objective flat outside the
-//! box, and a simplex there stops on equal values at the first corner it reaches.
+//! outside `[0, 1]` (Nelder-Mead's simplex may step out) is projected onto the box: the best
+//! profiles lie on the bounds (joints as stiff or as soft as allowed), which a projected
+//! simplex reaches and keeps. Measured on the worked example (docs/optimize.md), reflecting
+//! the coordinate back into the box instead found 171.8 mm against projection's 203.7 mm in
+//! the same 300 sweeps.
 
 use sim_core::{WireDiameter, available_wires, joint_positions, wire_stiffness_n_m_per_rad};
 
@@ -113,15 +115,10 @@ impl Space {
         }
     }
 
-    /// `k_min (k_max / k_min)^u`, `u` reflected into `[0, 1]` (NaN and infinities to 0).
+    /// `k_min (k_max / k_min)^u`, `u` projected onto `[0, 1]` (NaN to 0).
     fn stiffness_at(&self, u: f64) -> f64 {
         let (lo, hi) = self.bounds_n_m_per_rad;
-        let u = if u.is_finite() {
-            let t = u.rem_euclid(2.0);
-            if t > 1.0 { 2.0 - t } else { t }
-        } else {
-            0.0
-        };
+        let u = if u.is_nan() { 0.0 } else { u.clamp(0.0, 1.0) };
         (lo * (hi / lo).powf(u)).clamp(lo, hi)
     }
 
@@ -203,13 +200,13 @@ mod tests {
     fn the_box_maps_onto_the_bounds_logarithmically() {
         let space = Space::new(Family::PerJoint, (0.004, 0.064), Wires::Any, &LINKS).unwrap();
         assert_eq!(space.dim(), 8);
-        let k = space.values(&[0.0, 0.25, 0.5, 1.0, -0.25, 1.5, f64::NAN, 2.75]);
-        let expected = [0.004, 0.008, 0.016, 0.064, 0.008, 0.016, 0.004, 0.032];
+        let k = space.values(&[0.0, 0.25, 0.5, 1.0, -3.0, 7.0, f64::NAN, 0.75]);
+        let expected = [0.004, 0.008, 0.016, 0.064, 0.004, 0.064, 0.004, 0.032];
         for (got, want) in k.iter().zip(expected) {
             assert!((got - want).abs() < 1e-15, "{k:?}");
         }
         let back = space.coordinates(&k);
-        for (u, want) in back.iter().zip([0.0, 0.25, 0.5, 1.0, 0.25, 0.5, 0.0, 0.75]) {
+        for (u, want) in back.iter().zip([0.0, 0.25, 0.5, 1.0, 0.0, 1.0, 0.0, 0.75]) {
             assert!((u - want).abs() < 1e-12, "{back:?}");
         }
     }
