@@ -65,7 +65,8 @@ pub enum Stop {
         /// The budget, sweeps.
         budget: usize,
     },
-    /// [`STALL_CALLS`] calls in a row asked only for stiffness sets swept before.
+    /// [`STALL_CALLS`] calls in a row (or four times the simplex's vertices, if more) asked
+    /// only for stiffness sets swept before.
     #[error("no new stiffness set in {STALL_CALLS} calls")]
     Stalled,
     /// Interrupted (Ctrl-C, SIGTERM): the sweeps under way finished, no new one started.
@@ -210,7 +211,9 @@ impl<'a> Evaluator<'a> {
             }
             if todo.is_empty() && stop.is_none() && stall {
                 inner.idle_calls += 1;
-                if inner.idle_calls >= STALL_CALLS {
+                // Nelder-Mead's start looks its dim + 1 vertices up one by one (and must
+                // not fail there): never call that a stall.
+                if inner.idle_calls >= STALL_CALLS.max(4 * (self.spec.space.dim() + 1)) {
                     return Err(Stop::Stalled);
                 }
             } else {
@@ -267,8 +270,11 @@ impl<'a> Evaluator<'a> {
         Ok(batch
             .iter()
             .map(|(values, _)| {
-                let index = inner.seen[&key_of(values)];
-                inner.records[index].objective_value
+                inner
+                    .seen
+                    .get(&key_of(values))
+                    .and_then(|&i| inner.records.get(i))
+                    .and_then(|r| r.objective_value)
             })
             .collect())
     }
