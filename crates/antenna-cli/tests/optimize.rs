@@ -283,7 +283,17 @@ fn a_sweep_that_fails_makes_its_evaluation_infeasible_and_is_counted() {
 fn bad_input_is_a_located_error_with_exit_2() {
     let base = "[optimize]\nscenes = [\"small.toml\"]\nobjective = \"preview-mean\"\n\
                 parameters = \"per-joint\"\nbudget = 40\n";
-    let cases: [(&str, String, &str); 10] = [
+    let cases: [(&str, String, &str); 12] = [
+        (
+            "duration-negative",
+            format!("{base}duration_s = -1.0\n"),
+            "opt.toml:6:14: `duration_s` in [optimize]: -1 must be > 0",
+        ),
+        (
+            "duration-too-long",
+            format!("{base}duration_s = 1e9\n"),
+            "opt.toml:6:14: `duration_s` in [optimize]: 1000000000 s is more than",
+        ),
         (
             "unknown-objective",
             base.replace("\"preview-mean\"", "\"speed\""),

@@ -226,12 +226,10 @@ impl OptimizeSpec {
                 .map_err(|_| source.invalid(s.span(), OPTIMIZE, "seed", "the seed must be >= 0"))?,
             None => 1,
         };
-        let duration_s = raw
-            .duration_s
-            .as_ref()
-            .map(|d| positive(&source, OPTIMIZE, "duration_s", d))
-            .transpose()?;
-
+        let duration_s = match &raw.duration_s {
+            Some(d) => Some((positive(&source, OPTIMIZE, "duration_s", d)?, d.span())),
+            None => None,
+        };
         let scene_keys = raw.scenes.as_ref().ok_or_else(|| required("scenes"))?;
         let scenes = read_scenes(&source, folder, scene_keys, objective, duration_s)?;
         let first = &scenes[0].1;
@@ -321,7 +319,7 @@ fn read_scenes(
     folder: &Path,
     keys: &Spanned<Vec<Spanned<String>>>,
     objective: Objective,
-    duration_s: Option<f64>,
+    duration_s: Option<(f64, std::ops::Range<usize>)>,
 ) -> Result<Vec<(PathBuf, Scene)>, SceneError> {
     if keys.get_ref().is_empty() {
         return Err(source.invalid(
@@ -336,15 +334,20 @@ fn read_scenes(
         let scene_path = folder.join(key.get_ref());
         let mut scene = Scene::from_path(&scene_path)?;
         let bad = |why: String| source.invalid(key.span(), OPTIMIZE, "scenes", why);
-        if let Some(d) = duration_s {
+        if let Some((d, span)) = &duration_s {
             if (d / scene.motion.step_s).round() > MAX_SWEEP_STEPS as f64 {
-                return Err(bad(format!(
-                    "duration_s = {d} s is more than {MAX_SWEEP_STEPS} steps of {} s of {}",
-                    scene.motion.step_s,
-                    scene_path.display()
-                )));
+                return Err(source.invalid(
+                    span.clone(),
+                    OPTIMIZE,
+                    "duration_s",
+                    format!(
+                        "{d} s is more than {MAX_SWEEP_STEPS} steps of {} s of {}",
+                        scene.motion.step_s,
+                        scene_path.display()
+                    ),
+                ));
             }
-            scene.motion.duration_s = d;
+            scene.motion.duration_s = *d;
         }
         if scene.walls.is_empty() {
             return Err(bad(format!(
