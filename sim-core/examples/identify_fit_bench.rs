@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use bench_common::{human, median};
 use nalgebra::{Matrix3, Matrix5, Vector3, Vector5};
-use sim_core::identify::fit_bench;
+use sim_core::identify::fit_bench::{self, ring_down};
 
 const F_N_HZ: [f64; 4] = [2.0, 3.7, 8.0, 20.0];
 const ZETAS: [f64; 5] = [0.01, 0.03, 0.1, 0.2, 0.3];
@@ -257,47 +257,6 @@ fn quantile(values: &[f64], q: f64) -> f64 {
     }
     let rank = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len());
     v[rank - 1]
-}
-
-/// xorshift64* with Box-Muller, as in identify.rs's tests.
-struct Noise(u64);
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn gaussian(&mut self) -> f64 {
-        let (u1, u2) = (self.uniform(), self.uniform());
-        (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
-    }
-}
-
-/// identify.rs's test ring-down.
-#[allow(clippy::too_many_arguments)]
-fn ring_down(
-    f_n_hz: f64,
-    zeta: f64,
-    fs_hz: f64,
-    duration_s: f64,
-    amplitude_rad: f64,
-    phase_rad: f64,
-    offset_rad: f64,
-    noise_rad: f64,
-    seed: u64,
-) -> Vec<f64> {
-    let wn = 2.0 * PI * f_n_hz;
-    let wd = wn * (1.0 - zeta * zeta).sqrt();
-    let mut noise = Noise(seed.max(1));
-    (0..(duration_s * fs_hz).round() as usize)
-        .map(|i| {
-            let t = i as f64 / fs_hz;
-            offset_rad
-                + amplitude_rad * (-zeta * wn * t).exp() * (wd * t + phase_rad).cos()
-                + noise_rad * noise.gaussian()
-        })
-        .collect()
 }
 
 /// Linear least squares for (a, b, c) at fixed (sigma, omega); returns params and cost.

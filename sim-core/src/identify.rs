@@ -560,10 +560,56 @@ fn spectrum_peak_hz(x: &[f64], fs_hz: f64) -> Result<f64, IdentifyError> {
 }
 
 /// Hooks for `examples/identify_fit_bench.rs`, which measures the ring-down fit against a
-/// hand-written Levenberg-Marquardt baseline. Not part of the API.
+/// hand-written Levenberg-Marquardt baseline, and the ring-down records it shares with this
+/// module's tests. Not part of the API.
 #[doc(hidden)]
 pub mod fit_bench {
     use super::{IdentifyError, PI, fit_damped_sine, spectrum_peak_hz};
+
+    /// xorshift64* with Box-Muller: deterministic noise without a rand dependency.
+    pub struct Noise(pub u64);
+    impl Noise {
+        /// Uniform in (0, 1).
+        pub fn uniform(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        }
+        /// Standard normal.
+        pub fn gaussian(&mut self) -> f64 {
+            let (u1, u2) = (self.uniform(), self.uniform());
+            (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
+        }
+    }
+
+    /// A sampled ring-down `offset + A exp(-zeta w_n t) cos(w_d t + phase)` plus Gaussian
+    /// noise of `noise_rad` (seeded): the records of identify's tests and of
+    /// `examples/identify_fit_bench.rs`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn ring_down(
+        f_n_hz: f64,
+        zeta: f64,
+        fs_hz: f64,
+        duration_s: f64,
+        amplitude_rad: f64,
+        phase_rad: f64,
+        offset_rad: f64,
+        noise_rad: f64,
+        seed: u64,
+    ) -> Vec<f64> {
+        let wn = 2.0 * PI * f_n_hz;
+        let wd = wn * (1.0 - zeta * zeta).sqrt();
+        let mut noise = Noise(seed.max(1));
+        (0..(duration_s * fs_hz).round() as usize)
+            .map(|i| {
+                let t = i as f64 / fs_hz;
+                offset_rad
+                    + amplitude_rad * (-zeta * wn * t).exp() * (wd * t + phase_rad).cos()
+                    + noise_rad * noise.gaussian()
+            })
+            .collect()
+    }
 
     /// The fit's starting angular frequency, rad/s: the spectrum peak
     /// [`super::identify_stiffness`] seeds it with.
@@ -937,45 +983,7 @@ mod tests {
         assert!((f - 7.3217).abs() < 3.3e-3, "{f}");
     }
 
-    /// xorshift64* with Box-Muller: deterministic noise without a rand dependency.
-    struct Noise(u64);
-    impl Noise {
-        fn uniform(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        }
-        fn gaussian(&mut self) -> f64 {
-            let (u1, u2) = (self.uniform(), self.uniform());
-            (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
-        }
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn ring_down(
-        f_n_hz: f64,
-        zeta: f64,
-        fs_hz: f64,
-        duration_s: f64,
-        amplitude_rad: f64,
-        phase_rad: f64,
-        offset_rad: f64,
-        noise_rad: f64,
-        seed: u64,
-    ) -> Vec<f64> {
-        let wn = 2.0 * PI * f_n_hz;
-        let wd = wn * (1.0 - zeta * zeta).sqrt();
-        let mut noise = Noise(seed.max(1));
-        (0..(duration_s * fs_hz).round() as usize)
-            .map(|i| {
-                let t = i as f64 / fs_hz;
-                offset_rad
-                    + amplitude_rad * (-zeta * wn * t).exp() * (wd * t + phase_rad).cos()
-                    + noise_rad * noise.gaussian()
-            })
-            .collect()
-    }
+    use super::fit_bench::{Noise, ring_down};
 
     #[test]
     fn synthetic_grid_recovers_stiffness_within_one_percent() {
