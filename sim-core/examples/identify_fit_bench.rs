@@ -29,8 +29,8 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use bench_common::{human, median};
-use nalgebra::{Matrix3, Matrix5, Vector3, Vector5};
-use sim_core::identify::fit_bench::{self, ring_down};
+use nalgebra::{Matrix5, Vector5};
+use sim_core::identify::fit_bench::{self, cost_of, ring_down, scan_seed};
 
 const F_N_HZ: [f64; 4] = [2.0, 3.7, 8.0, 20.0];
 const ZETAS: [f64; 5] = [0.01, 0.03, 0.1, 0.2, 0.3];
@@ -257,49 +257,6 @@ fn quantile(values: &[f64], q: f64) -> f64 {
     }
     let rank = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len());
     v[rank - 1]
-}
-
-/// Linear least squares for (a, b, c) at fixed (sigma, omega); returns params and cost.
-fn linear_fit(x: &[f64], fs_hz: f64, sigma: f64, omega: f64) -> Option<(Vector3<f64>, f64)> {
-    let mut ata = Matrix3::zeros();
-    let mut atb = Vector3::zeros();
-    for (i, &v) in x.iter().enumerate() {
-        let t = i as f64 / fs_hz;
-        let e = (-sigma * t).exp();
-        let (s, c) = (omega * t).sin_cos();
-        let row = Vector3::new(e * c, e * s, 1.0);
-        ata += row * row.transpose();
-        atb += row * v;
-    }
-    let p = ata.cholesky()?.solve(&atb);
-    let cost = cost_of(x, fs_hz, &[p[0], p[1], p[2], sigma, omega]);
-    cost.is_finite().then_some((p, cost))
-}
-
-fn cost_of(x: &[f64], fs_hz: f64, p: &[f64; 5]) -> f64 {
-    x.iter()
-        .enumerate()
-        .map(|(i, &v)| {
-            let t = i as f64 / fs_hz;
-            let (s, c) = (p[4] * t).sin_cos();
-            let r = v - (p[2] + (-p[3] * t).exp() * (p[0] * c + p[1] * s));
-            r * r
-        })
-        .sum()
-}
-
-/// The coarse scan of damping ratios both fits start from: `[a, b, c, sigma, omega0]`, cost.
-fn scan_seed(x: &[f64], fs_hz: f64, omega_start: f64) -> Option<([f64; 5], f64)> {
-    let mut best: Option<([f64; 5], f64)> = None;
-    for zeta in [0.0, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5] {
-        let sigma = zeta * omega_start;
-        if let Some((p, cost)) = linear_fit(x, fs_hz, sigma, omega_start)
-            && best.is_none_or(|(_, c)| cost < c)
-        {
-            best = Some(([p[0], p[1], p[2], sigma, omega_start], cost));
-        }
-    }
-    best
 }
 
 /// The hand-written Levenberg-Marquardt fit of identify.rs before issue #17.

@@ -566,6 +566,17 @@ fn spectrum_peak_hz(x: &[f64], fs_hz: f64) -> Result<f64, IdentifyError> {
 pub mod fit_bench {
     use super::{IdentifyError, PI, fit_damped_sine, spectrum_peak_hz};
 
+    /// The coarse scan of damping ratios every fit starts from: the best
+    /// `[a, b, c, sigma, omega_start]` and its cost.
+    pub fn scan_seed(x: &[f64], fs_hz: f64, omega_start: f64) -> Option<([f64; 5], f64)> {
+        super::scan_seed(x, fs_hz, omega_start)
+    }
+
+    /// The sum of squared residuals of `[a, b, c, sigma, omega]`.
+    pub fn cost_of(x: &[f64], fs_hz: f64, p: &[f64; 5]) -> f64 {
+        super::cost_of(x, fs_hz, p)
+    }
+
     /// xorshift64* with Box-Muller: deterministic noise without a rand dependency.
     pub struct Noise(pub u64);
     impl Noise {
@@ -678,6 +689,22 @@ fn linear_fit(x: &[f64], fs_hz: f64, sigma: f64, omega: f64) -> Option<(Vector3<
     cost.is_finite().then_some((p, cost))
 }
 
+/// The coarse scan of damping ratios a fit starts from (linear least squares for a, b, c at
+/// each): the best `[a, b, c, sigma, omega_start]` and its cost.
+fn scan_seed(x: &[f64], fs_hz: f64, omega_start: f64) -> Option<([f64; 5], f64)> {
+    let mut best: Option<([f64; 5], f64)> = None;
+    for zeta in [0.0, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5] {
+        let sigma = zeta * omega_start;
+        if let Some((p, cost)) = linear_fit(x, fs_hz, sigma, omega_start)
+            && best.is_none_or(|(_, c)| cost < c)
+        {
+            best = Some(([p[0], p[1], p[2], sigma, omega_start], cost));
+        }
+    }
+    best
+}
+
+/// The sum of squared residuals of `[a, b, c, sigma, omega]`.
 fn cost_of(x: &[f64], fs_hz: f64, p: &[f64; 5]) -> f64 {
     x.iter()
         .enumerate()
@@ -791,17 +818,8 @@ fn fit_damped_sine(
         iterations,
         rms_residual_rad,
     };
-    // Seed the decay rate from a coarse scan of damping ratios (linear LS for a, b, c).
-    let mut best: Option<(f64, f64)> = None;
-    for zeta in [0.0, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.5] {
-        let sigma = zeta * omega_start;
-        if let Some((_, cost)) = linear_fit(x, fs_hz, sigma, omega_start)
-            && best.is_none_or(|(_, c)| cost < c)
-        {
-            best = Some((sigma, cost));
-        }
-    }
-    let (sigma_start, _) = best.ok_or(failed(0, f64::NAN))?;
+    let (seed, _) = scan_seed(x, fs_hz, omega_start).ok_or(failed(0, f64::NAN))?;
+    let sigma_start = seed[3];
     let model = RingDownModel::new(x.len(), fs_hz, sigma_start, omega_start);
     let problem = SeparableProblemBuilder::new(model)
         .observations(DVector::from_column_slice(x))
