@@ -370,6 +370,22 @@ fn bad_input_is_a_located_error_with_exit_2() {
     ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("--plot x.pdf: the file name must end in .svg or .png"));
+    // an output in a folder that does not exist is refused before the search, not after
+    for option in ["-o", "--plot", "--scene-out", "--log"] {
+        let out = run(&[
+            "optimize",
+            &example("optimize/wall_following.toml"),
+            option,
+            "/nonexistent-folder/out.svg",
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{option}");
+        assert!(
+            stderr(&out).contains("the folder /nonexistent-folder does not exist"),
+            "{option}: {}",
+            stderr(&out)
+        );
+        assert!(stdout(&out).is_empty());
+    }
 }
 
 /// The report without what differs from run to run (the time) or with how it was run (what

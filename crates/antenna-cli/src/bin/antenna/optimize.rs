@@ -83,8 +83,28 @@ fn interrupt_flag() -> anyhow::Result<Arc<AtomicBool>> {
     Ok(flag)
 }
 
+/// An output whose folder does not exist is refused before the search, not after it (a long
+/// run's result would be lost).
+fn check_output_folder(option: &str, path: Option<&Path>) -> Result<(), Failure> {
+    let Some(folder) = path.and_then(Path::parent) else {
+        return Ok(());
+    };
+    if folder.as_os_str().is_empty() || folder.is_dir() {
+        return Ok(());
+    }
+    Err(Failure::BadInput(anyhow!(
+        "{option} {}: the folder {} does not exist",
+        path.map_or(String::new(), |p| p.display().to_string()),
+        folder.display()
+    )))
+}
+
 pub(crate) fn run(args: &OptimizeArgs) -> Result<(), Failure> {
     check_plot_file(args.plot.as_deref())?;
+    check_output_folder("-o", args.output.as_deref())?;
+    check_output_folder("--plot", args.plot.as_deref())?;
+    check_output_folder("--scene-out", args.scene_out.as_deref())?;
+    check_output_folder("--log", args.log.as_deref())?;
     let spec = OptimizeSpec::from_path(&args.file).map_err(anyhow::Error::new)?;
     let jobs = match args.jobs {
         Some(j) => usize::try_from(j).unwrap_or(usize::MAX),
