@@ -109,6 +109,7 @@ pub mod metrics;
 pub mod nitinol;
 pub mod positions;
 pub mod profile;
+pub mod sensor;
 pub mod sweep;
 pub mod tip_force;
 pub mod velocity;
@@ -165,6 +166,9 @@ pub use nitinol::{
 };
 pub use positions::{FramePoses, Pose2, frame_pose, frame_poses, frame_poses_into, tip_pose};
 pub use profile::{ProfileError, StiffnessProfile, joint_positions};
+pub use sensor::{
+    CalibrationError, FIRMWARE_DEBOUNCE_SAMPLES, SensorError, SensorField, SensorSettings, Sensors,
+};
 pub use tip_force::{
     FreeBodyForces, TIP_FORCE_RANK_TOLERANCE, TipForce, TipForceError, joints_on_limit,
     tip_force_free_body, tip_force_least_squares, tip_wrench_least_squares,
