@@ -94,6 +94,7 @@ pub mod beam;
 pub mod castigliano;
 pub mod chain;
 pub mod contact;
+pub mod coverage;
 pub mod elastica;
 pub mod energy;
 pub mod equilibrium;
@@ -125,6 +126,9 @@ pub use beam::{
 };
 pub use castigliano::castigliano_deflection_rad;
 pub use chain::{Chain, ChainBuilder, JointLimit};
+pub use coverage::{
+    Coverage, CoverageError, CoverageSettings, MAX_SAMPLES, Section, WallSample, wall_coverage,
+};
 pub use elastica::{
     BendingStiffness, ElasticaError, ElasticaOptions, ElasticaProblem, ElasticaSolution,
     PerpendicularLoadClosedForm, ShapePoint, perpendicular_load_closed_form,
