@@ -30,6 +30,7 @@
 
 use nalgebra::Vector2;
 
+use crate::contact::Contact;
 use crate::wall::{Wall, WallShape};
 
 /// How the wall is sampled and what counts as captured.
@@ -236,6 +237,102 @@ pub fn wall_coverage(
         p90_error_mm,
         completeness,
     })
+}
+
+/// A run's coverage, gathered step by step: the extent of the true contacts on each wall
+/// along the motion direction (the [`Section`]s passed) and the estimated points.
+///
+/// ```
+/// use nalgebra::Vector2;
+/// use sim_core::{CoverageAccumulator, CoverageSettings, Line, SolidSide, Wall};
+/// let wall = Wall::smooth(Line::new(Vector2::zeros(), 0.0, SolidSide::Right)?);
+/// let mut run = CoverageAccumulator::new(0.0, 1);
+/// run.pass_points(0, [Vector2::new(0.0, 0.0), Vector2::new(0.1, 0.0)]);
+/// run.estimate([Vector2::new(0.05, 0.0)]);
+/// let c = run.coverage(&[wall], &CoverageSettings::default())?;
+/// assert!((c.mean_error_mm.unwrap() - 25.0).abs() < 0.2);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct CoverageAccumulator {
+    direction: Vector2<f64>,
+    /// Per wall: the least and greatest projection of a true contact.
+    extents_m: Vec<Option<(f64, f64)>>,
+    points_m: Vec<Vector2<f64>>,
+}
+
+impl CoverageAccumulator {
+    /// An empty run moving along `direction_rad` (from the ground x-axis) past `walls` walls.
+    pub fn new(direction_rad: f64, walls: usize) -> Self {
+        let (sin, cos) = direction_rad.sin_cos();
+        Self {
+            direction: Vector2::new(cos, sin),
+            extents_m: vec![None; walls],
+            points_m: Vec::new(),
+        }
+    }
+
+    /// A step's true contacts: each widens its wall's section to include it (a contact on a
+    /// wall beyond those counted, or not finite, is skipped).
+    pub fn pass(&mut self, contacts: &[Contact]) {
+        for c in contacts {
+            self.pass_points(c.wall, [c.point_m]);
+        }
+    }
+
+    /// Widens wall `wall`'s section to include `points_m` (non-finite points are skipped).
+    pub fn pass_points(&mut self, wall: usize, points_m: impl IntoIterator<Item = Vector2<f64>>) {
+        let Some(extent) = self.extents_m.get_mut(wall) else {
+            return;
+        };
+        for p in points_m {
+            let s = p.dot(&self.direction);
+            if !s.is_finite() {
+                continue;
+            }
+            *extent = Some(match *extent {
+                Some((lo, hi)) => (lo.min(s), hi.max(s)),
+                None => (s, s),
+            });
+        }
+    }
+
+    /// Adds estimated contact points.
+    pub fn estimate(&mut self, points_m: impl IntoIterator<Item = Vector2<f64>>) {
+        self.points_m.extend(points_m);
+    }
+
+    /// The estimated points so far.
+    pub fn points_m(&self) -> &[Vector2<f64>] {
+        &self.points_m
+    }
+
+    /// The sections passed so far: one per wall touched.
+    pub fn sections(&self) -> Vec<Section> {
+        self.extents_m
+            .iter()
+            .enumerate()
+            .filter_map(|(wall, e)| e.map(|(from_m, to_m)| Section { wall, from_m, to_m }))
+            .collect()
+    }
+
+    /// The coverage of the run so far ([`wall_coverage`]).
+    ///
+    /// # Errors
+    /// As [`wall_coverage`].
+    pub fn coverage(
+        &self,
+        walls: &[Wall],
+        settings: &CoverageSettings,
+    ) -> Result<Coverage, CoverageError> {
+        wall_coverage(
+            walls,
+            &self.direction,
+            &self.sections(),
+            &self.points_m,
+            settings,
+        )
+    }
 }
 
 /// The distance from `p` to the nearest of `sorted` (sorted by projection on `direction`).

@@ -127,7 +127,8 @@ pub use beam::{
 pub use castigliano::castigliano_deflection_rad;
 pub use chain::{Chain, ChainBuilder, JointLimit};
 pub use coverage::{
-    Coverage, CoverageError, CoverageSettings, MAX_SAMPLES, Section, WallSample, wall_coverage,
+    Coverage, CoverageAccumulator, CoverageError, CoverageSettings, MAX_SAMPLES, Section,
+    WallSample, wall_coverage,
 };
 pub use elastica::{
     BendingStiffness, ElasticaError, ElasticaOptions, ElasticaProblem, ElasticaSolution,
