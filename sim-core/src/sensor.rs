@@ -14,7 +14,9 @@
 //!   `s` twelve-bit counts (`sqrt(16) s / 4`); the daemon's simulated rig adds it to each
 //!   conversion and lets the firmware's own oversampling do the rest.
 //! - **Calibration**: `o_j` and `g_j` are given per joint, or drawn once per joint from a
-//!   Gaussian of the given spread with the settings' seed ([`CalibrationError`]).
+//!   Gaussian of the given spread with the settings' seed ([`CalibrationError`]; a gain
+//!   error's Gaussian is truncated to values above `-1`, where a reading still grows with
+//!   the angle).
 //! - **Touch switches**: a switch closes when the force at its contact is at least
 //!   `touch_threshold_n` (zero: every contact closes its switch, the ideal), and a bit changes
 //!   only after `touch_debounce_samples` consecutive raw reads agree (one: no debouncing; the
@@ -278,13 +280,20 @@ impl Sensors {
     pub fn new(settings: &SensorSettings, n: usize) -> Result<Sensors, SensorError> {
         settings.validate(n)?;
         let mut calibration = ChaCha8Rng::seed_from_u64(settings.seed);
-        let mut draw = |error: &CalibrationError| -> Vec<f64> {
+        // `above`: the draw is repeated until it exceeds this (a gain error at or below -1
+        // would make a reading that does not grow with the angle); at least half of a
+        // zero-mean Gaussian's draws pass, so this ends.
+        let mut draw = |error: &CalibrationError, above: f64| -> Vec<f64> {
             let mut per_link = vec![0.0; n + 1];
             match error {
                 CalibrationError::Spread(sd) if *sd > 0.0 => {
                     for v in &mut per_link[1..] {
-                        let z: f64 = StandardNormal.sample(&mut calibration);
-                        *v = sd * z;
+                        *v = loop {
+                            let z: f64 = StandardNormal.sample(&mut calibration);
+                            if sd * z > above {
+                                break sd * z;
+                            }
+                        };
                     }
                 }
                 CalibrationError::Spread(_) => {}
@@ -292,8 +301,8 @@ impl Sensors {
             }
             per_link
         };
-        let offset_counts = draw(&settings.offset_counts);
-        let gain_error = draw(&settings.gain_error);
+        let offset_counts = draw(&settings.offset_counts, f64::NEG_INFINITY);
+        let gain_error = draw(&settings.gain_error, -1.0);
         // The noise has its own stream, so the calibration does not depend on the noise level.
         let noise = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x9E37_79B9_7F4A_7C15);
         Ok(Sensors {

@@ -1,5 +1,5 @@
 //! The scene tables beyond scene-format.md's core (`[antenna.hairs]`, `[[walls]]`,
-//! `[[walls.zones]]`, `[sweep]`, `[start]`, `[contact]`): every error exits 2 with nothing on
+//! `[[walls.zones]]`, `[sweep]`, `[start]`, `[contact]`, `[sensors]`): every error exits 2 with nothing on
 //! stdout and names the file, the line and column, the key and the table, under both
 //! `antenna solve` and `antenna sweep`; good tables reach sim-core as written.
 #![allow(clippy::unwrap_used)]
@@ -508,5 +508,106 @@ fn contact_table_errors() {
         "contact_type.toml",
         &with("\n[contact]\nmargin_m = \"wide\"\n"),
         "28:12: `margin_m` in [contact]:",
+    );
+}
+
+#[test]
+fn sensors_table_reaches_the_settings() {
+    use sim_core::{CalibrationError, SensorSettings};
+    let scene = Scene::parse(WALL_SCENE, "s.toml").unwrap();
+    assert_eq!(scene.sensors, SensorSettings::IDEAL);
+    let scene = Scene::parse(
+        &with(
+            "\n[sensors]\nangle_noise_counts = 1\noffset_counts = 4.0\n\
+             gain_error = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -0.02]\n\
+             touch_threshold_n = 0.002\ntouch_debounce_samples = 3\nsample_rate_hz = 50\n\
+             seed = 9\n",
+        ),
+        "s.toml",
+    )
+    .unwrap();
+    assert_eq!(
+        scene.sensors,
+        SensorSettings {
+            angle_noise_counts: 1.0,
+            offset_counts: CalibrationError::Spread(4.0),
+            gain_error: CalibrationError::PerJoint(vec![0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -0.02]),
+            touch_threshold_n: 0.002,
+            touch_debounce_samples: 3,
+            sample_rate_hz: Some(50.0),
+            seed: 9,
+        }
+    );
+    // An empty table is the ideal sensors.
+    let scene = Scene::parse(&with("\n[sensors]\n"), "s.toml").unwrap();
+    assert!(scene.sensors.is_ideal());
+}
+
+/// Issue #18: every bad `[sensors]` value is a located error at the value naming the key,
+/// exit 2 from `solve` and `sweep` (and `study`, whose scene it is).
+#[test]
+fn sensors_table_errors() {
+    expect(
+        "sensors_unknown.toml",
+        &with("\n[sensors]\nnoise_counts = 1.0\n"),
+        "28:1: unknown key `noise_counts` in [sensors]; allowed: angle_noise_counts, \
+         offset_counts, gain_error, touch_threshold_n, touch_debounce_samples, sample_rate_hz, \
+         seed",
+    );
+    expect(
+        "sensors_noise.toml",
+        &with("\n[sensors]\nangle_noise_counts = -1.0\n"),
+        "28:22: `angle_noise_counts` in [sensors]: -1 must be finite and at least 0",
+    );
+    expect(
+        "sensors_noise_nan.toml",
+        &with("\n[sensors]\nangle_noise_counts = nan\n"),
+        "28:22: `angle_noise_counts` in [sensors]: NaN must be finite and at least 0",
+    );
+    expect(
+        "sensors_threshold.toml",
+        &with("\n[sensors]\nseed = 3\ntouch_threshold_n = -0.01\n"),
+        "29:21: `touch_threshold_n` in [sensors]: -0.01 must be finite and at least 0",
+    );
+    expect(
+        "sensors_debounce.toml",
+        &with("\n[sensors]\ntouch_debounce_samples = 0\n"),
+        "28:26: `touch_debounce_samples` in [sensors]: 0 is out of range 1..=1000000",
+    );
+    expect(
+        "sensors_rate.toml",
+        &with("\n[sensors]\nsample_rate_hz = 0\n"),
+        "28:18: `sample_rate_hz` in [sensors]: 0 must be finite and above 0",
+    );
+    expect(
+        "sensors_offset_length.toml",
+        &with("\n[sensors]\noffset_counts = [1.0, -2.0]\n"),
+        "28:17: `offset_counts` in [sensors]: has 2 value(s); expected 8 (one per flexible \
+         joint, links - 1)",
+    );
+    expect(
+        "sensors_offset_spread.toml",
+        &with("\n[sensors]\noffset_counts = -4\n"),
+        "28:17: `offset_counts` in [sensors]: -4 must be finite and at least 0",
+    );
+    expect(
+        "sensors_gain.toml",
+        &with("\n[sensors]\ngain_error = [0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0]\n"),
+        "28:14: `gain_error` in [sensors]: has -1; every entry must be above -1",
+    );
+    expect(
+        "sensors_gain_type.toml",
+        &with("\n[sensors]\ngain_error = \"small\"\n"),
+        "28:14: `gain_error` in [sensors]:",
+    );
+    expect(
+        "sensors_seed.toml",
+        &with("\n[sensors]\nseed = -3\n"),
+        "28:8: `seed` in [sensors]: -3 must be >= 0",
+    );
+    expect(
+        "sensors_seed_type.toml",
+        &with("\n[sensors]\nseed = 1.5\n"),
+        "28:8: `seed` in [sensors]:",
     );
 }

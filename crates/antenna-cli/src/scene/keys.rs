@@ -1,9 +1,10 @@
 //! The keys each table of a scene file allows: the fixed core of scene-format.md and our own
-//! tables (hairs, walls, the sweep, the start, the contact solver).
+//! tables (hairs, walls, the sweep, the start, the contact solver, the sensors).
 
 /// Keys allowed at the top level of a scene file.
 pub const TOP_LEVEL_KEYS: &[&str] = &[
     "antenna", "base", "tip_load", "tip_pin", "solver", "walls", "sweep", "start", "contact",
+    "sensors",
 ];
 /// Keys allowed in `[antenna]`.
 pub const ANTENNA_KEYS: &[&str] = &[
@@ -84,6 +85,16 @@ pub const CONTACT_KEYS: &[&str] = &[
     "jump_deg",
     "margin_m",
 ];
+/// Keys allowed in `[sensors]`.
+pub const SENSORS_KEYS: &[&str] = &[
+    "angle_noise_counts",
+    "offset_counts",
+    "gain_error",
+    "touch_threshold_n",
+    "touch_debounce_samples",
+    "sample_rate_hz",
+    "seed",
+];
 
 /// Every table with its allowed keys, for naming the table of an unknown key.
 pub(crate) const TABLES: &[(&str, &[&str])] = &[
@@ -100,6 +111,7 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
     ("[sweep]", SWEEP_KEYS),
     ("[start]", START_KEYS),
     ("[contact]", CONTACT_KEYS),
+    ("[sensors]", SENSORS_KEYS),
 ];
 
 /// The keys the parser itself requires (every other key is optional or checked after

@@ -1,8 +1,8 @@
 //! Scene files: the TOML description of one antenna, its base, and what acts on it
 //! (`shared/spec/scene-format.md`), parsed with serde and validated into a [`Scene`]; and our
 //! own tables for sweeps along walls: `[antenna.hairs]`, `[[walls]]` with
-//! `[[walls.zones]]`, `[sweep]`, `[start]` and `[contact]` (documented in the README's scene
-//! table). [`Scene::sweep_scene`] turns a scene into sim-core's [`SweepScene`](sim_core::sweep::SweepScene).
+//! `[[walls.zones]]`, `[sweep]`, `[start]`, `[contact]` and `[sensors]` (documented in the
+//! README's scene table). [`Scene::sweep_scene`] turns a scene into sim-core's [`SweepScene`](sim_core::sweep::SweepScene).
 //!
 //! Every error names the file, the key and, where the parser knows it, the line and column;
 //! see [`SceneError`]. Unknown keys are errors that list the keys allowed in their table.
@@ -10,7 +10,7 @@
 //! One file per table: [`keys`] (what each table allows), `antenna.rs` (`[antenna]`,
 //! `[antenna.stiffness]`), [`hairs`], [`walls`] with [`surface`] and [`points_file`] (a
 //! digitized wall's CSV file of points), [`motion`] (`[sweep]`),
-//! [`start`], [`contact`], `solver.rs` (`[solver]`), `sweep_scene.rs` (the conversion) and
+//! [`start`], [`contact`], [`sensors`], `solver.rs` (`[solver]`), `sweep_scene.rs` (the conversion) and
 //! `source.rs` (located errors).
 //!
 //! ```
@@ -84,6 +84,7 @@ pub mod hairs;
 pub mod keys;
 pub mod motion;
 pub mod points_file;
+pub mod sensors;
 mod solver;
 pub(crate) mod source;
 pub mod start;
@@ -97,7 +98,7 @@ use nalgebra::Vector2;
 use serde::Deserialize;
 use sim_core::contact::ContactSettings;
 use sim_core::sweep::{Motion, Placement};
-use sim_core::{Chain, StiffnessProfile, Wall};
+use sim_core::{Chain, SensorSettings, StiffnessProfile, Wall};
 use toml::Spanned;
 
 use crate::error::{Location, SceneError, SceneErrorKind};
@@ -106,6 +107,7 @@ use contact::RawContact;
 pub use hairs::HairSpec;
 pub use keys::*;
 use motion::RawSweep;
+use sensors::RawSensors;
 use solver::RawSolver;
 use source::{Source, point};
 use start::RawStart;
@@ -190,6 +192,9 @@ pub struct Scene {
     pub placement: Placement,
     /// `[contact]` ([`ContactSettings::default`] where silent).
     pub contact: ContactSettings,
+    /// `[sensors]` ([`SensorSettings::IDEAL`] where silent): how a sweep's mapping senses the
+    /// joint angles and the touch switches.
+    pub sensors: SensorSettings,
     /// Where some keys are in the file, for errors found only when solving.
     pub locations: SceneLocations,
 }
@@ -274,6 +279,7 @@ struct RawScene {
     sweep: Option<RawSweep>,
     start: Option<Spanned<RawStart>>,
     contact: Option<RawContact>,
+    sensors: Option<Spanned<RawSensors>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -368,6 +374,10 @@ impl RawScene {
             Some(raw) => raw.validate(source)?,
             None => ContactSettings::default(),
         };
+        let sensors = match &self.sensors {
+            Some(raw) => raw.get_ref().validate(source, raw.span(), chain.n())?,
+            None => SensorSettings::IDEAL,
+        };
 
         let locations = SceneLocations {
             path: source.path.to_string(),
@@ -404,6 +414,7 @@ impl RawScene {
             motion,
             placement,
             contact,
+            sensors,
             locations,
         })
     }
@@ -449,7 +460,7 @@ max_n_m_per_rad = 0.082
         assert!(e.starts_with("s.toml:12:1: unknown key `foo` in [solver]; allowed: tolerance, max_iterations, initial"), "{e}");
         let e = err(&format!("{GOOD}[wals]\n"));
         assert!(
-            e.contains("unknown key `wals` in the top level; allowed: antenna, base, tip_load, tip_pin, solver, walls, sweep, start, contact"),
+            e.contains("unknown key `wals` in the top level; allowed: antenna, base, tip_load, tip_pin, solver, walls, sweep, start, contact, sensors"),
             "{e}"
         );
         let e = err(&GOOD.replace("profile =", "colour = 1\nprofile ="));

@@ -71,6 +71,13 @@ pub struct StudyRow {
     pub mapping_points: Option<usize>,
     /// Their mean distance to the true wall, millimetres.
     pub mapping_mean_error_mm: Option<f64>,
+    /// The wall section passed: each point's mean distance to the nearest estimated point,
+    /// millimetres (the sweep summary's `mapping_coverage_error_mm`).
+    pub mapping_coverage_error_mm: Option<f64>,
+    /// Its 90th percentile, millimetres.
+    pub mapping_coverage_p90_mm: Option<f64>,
+    /// The fraction of the section within 5 mm of an estimated point.
+    pub mapping_completeness: Option<f64>,
     /// Wall-clock time of the sweep, milliseconds.
     pub wall_clock_ms: Option<f64>,
     /// Steps in which the solver relaxed something to get through (friction dropped on a
@@ -109,6 +116,9 @@ pub const CSV_COLUMNS: &[&str] = &[
     "contact_distance_spearman",
     "mapping_points",
     "mapping_mean_error_mm",
+    "mapping_coverage_error_mm",
+    "mapping_coverage_p90_mm",
+    "mapping_completeness",
     "wall_clock_ms",
     "relaxed_steps",
     "iterations_median",
@@ -174,6 +184,9 @@ impl StudyRow {
             contact_distance_spearman: summary.and_then(|s| s.contact_distance_spearman),
             mapping_points: summary.map(|s| s.mapping_points),
             mapping_mean_error_mm: summary.and_then(|s| s.mapping_mean_error_mm),
+            mapping_coverage_error_mm: summary.and_then(|s| s.mapping_coverage_error_mm),
+            mapping_coverage_p90_mm: summary.and_then(|s| s.mapping_coverage_p90_mm),
+            mapping_completeness: summary.and_then(|s| s.mapping_completeness),
             wall_clock_ms: summary.map(|s| s.wall_clock_ms),
             relaxed_steps: summary.map(|s| s.relaxed_steps),
             iterations_median: summary.and_then(|s| s.iterations_median),
@@ -245,6 +258,9 @@ mod tests {
             contact_distance_spearman: None,
             mapping_points: Some(4),
             mapping_mean_error_mm: Some(1.25),
+            mapping_coverage_error_mm: Some(2.5),
+            mapping_coverage_p90_mm: Some(7.0),
+            mapping_completeness: Some(0.75),
             wall_clock_ms: Some(12.0),
             relaxed_steps: Some(0),
             iterations_median: Some(1),
@@ -261,6 +277,6 @@ mod tests {
         }
         let line = row.csv_line();
         assert!(line.starts_with("3,linear,30.0,0.2,distal,smooth mu=0.3,failed,\"step 4 (t = 0.04 s) failed: \"\"why\"\", and more\",3,0.03,,,false,"), "{line}");
-        assert!(line.ends_with(",4,1.25,12.0,0,1,3"), "{line}");
+        assert!(line.ends_with(",4,1.25,2.5,7.0,0.75,12.0,0,1,3"), "{line}");
     }
 }

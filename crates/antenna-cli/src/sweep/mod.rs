@@ -34,13 +34,15 @@ mod summary;
 
 use std::time::Instant;
 
-use sim_core::Chain;
 use sim_core::Wall;
 use sim_core::sweep::{Sweep, SweepStep};
+use sim_core::{Chain, Sensors};
 
 pub use failure::SweepFailure;
-pub use step_metrics::StepMetrics;
-pub use summary::{SweepStats, SweepSummary};
+pub use step_metrics::{SensorSample, StepMetrics};
+pub use summary::{
+    COMPLETE_WITHIN_MM, SensorsSummary, SweepStats, SweepSummary, coverage_settings,
+};
 
 use crate::scene::Scene;
 
@@ -60,6 +62,9 @@ pub struct SweepRun {
     chain: Chain,
     walls: Vec<Wall>,
     sweep: Sweep,
+    /// The scene's `[sensors]` in use: one sample clock, noise stream and set of debouncers
+    /// for the whole sweep.
+    sensors: Sensors,
     placed_pending: bool,
     stats: SweepStats,
     started: Instant,
@@ -76,15 +81,20 @@ impl SweepRun {
         let sweep_scene = scene.sweep_scene()?;
         let chain = sweep_scene.chain.clone();
         let walls = sweep_scene.walls.clone();
+        let sensors = Sensors::new(&scene.sensors, chain.n()).map_err(|e| {
+            SweepFailure::BadInput(format!("{}: [sensors]: {e}", scene.locations.path))
+        })?;
         let sweep = sim_core::sweep::Sweep::new(sweep_scene)
             .map_err(|e| SweepFailure::from_sweep_error(scene, e))?;
+        let stats = SweepStats::with_coverage(walls.clone(), sweep.motion().direction_rad());
         Ok(SweepRun {
             scene: scene.clone(),
             chain,
             walls,
             sweep,
+            sensors,
             placed_pending: true,
-            stats: SweepStats::default(),
+            stats,
             started,
         })
     }
@@ -134,15 +144,24 @@ impl SweepRun {
             }
         };
         Some(step.map(|step| {
-            let metrics = StepMetrics::of(&self.chain, &self.walls, &step);
+            let metrics = StepMetrics::sensed(&self.chain, &self.walls, &step, &mut self.sensors);
             self.stats.push(&step, &metrics);
             SweepState { step, metrics }
         }))
     }
 
-    /// The summary of the states so far, with the wall-clock time since [`Self::start`].
+    /// The sensors in use (their settings, the calibration drawn, the samples taken).
+    pub fn sensors(&self) -> &Sensors {
+        &self.sensors
+    }
+
+    /// The summary of the states so far, with the wall-clock time since [`Self::start`] and,
+    /// when the scene's sensors are not ideal, their settings and samples.
     pub fn summary(&self) -> SweepSummary {
-        self.stats
-            .summary(self.started.elapsed().as_secs_f64() * 1e3)
+        let mut summary = self
+            .stats
+            .summary(self.started.elapsed().as_secs_f64() * 1e3);
+        summary.sensors = SensorsSummary::of(&self.sensors);
+        summary
     }
 }

@@ -92,10 +92,19 @@ pub struct StepRecord {
     /// The distal segment's angle to the nearest wall, radians in `[0, pi]` (`null` without
     /// walls).
     pub distal_angle_to_wall_rad: Option<f64>,
-    /// Touch bits per link `0..=n` (bit `k`: switch `k`, bit 0 the most proximal quarter).
+    /// Touch bits per link `0..=n` (bit `k`: switch `k`, bit 0 the most proximal quarter):
+    /// the true ones, every contact closing the switch under it.
     pub touch_bits: Vec<u8>,
-    /// Contact points estimated from the 12-bit angles and the touch bits in this step.
+    /// What the robot's sensors read, when the scene's `[sensors]` are not ideal (absent
+    /// otherwise: the mapping then uses the 12-bit angles and `touch_bits`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensed: Option<SensedRecord>,
+    /// Contact points estimated from the sensed angles and touch bits in this step (the
+    /// 12-bit angles and `touch_bits` with ideal sensors; none in a step not sampled).
     pub mapping_points: usize,
+    /// The estimated points themselves, ground frame, metres (the map: the summary's wall
+    /// coverage scores all steps' points together).
+    pub mapping_points_m: Vec<[f64; 2]>,
     /// Their mean distance to the true wall, millimetres (`null` without points).
     pub mapping_error_mm: Option<f64>,
     /// Whether the posture snapped during the step (left its branch of equilibria and was
@@ -116,6 +125,32 @@ pub struct StepRecord {
     /// The independent check of the step's state (every step passes it, or the sweep
     /// stops): the largest residual of each equilibrium condition.
     pub certificate: CertificateRecord,
+}
+
+/// What the robot's sensors read at a step (`sensed` in a `step` line).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SensedRecord {
+    /// Whether the robot sampled its sensors at this step (`[sensors] sample_rate_hz`); a
+    /// step not sampled maps no points.
+    pub sampled: bool,
+    /// The joint angles as reported, `theta_0..theta_n`, radians (`null` when not sampled).
+    pub theta_rad: Option<Vec<f64>>,
+    /// The debounced touch bits per link `0..=n` the mapping used (`null` when not sampled).
+    pub touch_bits: Option<Vec<u8>>,
+}
+
+impl SensedRecord {
+    /// The record of a step's sensing; `None` with ideal sensors.
+    pub fn new(metrics: &StepMetrics) -> Option<SensedRecord> {
+        if metrics.ideal_sensors {
+            return None;
+        }
+        Some(SensedRecord {
+            sampled: metrics.sample.is_some(),
+            theta_rad: metrics.sample.as_ref().map(|s| s.theta_rad.clone()),
+            touch_bits: metrics.sample.as_ref().map(|s| s.touch_bits.clone()),
+        })
+    }
 }
 
 /// The independent check of a step's state ([`EquilibriumCheck`]): the largest residual of
@@ -174,7 +209,13 @@ impl StepRecord {
             flipped: step.flipped(),
             distal_angle_to_wall_rad: step.flip.map(|f| f.angle_to_wall_rad),
             touch_bits: step.touch_bits.clone(),
+            sensed: SensedRecord::new(metrics),
             mapping_points: metrics.mapping.count,
+            mapping_points_m: metrics
+                .estimates
+                .iter()
+                .map(|e| [e.point_m.x, e.point_m.y])
+                .collect(),
             mapping_error_mm: metrics.mapping.mean_error_mm,
             snapped: step.report.snapped,
             substeps: step.report.substeps,

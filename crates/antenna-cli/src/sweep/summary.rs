@@ -7,7 +7,10 @@ use std::fmt::Write as _;
 
 use serde::{Deserialize, Serialize};
 use sim_core::sweep::SweepStep;
-use sim_core::{MappingAccumulator, pearson_correlation, spearman_correlation};
+use sim_core::{
+    CoverageAccumulator, CoverageSettings, MappingAccumulator, Sensors, Wall, pearson_correlation,
+    spearman_correlation,
+};
 
 use super::StepMetrics;
 
@@ -59,6 +62,20 @@ pub struct SweepSummary {
     pub mapping_mean_error_mm: Option<f64>,
     /// Their largest distance to the true wall, millimetres.
     pub mapping_max_error_mm: Option<f64>,
+    /// The wall section the antenna passed (per wall, between its first and last true contact
+    /// along the motion), sampled every 0.5 mm of arclength: each sample's mean distance to
+    /// the nearest estimated point, millimetres (`null` without points or contacts; see
+    /// `sim_core::coverage`).
+    pub mapping_coverage_error_mm: Option<f64>,
+    /// The 90th percentile (nearest rank) of that distance, millimetres.
+    pub mapping_coverage_p90_mm: Option<f64>,
+    /// The fraction of that section within [`COMPLETE_WITHIN_MM`] of an estimated point
+    /// (`null` without contacts; `0` without points).
+    pub mapping_completeness: Option<f64>,
+    /// The scene's `[sensors]` in force and the samples they took; absent (`None`) with
+    /// ideal sensors, which sample every step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensors: Option<SensorsSummary>,
     /// Substeps solved over all steps.
     pub substeps: usize,
     /// Newton iterations over all steps.
@@ -89,9 +106,67 @@ pub struct SweepSummary {
     pub stopped_by: Option<String>,
 }
 
+/// The sensor settings a sweep used (`[sensors]`, the calibration errors as drawn or given)
+/// and the samples taken.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SensorsSummary {
+    /// Samples taken (recorded steps the robot read its sensors at, the placement included).
+    pub samples: u64,
+    /// The sample rate, hertz (`null`: every step).
+    pub sample_rate_hz: Option<f64>,
+    /// The Hall angle noise of one sample, standard deviation, 12-bit counts.
+    pub angle_noise_counts: f64,
+    /// The calibration offset of each flexible joint `1..=n` in use, 12-bit counts.
+    pub offset_counts: Vec<f64>,
+    /// The gain error of each flexible joint `1..=n` in use, a fraction.
+    pub gain_error: Vec<f64>,
+    /// The force that closes a touch switch, newtons.
+    pub touch_threshold_n: f64,
+    /// Agreeing raw reads before a touch bit changes.
+    pub touch_debounce_samples: u32,
+    /// The seed of the noise and of drawn calibration errors.
+    pub seed: u64,
+}
+
+impl SensorsSummary {
+    /// The summary of `sensors` so far; `None` when they are ideal.
+    pub fn of(sensors: &Sensors) -> Option<SensorsSummary> {
+        let settings = sensors.settings();
+        if settings.is_ideal() {
+            return None;
+        }
+        let flexible = |per_link: &[f64]| per_link.get(1..).unwrap_or_default().to_vec();
+        Some(SensorsSummary {
+            samples: sensors.samples(),
+            sample_rate_hz: settings.sample_rate_hz,
+            angle_noise_counts: settings.angle_noise_counts,
+            offset_counts: flexible(sensors.offset_counts()),
+            gain_error: flexible(sensors.gain_error()),
+            touch_threshold_n: settings.touch_threshold_n,
+            touch_debounce_samples: settings.touch_debounce_samples,
+            seed: settings.seed,
+        })
+    }
+}
+
+/// A wall point this close to an estimated point counts as mapped
+/// ([`SweepSummary::mapping_completeness`]), millimetres.
+pub const COMPLETE_WITHIN_MM: f64 = 5.0;
+
+/// The wall sampling and threshold of the sweep's coverage ([`COMPLETE_WITHIN_MM`]).
+pub fn coverage_settings() -> CoverageSettings {
+    CoverageSettings {
+        complete_within_m: COMPLETE_WITHIN_MM * 1e-3,
+        ..CoverageSettings::default()
+    }
+}
+
 /// The running statistics of a sweep; [`Self::summary`] reports them.
 #[derive(Debug, Clone, Default)]
 pub struct SweepStats {
+    /// The walls and the coverage gathered against them (`None`: not scored, see
+    /// [`Self::with_coverage`]).
+    coverage: Option<(Vec<Wall>, CoverageAccumulator)>,
     steps: usize,
     last_t_s: f64,
     contacts_total: usize,
@@ -120,6 +195,16 @@ pub struct SweepStats {
 }
 
 impl SweepStats {
+    /// Statistics that also score the map's coverage of `walls`, passed along
+    /// `direction_rad` (the sweep's motion).
+    pub fn with_coverage(walls: Vec<Wall>, direction_rad: f64) -> Self {
+        let coverage = CoverageAccumulator::new(direction_rad, walls.len());
+        Self {
+            coverage: Some((walls, coverage)),
+            ..Self::default()
+        }
+    }
+
     /// Records why the sweep stopped early: `outcome` is `"jammed"` or `"failed"`.
     pub fn stop(&mut self, outcome: &str, why: String) {
         self.stopped_by = Some((outcome.to_string(), why));
@@ -164,6 +249,10 @@ impl SweepStats {
         for &e in &metrics.errors_mm {
             self.mapping.push(e);
         }
+        if let Some((_, coverage)) = &mut self.coverage {
+            coverage.pass(&step.contacts);
+            coverage.estimate(metrics.estimates.iter().map(|e| e.point_m));
+        }
         self.substeps += step.report.substeps;
         self.iterations += step.report.iterations;
         let r = &step.report;
@@ -191,6 +280,13 @@ impl SweepStats {
     pub fn summary(&self, wall_clock_ms: f64) -> SweepSummary {
         let recorded = self.steps + 1;
         let mapping = self.mapping.score();
+        // The walls, directions and points are checked where they are made (a scene, a
+        // sweep's steps), so the coverage cannot fail on them; if it ever did, it is
+        // reported as not scored (null), never as a number.
+        let coverage = self
+            .coverage
+            .as_ref()
+            .and_then(|(walls, c)| c.coverage(walls, &coverage_settings()).ok());
         SweepSummary {
             steps: self.steps,
             sweep_time_s: self.last_t_s,
@@ -212,6 +308,10 @@ impl SweepStats {
             mapping_points: mapping.count,
             mapping_mean_error_mm: mapping.mean_error_mm,
             mapping_max_error_mm: mapping.max_error_mm,
+            mapping_coverage_error_mm: coverage.as_ref().and_then(|c| c.mean_error_mm),
+            mapping_coverage_p90_mm: coverage.as_ref().and_then(|c| c.p90_error_mm),
+            mapping_completeness: coverage.as_ref().and_then(|c| c.completeness),
+            sensors: None,
             substeps: self.substeps,
             iterations: self.iterations,
             iterations_median: percentile(&self.step_iterations, 0.5),
@@ -337,6 +437,33 @@ impl SweepSummary {
             optional(self.mapping_mean_error_mm, 1.0, " mm"),
             optional(self.mapping_max_error_mm, 1.0, " mm")
         );
+        let _ = writeln!(
+            out,
+            "wall coverage of the section passed: mean {}, p90 {}, {} within {COMPLETE_WITHIN_MM} mm",
+            optional(self.mapping_coverage_error_mm, 1.0, " mm"),
+            optional(self.mapping_coverage_p90_mm, 1.0, " mm"),
+            self.mapping_completeness
+                .map_or_else(|| "-".to_string(), |c| format!("{:.1} %", 100.0 * c)),
+        );
+        if let Some(sensors) = &self.sensors {
+            let rate = sensors
+                .sample_rate_hz
+                .map_or_else(|| "every step".to_string(), |r| format!("{r} Hz"));
+            let largest = |values: &[f64]| values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let _ = writeln!(
+                out,
+                "sensors: {} samples ({rate}); angle noise {} counts, calibration offsets up to \
+                 {:.2} counts and gain errors up to {:.2} %, touch threshold {} N, debounce {} \
+                 sample(s), seed {}",
+                sensors.samples,
+                sensors.angle_noise_counts,
+                largest(&sensors.offset_counts),
+                100.0 * largest(&sensors.gain_error),
+                sensors.touch_threshold_n,
+                sensors.touch_debounce_samples,
+                sensors.seed
+            );
+        }
         let _ = writeln!(
             out,
             "solver: Newton iterations per step median {}, p99 {}; every step certified (largest \
