@@ -154,6 +154,38 @@ fn a_bad_configuration_names_the_key_and_exits_with_failure() {
     );
 }
 
+#[test]
+fn bad_sensor_settings_are_refused_before_the_daemon_starts() {
+    let path = std::env::temp_dir().join(format!("antennad-sensors-{}.toml", std::process::id()));
+    std::fs::write(
+        &path,
+        "[sim.sensors]
+seed = 1
+angle_noise_counts = -2.0
+",
+    )
+    .unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
+        .arg("--config")
+        .arg(&path)
+        .args([
+            "--exit-after-trial",
+            "--listen",
+            "127.0.0.1:0",
+            "--no-record",
+        ])
+        .output()
+        .unwrap();
+    std::fs::remove_file(&path).ok();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains(":3:1: `sim.sensors.angle_noise_counts`: must be finite and at least 0"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("watch it with"), "{stderr}");
+}
+
 /// A running antennad: its log lines (stderr) and its data lines (stdout).
 type Lines = Box<dyn Iterator<Item = String>>;
 

@@ -141,3 +141,100 @@ fn a_poll_rate_the_bus_cannot_carry_is_refused_with_the_arithmetic() {
     let e = error("[bus]\nspeed_hz = 0\n");
     assert!(e.message.contains("must be positive"), "{e}");
 }
+
+/// `[sim.sensors]` (issue #18): every bad value is named with its line and column.
+#[test]
+fn bad_sensor_settings_are_located() {
+    let located = |body: &str, key: &str, column: usize, part: &str| {
+        let e = error(&format!(
+            "[sim.wall]\nmu = 0.3\n\n[sim.sensors]\nseed = 4\n{body}\n"
+        ));
+        assert_eq!(e.key, format!("sim.sensors.{key}"), "{e}");
+        assert_eq!((e.line, e.column), (Some(6), Some(column)), "{e}");
+        assert!(e.message.contains(part), "{part:?} missing from: {e}");
+        assert!(
+            e.to_string()
+                .starts_with(&format!("test.toml:6:{column}: `sim.sensors.{key}`")),
+            "{e}"
+        );
+    };
+    located(
+        "angle_noise_counts = -1.0",
+        "angle_noise_counts",
+        1,
+        "must be finite and at least 0, got -1",
+    );
+    located(
+        "touch_threshold_n = -0.2",
+        "touch_threshold_n",
+        1,
+        "must be finite and at least 0, got -0.2",
+    );
+    located(
+        "offset_counts = [1.0, 2.0]",
+        "offset_counts",
+        1,
+        "has 2 entries; a list needs one per segment on the bus, base to tip (9)",
+    );
+    located(
+        "offset_counts = -3",
+        "offset_counts",
+        1,
+        "the spread each segment's value is drawn from",
+    );
+    located(
+        "gain_error = [0, 0, 0, -1.0, 0, 0, 0, 0, 0]",
+        "gain_error",
+        1,
+        "has -1; every entry must be above -1",
+    );
+    // A value of the wrong type is put at the value.
+    located(
+        "gain_error = \"large\"",
+        "gain_error",
+        14,
+        "a number (the spread each segment's value is drawn from) or a list",
+    );
+    located("  angle_noise = 2.0", "angle_noise", 3, "unknown field");
+    located(
+        "touch_debounce_samples = 5",
+        "touch_debounce_samples",
+        1,
+        "debounces its touch switches over 3 consecutive reads",
+    );
+    located(
+        "sample_rate_hz = 120.0",
+        "sample_rate_hz",
+        1,
+        "the sample rate is bus.poll_hz (now 1000 Hz); set that instead",
+    );
+    let e = error("[sim.sensors]\nseed = -1\n");
+    assert_eq!(
+        (e.key.as_str(), e.line, e.column),
+        ("sim.sensors.seed", Some(2), Some(8))
+    );
+    assert!(e.message.contains("u64"), "{e}");
+    // The firmware's own debounce may be repeated; the list's length follows the bus.
+    let config = Config::from_toml_str(
+        "[bus]\n[[bus.segments]]\naddress = 0x20\nzero_counts = 1\ndirection = \"cw\"\n\
+         [[bus.segments]]\naddress = 0x21\nzero_counts = 2\ndirection = \"ccw\"\n\
+         [sim.antenna]\nlinks = 2\n[sim.sensors]\ntouch_debounce_samples = 3\n\
+         offset_counts = [1.5, -2]\ngain_error = 0.01\nangle_noise_counts = 0.5\nseed = 8\n",
+        "t.toml",
+    )
+    .unwrap();
+    let settings = config.sensor_settings();
+    assert_eq!(settings.touch_debounce_samples, 3);
+    assert_eq!(settings.sample_rate_hz, Some(config.bus.poll_hz));
+    assert_eq!(
+        settings.offset_counts,
+        sim_core::CalibrationError::PerJoint(vec![1.5, -2.0])
+    );
+    assert_eq!(
+        settings.gain_error,
+        sim_core::CalibrationError::Spread(0.01)
+    );
+    // What is recorded reads back as what was in force.
+    let back = Config::from_toml_str(&config.to_recorded_toml(), "recorded").unwrap();
+    assert_eq!(back, config);
+}

@@ -2,7 +2,8 @@
 //! and the `antenna` command (which commissions it), so that neither depends on the other:
 //!
 //! - [`SimBus`]: a virtual bus whose segments run `firmware-segment`'s own logic
-//!   (oversampling, debouncing and the I2C target state machine);
+//!   (oversampling, debouncing and the I2C target state machine), their Hall sensors ideal
+//!   or as they are ([`hall_sensor`]: calibration errors, seeded noise on each conversion);
 //! - `linux_i2c::LinuxI2cBus` (Linux only): `/dev/i2c-N`, with a failed transfer's errno
 //!   sorted into a NACK (`ENXIO`, `EREMOTEIO`) or a bus error;
 //! - [`commission`]: scan, assign addresses, measure `zero_counts` and read the firmware's
@@ -23,8 +24,10 @@
 //! ```
 
 pub mod commission;
+pub mod hall_sensor;
 #[cfg(target_os = "linux")]
 pub mod linux_i2c;
 pub mod sim_bus;
 
+pub use hall_sensor::{HallErrors, HallSensor, HallSensorError};
 pub use sim_bus::{SegmentFault, SimBus, SimBusError, SimSegment};

@@ -4,6 +4,8 @@ use antenna_protocol::{Calibration, DEFAULT_ADDRESS, SampleWord, StatusFlags, To
 use embedded_hal::i2c::{ErrorKind, ErrorType, I2c, NoAcknowledgeSource, Operation};
 use firmware_segment::{BusEvent, Debouncer, TargetMachine, adc_fault, oversample};
 
+use crate::hall_sensor::HallSensor;
+
 /// An error on the simulated bus, as a real bus would report it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum SimBusError {
@@ -48,12 +50,14 @@ pub enum SegmentFault {
 }
 
 /// One simulated segment: a physical joint angle and touch switches, sampled by the
-/// firmware's oversampling and debouncing and served by its I2C target state machine.
+/// firmware's oversampling and debouncing and served by its I2C target state machine. Its
+/// Hall sensor is ideal unless given one as it is ([`SimSegment::with_hall_sensor`]).
 #[derive(Debug, Clone)]
 pub struct SimSegment {
     machine: TargetMachine,
     debouncer: Debouncer,
     calibration: Calibration,
+    hall: HallSensor,
     angle_rad: f64,
     touch_raw: u8,
     fault: SegmentFault,
@@ -66,6 +70,7 @@ impl SimSegment {
             machine: TargetMachine::new(address, true),
             debouncer: Debouncer::new(),
             calibration,
+            hall: HallSensor::ideal(),
             angle_rad: 0.0,
             touch_raw: 0,
             fault: SegmentFault::None,
@@ -79,6 +84,18 @@ impl SimSegment {
             machine: TargetMachine::new(DEFAULT_ADDRESS, false),
             ..Self::new(DEFAULT_ADDRESS, calibration)
         }
+    }
+
+    /// The segment with `hall` as its Hall sensor and ADC: calibration errors and seeded
+    /// noise on each conversion ([`crate::hall_sensor`]).
+    pub fn with_hall_sensor(mut self, hall: HallSensor) -> Self {
+        self.hall = hall;
+        self
+    }
+
+    /// The Hall sensor and ADC.
+    pub fn hall_sensor(&self) -> &HallSensor {
+        &self.hall
     }
 
     /// Injects `fault` (or clears it with [`SegmentFault::None`]).
@@ -106,17 +123,17 @@ impl SimSegment {
         self.machine.address()
     }
 
-    /// One sampling period of the firmware's main loop: 16 conversions that oversample to
-    /// the angle's count, the touch port read and debounced, and the sample published.
+    /// One sampling period of the firmware's main loop: 16 conversions of the angle by the
+    /// Hall sensor (ideal: they oversample to the angle's count), the touch port read and
+    /// debounced, and the sample published.
     pub fn sample(&mut self) {
         if self.fault == SegmentFault::StuckCounter {
             return;
         }
-        let counts = self.calibration.counts_for_angle(self.angle_rad);
         let conversions = if self.fault == SegmentFault::SensorRail {
             [0; 16]
         } else {
-            conversions_for_counts(counts)
+            self.hall.conversions(self.calibration, self.angle_rad)
         };
         let touch = self.debouncer.step(self.touch_raw);
         let word = SampleWord::pack_truncate(oversample(&conversions), touch.bits());
@@ -129,19 +146,6 @@ impl SimSegment {
     fn step(&mut self, event: BusEvent) -> firmware_segment::StepResult {
         self.machine.step(event)
     }
-}
-
-/// Sixteen 10-bit conversions whose oversampled value, `(sum) >> 2`, is `counts` (clamped to
-/// 4092, the largest count 16 ten-bit conversions can make).
-fn conversions_for_counts(counts: u16) -> [u16; 16] {
-    let sum = u32::from(counts.min(4092)) << 2;
-    let base = sum / 16;
-    let extra = (sum % 16) as usize;
-    let mut conversions = [base as u16; 16];
-    for conversion in conversions.iter_mut().take(extra) {
-        *conversion += 1;
-    }
-    conversions
 }
 
 /// A virtual I2C bus of [`SimSegment`]s, implementing embedded-hal's [`I2c`] as a controller
@@ -294,14 +298,6 @@ mod tests {
             SimSegment::new(0x21, Calibration::new(2048, Direction::CounterClockwise)),
             SimSegment::new(0x22, Calibration::new(100, Direction::Clockwise)),
         ])
-    }
-
-    #[test]
-    fn conversions_oversample_to_the_requested_count() {
-        for counts in 0..=4092u16 {
-            assert_eq!(oversample(&conversions_for_counts(counts)), counts);
-        }
-        assert_eq!(oversample(&conversions_for_counts(4095)), 4092);
     }
 
     #[test]

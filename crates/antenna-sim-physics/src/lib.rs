@@ -8,7 +8,8 @@
 //! position is one step of a sweep; a new base angle rebuilds the solver from the current
 //! posture, backed off the wall if the turn would put the antenna into it, and steps back. A
 //! segment's touch switches close where its link touches the wall
-//! (`sim_core::touch_bits_from_contacts`).
+//! (`sim_core::touch_bits_from_contacts`), every contact or, with a touch threshold
+//! ([`SimPhysics::set_touch_threshold_n`]), those pressing at least that hard.
 //!
 //! # Example
 //!

@@ -29,6 +29,12 @@ pub enum PhysicsError {
         /// sim-core's error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// A touch threshold that is negative or not finite.
+    #[error("touch threshold {threshold_n} N: must be finite and at least 0")]
+    TouchThreshold {
+        /// The threshold given, newtons.
+        threshold_n: f64,
+    },
 }
 
 fn model<E: std::error::Error + Send + Sync + 'static>(
@@ -46,7 +52,8 @@ fn model<E: std::error::Error + Send + Sync + 'static>(
 pub struct SimState {
     /// Joint angles `theta_1..theta_n`, radians.
     pub joint_angles_rad: Vec<f64>,
-    /// Raw touch switches per segment.
+    /// Raw touch switches per segment (a switch closed by a contact whose force is at least
+    /// the touch threshold, [`SimPhysics::set_touch_threshold_n`]).
     pub touch: Vec<TouchBits>,
     /// The wall's force on the tip, newtons (0 out of contact).
     pub tip_force_n: f64,
@@ -64,6 +71,7 @@ pub struct SimPhysics {
     sim: QuasiStatic,
     contacts: Vec<ChainContact>,
     touch_bits: Vec<u8>,
+    touch_threshold_n: f64,
     relaxed_steps: u64,
 }
 
@@ -109,8 +117,29 @@ impl SimPhysics {
             touch_bits: vec![0; theta.len()],
             sim,
             contacts: Vec::new(),
+            touch_threshold_n: 0.0,
             relaxed_steps: 0,
         })
+    }
+
+    /// Sets the force a contact needs to close the touch switch under it, newtons (`0`, the
+    /// default: every contact closes its switch). A contact closes it when the magnitude of
+    /// the wall's force on the chain there is at least this.
+    ///
+    /// # Errors
+    /// [`PhysicsError::TouchThreshold`] for a negative or non-finite threshold (the one in
+    /// force is kept).
+    pub fn set_touch_threshold_n(&mut self, threshold_n: f64) -> Result<(), PhysicsError> {
+        if !(threshold_n.is_finite() && threshold_n >= 0.0) {
+            return Err(PhysicsError::TouchThreshold { threshold_n });
+        }
+        self.touch_threshold_n = threshold_n;
+        Ok(())
+    }
+
+    /// The force a contact needs to close its touch switch, newtons.
+    pub fn touch_threshold_n(&self) -> f64 {
+        self.touch_threshold_n
     }
 
     /// The posture with the base at `base_x_m` along the track and the base link at
@@ -133,9 +162,14 @@ impl SimPhysics {
             self.relaxed_steps += 1;
         }
         let contacts = self.sim.contacts();
+        let threshold_n = self.touch_threshold_n;
         self.contacts.clear();
-        self.contacts
-            .extend(contacts.iter().map(|c| c.chain_contact()));
+        self.contacts.extend(
+            contacts
+                .iter()
+                .filter(|c| threshold_n == 0.0 || c.force_n().norm() >= threshold_n)
+                .map(|c| c.chain_contact()),
+        );
         touch_bits_from_contacts(&self.contacts, &mut self.touch_bits)
             .map_err(model("touch bits"))?;
         let n = self.sim.chain().n();
@@ -223,6 +257,63 @@ mod tests {
         assert!(pressed.touch[8].any());
         let back = physics.update(0.0, base).unwrap();
         assert!(back.joint_angles_rad.iter().all(|a| a.abs() < 1e-6));
+    }
+
+    /// The touch threshold (issue #18): only contacts pressing at least that hard close a
+    /// switch; the physics itself is the same, and threshold 0 is every contact.
+    #[test]
+    fn a_touch_threshold_suppresses_light_contacts() {
+        let antenna = AntennaSpec::default();
+        let base = antenna.base_angle_deg.to_radians();
+        let sweep: Vec<f64> = (0..=40).map(|k| f64::from(k) * 0.005).collect();
+        // Every contact's force over the sweep, with threshold 0 (the default).
+        let mut any = SimPhysics::new(&antenna, &FlatWallSpec::default()).unwrap();
+        let mut explicit = SimPhysics::new(&antenna, &FlatWallSpec::default()).unwrap();
+        explicit.set_touch_threshold_n(0.0).unwrap();
+        let mut forces_n = Vec::new();
+        let mut states = Vec::new();
+        for &x in &sweep {
+            let state = any.update(x, base).unwrap();
+            assert_eq!(explicit.update(x, base).unwrap(), state);
+            forces_n.extend(any.sim.contacts().iter().map(|c| c.force_n().norm()));
+            states.push(state);
+        }
+        forces_n.sort_by(f64::total_cmp);
+        assert!(forces_n.len() > 10, "{forces_n:?}");
+        let threshold_n = forces_n[forces_n.len() / 2];
+        assert!(forces_n[0] < threshold_n, "{forces_n:?}");
+
+        let mut firm = SimPhysics::new(&antenna, &FlatWallSpec::default()).unwrap();
+        firm.set_touch_threshold_n(threshold_n).unwrap();
+        assert_eq!(firm.touch_threshold_n(), threshold_n);
+        let (mut suppressed, mut kept) = (0, 0);
+        for (&x, any_state) in sweep.iter().zip(&states) {
+            let state = firm.update(x, base).unwrap();
+            assert_eq!(state.joint_angles_rad, any_state.joint_angles_rad);
+            let mut expected = vec![0u8; antenna.links + 1];
+            let pressing: Vec<ChainContact> = firm
+                .sim
+                .contacts()
+                .iter()
+                .filter(|c| c.force_n().norm() >= threshold_n)
+                .map(|c| c.chain_contact())
+                .collect();
+            touch_bits_from_contacts(&pressing, &mut expected).unwrap();
+            for (k, (bits, any_bits)) in state.touch.iter().zip(&any_state.touch).enumerate() {
+                assert_eq!(bits.bits(), expected[k + 1]);
+                // A switch the threshold opens was closed without it, never the other way.
+                assert_eq!(bits.bits() & !any_bits.bits(), 0);
+                suppressed += (any_bits.bits() & !bits.bits()).count_ones();
+                kept += bits.bits().count_ones();
+            }
+        }
+        assert!(suppressed > 0 && kept > 0, "{suppressed} {kept}");
+        assert!(matches!(
+            firm.set_touch_threshold_n(-0.1),
+            Err(PhysicsError::TouchThreshold { .. })
+        ));
+        assert!(firm.set_touch_threshold_n(f64::NAN).is_err());
+        assert_eq!(firm.touch_threshold_n(), threshold_n);
     }
 
     #[test]

@@ -19,6 +19,9 @@ use crate::net::ControlToken;
 use antenna_data::record::{ChunkCompression, RecorderOptions};
 use antenna_protocol::{Calibration, Direction};
 use serde::{Deserialize, Serialize};
+use sim_core::{
+    CalibrationError, FIRMWARE_DEBOUNCE_SAMPLES, SensorError, SensorField, SensorSettings,
+};
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -463,6 +466,110 @@ pub struct SimConfig {
     /// Faults to inject into simulated segments (none by default), to see and test how the
     /// daemon copes.
     pub faults: Vec<SimFaultConfig>,
+    /// The segments' sensors as they are (ideal by default).
+    pub sensors: SimSensorsConfig,
+}
+
+/// `[sim.sensors]`: the simulated segments' sensors as they are (seed 2.3.1; issue #18), with
+/// the keys and meaning of sim-core's [`SensorSettings`] (a scene's `[sensors]`), seeded so
+/// that one seed gives one run. Left out, the sensors are ideal and the simulated rig's words
+/// are exactly those of ideal sensors.
+///
+/// - Each segment's Hall sensor sees its joint angle turned by the joint's gain error and
+///   calibration offset, and each of the 16 ten-bit conversions of a sample gets its own
+///   Gaussian noise of `angle_noise_counts` ten-bit counts; the segment firmware's own
+///   oversampling turns that into `angle_noise_counts` twelve-bit counts
+///   ([`antenna_bus::hall_sensor`], which also says what the firmware's truncation and its ADC
+///   fault bit make of noisy conversions).
+/// - A touch switch closes for a contact whose force is at least `touch_threshold_n`.
+/// - Two settings of [`SensorSettings`] are the rig's own and are not taken here: the touch
+///   debounce is the segment firmware's, over [`FIRMWARE_DEBOUNCE_SAMPLES`] reads
+///   (`touch_debounce_samples` may only repeat it), and the sensors are sampled once per poll,
+///   at `bus.poll_hz` (`sample_rate_hz` is refused, naming `bus.poll_hz`).
+///   [`Config::sensor_settings`] gives all of them as in force.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimSensorsConfig {
+    /// Standard deviation of the Hall angle noise of one sample, twelve-bit counts (`>= 0`).
+    pub angle_noise_counts: f64,
+    /// Calibration offset per segment, twelve-bit counts: a number (the spread each segment's
+    /// offset is drawn from with the seed, `>= 0`) or a list of one per segment, base to tip.
+    pub offset_counts: CalibrationErrorConfig,
+    /// Gain error per segment, a fraction (`0.01`: the angle reads 1 % large): a number (the
+    /// spread of a draw) or a list of one per segment, each above -1.
+    pub gain_error: CalibrationErrorConfig,
+    /// The force that closes a touch switch, newtons (`>= 0`; 0: any contact).
+    pub touch_threshold_n: f64,
+    /// Only [`FIRMWARE_DEBOUNCE_SAMPLES`], the firmware's, if given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub touch_debounce_samples: Option<u32>,
+    /// Refused if given: the sensors are sampled at `bus.poll_hz`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sample_rate_hz: Option<f64>,
+    /// The seed of the noise and of the drawn calibration errors.
+    pub seed: u64,
+}
+
+impl Default for SimSensorsConfig {
+    fn default() -> Self {
+        let ideal = SensorSettings::IDEAL;
+        Self {
+            angle_noise_counts: ideal.angle_noise_counts,
+            offset_counts: CalibrationErrorConfig(ideal.offset_counts),
+            gain_error: CalibrationErrorConfig(ideal.gain_error),
+            touch_threshold_n: ideal.touch_threshold_n,
+            touch_debounce_samples: None,
+            sample_rate_hz: None,
+            seed: ideal.seed,
+        }
+    }
+}
+
+/// `offset_counts` and `gain_error` of `[sim.sensors]`: a number (the spread each segment's
+/// value is drawn from) or a list (one value per segment).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationErrorConfig(pub CalibrationError);
+
+impl Serialize for CalibrationErrorConfig {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match &self.0 {
+            CalibrationError::Spread(sd) => serializer.serialize_f64(*sd),
+            CalibrationError::PerJoint(values) => values.serialize(serializer),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for CalibrationErrorConfig {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::{self, SeqAccess, Visitor};
+        struct CalibrationVisitor;
+        impl<'de> Visitor<'de> for CalibrationVisitor {
+            type Value = CalibrationErrorConfig;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(
+                    "a number (the spread each segment's value is drawn from) or a list of one \
+                     number per segment",
+                )
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
+                Ok(CalibrationErrorConfig(CalibrationError::Spread(v)))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                Ok(CalibrationErrorConfig(CalibrationError::Spread(v as f64)))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                Ok(CalibrationErrorConfig(CalibrationError::Spread(v as f64)))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                let mut values = Vec::new();
+                while let Some(v) = seq.next_element::<f64>()? {
+                    values.push(v);
+                }
+                Ok(CalibrationErrorConfig(CalibrationError::PerJoint(values)))
+            }
+        }
+        deserializer.deserialize_any(CalibrationVisitor)
+    }
 }
 
 /// What an injected fault does to a simulated segment.
@@ -646,6 +753,85 @@ impl Config {
             server.token = Some(token);
         }
         Ok(())
+    }
+
+    /// The simulated segments' sensors as in force: `[sim.sensors]`, with the segment
+    /// firmware's touch debounce ([`FIRMWARE_DEBOUNCE_SAMPLES`]) and a sample at every poll
+    /// (`sample_rate_hz` = `bus.poll_hz`).
+    pub fn sensor_settings(&self) -> SensorSettings {
+        let sensors = &self.sim.sensors;
+        SensorSettings {
+            angle_noise_counts: sensors.angle_noise_counts,
+            offset_counts: sensors.offset_counts.0.clone(),
+            gain_error: sensors.gain_error.0.clone(),
+            touch_threshold_n: sensors.touch_threshold_n,
+            touch_debounce_samples: FIRMWARE_DEBOUNCE_SAMPLES,
+            sample_rate_hz: Some(self.bus.poll_hz),
+            seed: sensors.seed,
+        }
+    }
+
+    /// Checks `[sim.sensors]`: the failing key (dotted) and why.
+    fn validate_sensors(&self) -> Result<(), (String, String)> {
+        let sensors = &self.sim.sensors;
+        let key = |name: &str| format!("sim.sensors.{name}");
+        if let Some(samples) = sensors.touch_debounce_samples
+            && samples != FIRMWARE_DEBOUNCE_SAMPLES
+        {
+            return Err((
+                key("touch_debounce_samples"),
+                format!(
+                    "must be {FIRMWARE_DEBOUNCE_SAMPLES} (or left out), got {samples}: the \
+                     simulated segments run the segment firmware, which debounces its touch \
+                     switches over {FIRMWARE_DEBOUNCE_SAMPLES} consecutive reads"
+                ),
+            ));
+        }
+        if let Some(rate_hz) = sensors.sample_rate_hz {
+            return Err((
+                key("sample_rate_hz"),
+                format!(
+                    "not taken here (got {rate_hz}): the simulated segments sample once per \
+                     poll, so the sample rate is bus.poll_hz (now {} Hz); set that instead",
+                    self.bus.poll_hz
+                ),
+            ));
+        }
+        let segments = self.bus.segments.len();
+        self.sensor_settings()
+            .validate(segments)
+            .map_err(|e| match e {
+                SensorError::OutOfRange {
+                    field,
+                    value,
+                    expected,
+                } => {
+                    let spread = match (field, expected.starts_with("every")) {
+                        (SensorField::Offset | SensorField::Gain, false) => {
+                            " (a number is the spread each segment's value is drawn from)"
+                        }
+                        _ => "",
+                    };
+                    let message = if expected.starts_with("every") {
+                        format!("has {value}; {expected}")
+                    } else {
+                        format!("{expected}{spread}, got {value}")
+                    };
+                    (key(field.key()), message)
+                }
+                SensorError::WrongLength {
+                    field,
+                    expected,
+                    actual,
+                } => (
+                    key(field.key()),
+                    format!(
+                        "has {actual} entries; a list needs one per segment on the bus, base \
+                         to tip ({expected}), or give a number, the spread each segment's \
+                         value is drawn from"
+                    ),
+                ),
+            })
     }
 
     /// The trial called `name`, or the first one.
@@ -979,7 +1165,7 @@ impl Config {
         if !antenna.base_angle_deg.is_finite() {
             return fail("sim.antenna.base_angle_deg", "must be finite".to_owned());
         }
-        Ok(())
+        self.validate_sensors()
     }
 }
 

@@ -574,7 +574,7 @@ impl Daemon {
         let (poll_join, bus_description) = match &sim_state {
             Some(state) => {
                 let handle = spawn_watched_poller(
-                    Poller::new(sim_bus(&config), &addresses),
+                    Poller::new(sim_bus(&config)?, &addresses),
                     clock,
                     settings,
                     sense_with_faults(sense(Arc::clone(state)), &config),

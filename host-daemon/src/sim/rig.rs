@@ -9,6 +9,15 @@
 //! prediction): sim-core's quasi-static contact solver, every link and joint kept out of the
 //! wall, Coulomb friction that sticks and slips (`mu` of `[sim.wall]`), snaps followed
 //! downhill, a segment's touch switches closing where its link touches the wall.
+//!
+//! # Sensors
+//! The segments' sensors are ideal unless `[sim.sensors]` says otherwise
+//! ([`crate::service::config::SimSensorsConfig`]): each segment's Hall sensor then has its
+//! joint's calibration offset and gain error and seeded noise on each of its ten-bit
+//! conversions, which the firmware's own oversampling turns into the twelve-bit reading
+//! ([`sim_bus`]), and a touch switch closes only for a contact pressing at least
+//! `touch_threshold_n` ([`sim_physics`]). The touch debounce is the firmware's own, and the
+//! sensors are sampled once per poll (`bus.poll_hz`).
 
 use crate::hardware::poll::{Poller, SegmentHealth};
 use crate::service::acquisition::{
@@ -20,17 +29,24 @@ use crate::service::motion::{MotionCommand, MotionShared, RigStatus, spawn_motio
 use crate::service::rig::DaemonRig;
 use crate::service::trial_script::ScriptEnds;
 use crate::sim::bus::{SimBus, SimSegment};
+use antenna_bus::{HallErrors, HallSensor};
 pub use antenna_sim_physics::{AntennaSpec, FlatWallSpec, SimPhysics, SimState};
 use anyhow::{Context, Result, anyhow};
+use sim_core::Sensors;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::channel;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 /// The physics of `config`'s simulated antenna (`[sim.antenna]`) against its wall
-/// (`[sim.wall]`).
+/// (`[sim.wall]`), its touch switches closed by contacts of at least
+/// `sim.sensors.touch_threshold_n`.
 pub fn sim_physics(config: &Config) -> Result<SimPhysics> {
-    Ok(SimPhysics::new(&antenna_spec(config), &wall_spec(config))?)
+    let mut physics = SimPhysics::new(&antenna_spec(config), &wall_spec(config))?;
+    physics
+        .set_touch_threshold_n(config.sim.sensors.touch_threshold_n)
+        .context("`sim.sensors.touch_threshold_n`")?;
+    Ok(physics)
 }
 
 /// `[sim.antenna]` as the physics takes it.
@@ -57,16 +73,34 @@ pub fn wall_spec(config: &Config) -> FlatWallSpec {
 }
 
 /// The virtual bus of `config.bus`: one simulated segment per configured segment, each with
-/// its own calibration.
-pub fn sim_bus(config: &Config) -> SimBus {
-    SimBus::new(
-        config
-            .bus
-            .segments
-            .iter()
-            .map(|s| SimSegment::new(s.address, s.calibration()))
-            .collect(),
-    )
+/// its own calibration and its Hall sensor as `[sim.sensors]` says: segment `k` (base to tip)
+/// senses joint `k + 1`, with that joint's calibration offset and gain error (given, or drawn
+/// from the seed by sim-core's [`Sensors`]) and its own noise stream of the seed, `k + 1`
+/// (stream 0 is the calibration draw's), so that its noise does not depend on the others'.
+///
+/// # Errors
+/// When `[sim.sensors]` does not fit the bus (a configuration that passed
+/// [`Config::from_toml_str`] always does).
+pub fn sim_bus(config: &Config) -> Result<SimBus> {
+    let settings = config.sensor_settings();
+    let segments = &config.bus.segments;
+    let sensors = Sensors::new(&settings, segments.len()).context("`sim.sensors`")?;
+    let (offsets_counts, gain_errors) = (sensors.offset_counts(), sensors.gain_error());
+    segments
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let errors = HallErrors {
+                noise_counts: settings.angle_noise_counts,
+                offset_counts: offsets_counts.get(k + 1).copied().unwrap_or_default(),
+                gain_error: gain_errors.get(k + 1).copied().unwrap_or_default(),
+            };
+            let hall = HallSensor::new(errors, settings.seed, k as u64 + 1)
+                .with_context(|| format!("`sim.sensors` for bus.segments[{k}]"))?;
+            Ok(SimSegment::new(s.address, s.calibration()).with_hall_sensor(hall))
+        })
+        .collect::<Result<Vec<_>>>()
+        .map(SimBus::new)
 }
 
 /// The polling thread's hook for the simulated rig: the segments sense the shared state and
@@ -149,7 +183,7 @@ pub fn run_sim_trial(
     sim_config.stage.port = "sim".to_owned();
     sim_config.servo.port = "sim".to_owned();
     let rig = DaemonRig::open(&sim_config, Some(Arc::clone(&state)))?;
-    let bus = sim_bus(config);
+    let bus = sim_bus(config)?;
     let poller = Poller::new(bus, &config.bus.addresses());
     let (events, receiver) = event_channel(options.queue);
     let threads_stop = Arc::new(AtomicBool::new(false));
