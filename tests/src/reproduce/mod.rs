@@ -87,6 +87,19 @@ pub fn load_scene(name: &str) -> Result<SweepScene, ReproduceError> {
     })
 }
 
+/// The `[sensors]` of the example scene `name` (ideal without the table).
+///
+/// # Errors
+/// [`ReproduceError::Scene`] for a scene that does not parse.
+pub fn load_sensors(name: &str) -> Result<sim_core::SensorSettings, ReproduceError> {
+    let path = example_path(name);
+    let scene = antenna_cli::scene::Scene::from_path(&path).map_err(|e| ReproduceError::Scene {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    Ok(scene.sensors)
+}
+
 /// `chain` with the stiffness of `profile` normalized to the seed's range.
 ///
 /// # Errors
