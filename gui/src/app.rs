@@ -13,12 +13,15 @@ use std::time::{Duration, Instant};
 
 use antenna_data::stream::SegmentStatus;
 use egui::{Color32, RichText};
+use sim_core::CoverageSettings;
 
 use crate::client::{ClientOptions, Command, ConnectionState, LiveClient, ReplyRecord};
 use crate::error::MonitorError;
 use crate::export::{FigureInput, export_csv, export_figure};
 use crate::frame::{ChainFrame, SegmentState};
 use crate::history::{Health, History};
+use crate::mapping::CoverageCache;
+use crate::panels::chain::WallMap;
 use crate::panels::{
     ChainPanel, ControlsPanel, HealthPanel, JointAnglesPanel, StageInfo, StagePanel,
     TimelineAction, TimelinePanel, TouchRasterPanel,
@@ -100,6 +103,10 @@ pub struct MonitorApp {
     sweep_view: Option<ViewState>,
     /// Whether the end of the current sweep has been reported.
     sweep_reported: bool,
+    /// Sweeps opened so far: tells the coverage of one sweep from another's.
+    sweeps_opened: u64,
+    /// The wall map's coverage at the step drawn.
+    coverage: CoverageCache,
     export_dir: PathBuf,
     exports: Vec<ExportRecord>,
     message: Option<(String, bool)>,
@@ -180,6 +187,8 @@ impl MonitorApp {
                 .map_or_else(String::new, |p| p.display().to_string()),
             sweep_view: None,
             sweep_reported: false,
+            sweeps_opened: 0,
+            coverage: CoverageCache::default(),
             export_dir: options.export_dir,
             exports: Vec::new(),
             message: None,
@@ -257,6 +266,8 @@ impl MonitorApp {
                 self.view = ViewState::new(planned_end_s.max(0.01));
                 self.sweep_view = Some(self.view.clone());
                 self.sweep_reported = false;
+                self.sweeps_opened += 1;
+                self.coverage.clear();
                 self.message = Some((format!("running the sweep of {}", path.display()), false));
                 self.playing = None;
                 self.source = Source::Sweep(worker);
@@ -271,6 +282,13 @@ impl MonitorApp {
             Source::Sweep(w) => Some(w),
             _ => None,
         }
+    }
+
+    /// The sweep and step whose wall map is held: `(n, step)` for the `n`th sweep opened
+    /// (from 1) and the index of the step among its steps (the placement is 0); `None` before
+    /// a map is computed. The map is computed only while it is shown.
+    pub fn coverage_key(&self) -> Option<(u64, usize)> {
+        self.coverage.key()
     }
 
     /// The view (window, cursor, following).
@@ -305,8 +323,9 @@ impl MonitorApp {
     }
 
     /// Waits (at most `timeout`) until the live history spans `history_s` seconds and the
-    /// prediction for the newest pose is in: for a screenshot that shows the chain from the
-    /// first frame. Returns whether that happened.
+    /// prediction for the newest pose is in (a sweep: until it has run `history_s` seconds,
+    /// or ended): for a screenshot that shows the chain from the first frame. Returns whether
+    /// that happened.
     pub fn wait_for_data(&mut self, history_s: f64, timeout: Duration) -> bool {
         let deadline = Instant::now() + timeout;
         while Instant::now() < deadline {
@@ -330,7 +349,13 @@ impl MonitorApp {
                 }
                 Source::Trial(_) => return true,
                 Source::Sweep(worker) => {
-                    if worker.lock().frame_count() > 0 {
+                    let state = worker.lock();
+                    let span = state
+                        .history
+                        .first_t_s()
+                        .zip(state.history.latest_t_s())
+                        .map(|(a, b)| b - a);
+                    if state.is_finished() || span.is_some_and(|s| s >= history_s) {
                         return true;
                     }
                     None
@@ -681,6 +706,23 @@ impl MonitorApp {
             .as_ref()
             .and_then(|p| p.worker.as_ref().ok())
             .map_or("", PredictionWorker::name);
+        // A sweep's wall map up to the step drawn, recomputed only when that step changes.
+        let map_step = data
+            .sweep
+            .filter(|_| self.panels.chain.show_map)
+            .zip(self.view.cursor_s(latest))
+            .and_then(|(sweep, c)| sweep.step_index_at(c).map(|k| (sweep, k)));
+        if let Some((sweep, k)) = map_step {
+            let settings = CoverageSettings::default();
+            let pending = self
+                .coverage
+                .refresh(self.sweeps_opened, k, Instant::now(), || {
+                    sweep.mapping.coverage(&sweep.walls, k, &settings)
+                });
+            if pending {
+                ui.ctx().request_repaint_after(CoverageCache::MIN_INTERVAL);
+            }
+        }
 
         let playing = self.playing.is_some();
         let actions = egui::Panel::top("timeline_bar")
@@ -790,6 +832,22 @@ impl MonitorApp {
                 });
             });
 
+        let map = data.sweep.map(|sweep| {
+            let shown = self
+                .coverage
+                .key()
+                .filter(|(opened, _)| *opened == self.sweeps_opened && map_step.is_some());
+            WallMap {
+                coverage: shown.and_then(|_| {
+                    self.coverage
+                        .coverage()
+                        .map(|c| c.as_ref().map_err(String::as_str))
+                }),
+                points_m: shown.map_or(&[], |(_, k)| sweep.mapping.points_m(k)),
+                settings: CoverageSettings::default(),
+                walls: &sweep.walls,
+            }
+        });
         egui::CentralPanel::default()
             .frame(unfilled(egui::Frame::central_panel(ui.style())))
             .show(ui, |ui| {
@@ -802,6 +860,7 @@ impl MonitorApp {
                         predicted.as_ref(),
                         model,
                         prediction_note.as_deref(),
+                        map.as_ref(),
                     );
                 });
                 ui.allocate_ui(egui::vec2(width, height * 0.3), |ui| {

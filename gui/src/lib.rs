@@ -13,7 +13,8 @@
 //!
 //! The chain panel draws only [`frame::ChainFrame`], whatever the source: live samples and
 //! recorded polls become frames through [`rig::RigGeometry`], a sweep's steps through
-//! [`sweep::frame_from_step`].
+//! [`sweep::frame_from_step`]. A sweep's wall map ([`mapping`]: the contact points the
+//! robot estimates, the wall passed shaded by how well they cover it) is drawn over the walls.
 //!
 //! # Example: a history and its frame
 //!
@@ -63,6 +64,7 @@ pub mod error;
 pub mod export;
 pub mod frame;
 pub mod history;
+pub mod mapping;
 pub mod panels;
 pub mod prediction;
 pub mod recording;

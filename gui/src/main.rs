@@ -40,7 +40,8 @@ struct Args {
     #[arg(long, default_value = ".")]
     export_dir: PathBuf,
     /// Before opening the window, wait until the live history spans this many seconds and
-    /// the first prediction is in (at most 10 s longer): for screenshots.
+    /// the first prediction is in (a scene's sweep: until it has run this many seconds, or
+    /// ended; at most 10 s longer): for screenshots.
     #[arg(long, value_name = "S")]
     wait_for_history_s: Option<f64>,
     /// Window size in points, WIDTHxHEIGHT.

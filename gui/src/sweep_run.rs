@@ -9,6 +9,11 @@
 //! sample of a [`History`] (joint angles, touch bits, the base's x as the stage), so the
 //! time-series panels, the scrub slider, playback and the exports work as for a recording.
 //!
+//! Each step also joins the sweep's wall map ([`SweepRunState::mapping`], a [`SweepMapping`]):
+//! the contact points the robot would estimate from its sensors' reading (the scene's
+//! `[sensors]`, unless [`SweepWorker::start_with_sensors`] is given others) and the wall sections passed,
+//! from which the chain panel draws the wall shaded by how well it was mapped.
+//!
 //! A placement or a step that fails stops the sweep with the time it failed at
 //! ([`MonitorError::SweepStopped`]); the steps before it stay, to be played and scrubbed.
 //! Dropping the worker stops the thread after the step it is solving.
@@ -21,11 +26,12 @@ use std::thread::JoinHandle;
 use antenna_cli::Scene;
 use antenna_cli::sweep::SweepFailure;
 use sim_core::sweep::{Sweep, SweepError, SweepScene, SweepStep};
-use sim_core::{Chain, Wall};
+use sim_core::{Chain, SensorSettings, Wall};
 
 use crate::error::MonitorError;
 use crate::frame::ChainFrame;
 use crate::history::{Health, History, Sample, SegmentReading};
+use crate::mapping::SweepMapping;
 use crate::sweep::{frame_from_step, track_m};
 
 /// The most steps the monitor holds of one sweep (2000 s at 100 Hz); a longer scene is run
@@ -77,6 +83,9 @@ pub struct SweepRunState {
     /// anchors torn out, a residual accepted above the tolerance): every step is certified
     /// by sim-core's independent check, and these are said on screen.
     pub relaxed_steps: usize,
+    /// The wall map: the points estimated from the sensed steps and the sections passed,
+    /// step by step (one entry per step in `steps`).
+    pub mapping: SweepMapping,
 }
 
 impl SweepRunState {
@@ -113,6 +122,12 @@ impl SweepRunState {
     pub fn step_at(&self, t_s: f64) -> Option<&SweepStep> {
         let after = self.steps.partition_point(|s| s.t_s <= t_s);
         self.steps.get(after.saturating_sub(1))
+    }
+
+    /// The index in `steps` of the step showing instant `t_s` ([`Self::step_at`]).
+    pub fn step_index_at(&self, t_s: f64) -> Option<usize> {
+        let after = self.steps.partition_point(|s| s.t_s <= t_s);
+        (!self.steps.is_empty()).then(|| after.saturating_sub(1))
     }
 
     /// What the solver relaxed in the step showing instant `t_s` (empty when nothing).
@@ -174,6 +189,7 @@ impl SweepRunState {
         if step.report.relaxed() {
             self.relaxed_steps += 1;
         }
+        self.mapping.push(&self.chain, &step);
         self.steps.push(step);
         Ok(())
     }
@@ -194,10 +210,41 @@ impl SweepWorker {
     /// # Errors
     /// [`MonitorError::Scene`] if the file cannot be read, does not parse or cannot be swept
     /// (naming the key, line and column); [`MonitorError::Sweep`] if the thread cannot start.
+    ///
+    /// The wall map is estimated from what the scene's own `[sensors]` read (ideal without
+    /// the table).
     pub fn start(path: &Path, max_steps: usize) -> Result<SweepWorker, MonitorError> {
+        Self::launch(path, max_steps, None)
+    }
+
+    /// As [`Self::start`], with the wall map estimated from what sensors as `sensors`
+    /// describe them read ([`SweepMapping::new`]) instead of the scene's `[sensors]`.
+    ///
+    /// # Errors
+    /// As [`Self::start`]; [`MonitorError::Sweep`] if `sensors` do not fit the scene's chain.
+    pub fn start_with_sensors(
+        path: &Path,
+        max_steps: usize,
+        sensors: &SensorSettings,
+    ) -> Result<SweepWorker, MonitorError> {
+        Self::launch(path, max_steps, Some(sensors))
+    }
+
+    fn launch(
+        path: &Path,
+        max_steps: usize,
+        sensors: Option<&SensorSettings>,
+    ) -> Result<SweepWorker, MonitorError> {
         let scene = Scene::from_path(path)?;
+        let sensors = sensors.unwrap_or(&scene.sensors);
         let sweep_scene = scene.sweep_scene()?;
         let steps_total = sweep_scene.motion.steps();
+        let mapping = SweepMapping::new(
+            sensors,
+            &sweep_scene.chain,
+            sweep_scene.walls.len(),
+            sweep_scene.motion.direction_rad(),
+        )?;
         let state = SweepRunState {
             path: path.to_path_buf(),
             name: path
@@ -214,6 +261,7 @@ impl SweepWorker {
             placement_note: None,
             phase: SweepPhase::Placing,
             relaxed_steps: 0,
+            mapping,
         };
         let shared = Arc::new(Mutex::new(state));
         let cancel = Arc::new(AtomicBool::new(false));
@@ -382,6 +430,23 @@ mod tests {
             "{}",
             state.progress()
         );
+    }
+
+    #[test]
+    fn the_wall_map_senses_through_the_scenes_sensors() {
+        let text = format!("{SCENE}\n[sensors]\nangle_noise_counts = 2.0\nseed = 3\n");
+        let path = scene_file("sensors", &text);
+        let worker = SweepWorker::start(&path, MAX_SWEEP_STEPS).unwrap();
+        let overridden =
+            SweepWorker::start_with_sensors(&path, MAX_SWEEP_STEPS, &SensorSettings::IDEAL)
+                .unwrap();
+        wait(&worker);
+        wait(&overridden);
+        std::fs::remove_file(&path).ok();
+        let settings = worker.lock().mapping.sensor_settings().clone();
+        assert_eq!(settings.angle_noise_counts, 2.0);
+        assert_eq!(settings.seed, 3);
+        assert!(overridden.lock().mapping.sensor_settings().is_ideal());
     }
 
     #[test]

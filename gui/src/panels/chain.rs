@@ -7,10 +7,24 @@
 //! the same way: a link whose segment has any touch bit set is drawn red, and each switch
 //! that fires is a dot at its place along the link ([`ChainFrame::lit_switches`]); the
 //! prediction's switches are rings.
+//!
+//! A simulated sweep's wall map ([`WallMap`], [`crate::mapping`]) is drawn over the walls when
+//! **wall map** is ticked: the wall section passed up to the step shown, sampled along its
+//! length and shaded by each sample's distance to the nearest estimated contact point
+//! ([`coverage_colour`]: captured, bluish green, to missed, vermillion, at the completeness
+//! threshold), on a dark band so that it reads on either theme; the estimated points as small
+//! dots (as in the seed's Figures 4.15 and 4.16); a colour bar in the panel's lower right
+//! corner; and the numbers (mean and 90th percentile coverage error, completeness, points) in
+//! the row above the panel.
 
-use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, Vec2};
+use std::collections::HashSet;
+
+use egui::{Align2, Color32, FontId, Pos2, Rect, RichText, Sense, Shape, Stroke, Vec2};
+use nalgebra::Vector2;
+use sim_core::{Coverage, CoverageSettings, Wall};
 
 use crate::frame::{ChainFrame, PointM};
+use crate::mapping::{COLOUR_BANDS, coverage_band, coverage_colour, coverage_summary};
 
 /// The measured chain's colour (the screenshot check looks for it).
 pub const CHAIN_COLOUR: Color32 = Color32::from_rgb(30, 110, 255);
@@ -23,6 +37,8 @@ pub const UNHEALTHY_COLOUR: Color32 = Color32::from_rgb(150, 150, 150);
 const WALL_COLOUR: Color32 = Color32::from_rgb(170, 140, 110);
 const DIFFERENCE_COLOUR: Color32 = Color32::from_rgb(255, 0, 255);
 const TRACK_COLOUR: Color32 = Color32::from_rgb(110, 110, 110);
+/// The band under the wall map's colours.
+const MAP_UNDERLAY_COLOUR: Color32 = Color32::from_rgb(35, 35, 35);
 
 /// The chain panel (see the module documentation).
 #[derive(Debug, Clone, PartialEq)]
@@ -31,6 +47,8 @@ pub struct ChainPanel {
     pub show_prediction: bool,
     /// Draw the measured-to-predicted difference.
     pub show_difference: bool,
+    /// Draw a sweep's wall map.
+    pub show_map: bool,
 }
 
 impl Default for ChainPanel {
@@ -38,8 +56,23 @@ impl Default for ChainPanel {
         Self {
             show_prediction: true,
             show_difference: true,
+            show_map: true,
         }
     }
+}
+
+/// A simulated sweep's wall map up to the step shown (see the module documentation).
+#[derive(Debug, Clone, Copy)]
+pub struct WallMap<'a> {
+    /// The coverage of the wall passed by the points estimated up to the step mapped, or why
+    /// it could not be computed; `None` while it is not (yet) computed.
+    pub coverage: Option<Result<&'a Coverage, &'a str>>,
+    /// The points estimated up to the step mapped, ground frame, metres.
+    pub points_m: &'a [Vector2<f64>],
+    /// The wall sampling and the completeness threshold the coverage was computed with.
+    pub settings: CoverageSettings,
+    /// The walls the samples are on (their solid side is where the map's band is drawn).
+    pub walls: &'a [Wall],
 }
 
 /// Maps track-frame metres to screen points, y up, equal scales.
@@ -50,12 +83,16 @@ struct ToScreen {
 }
 
 impl ToScreen {
-    fn fit(rect: Rect, frames: &[&ChainFrame]) -> Self {
+    /// The scale and centre that show `frames` and the points `also_m` in `rect`.
+    fn fit(rect: Rect, frames: &[&ChainFrame], also_m: impl Iterator<Item = PointM>) -> Self {
         let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for f in frames {
+        let bounds = frames.iter().flat_map(|f| {
             let (a, b) = f.bounds_m();
-            min = [min[0].min(a[0]), min[1].min(a[1])];
-            max = [max[0].max(b[0]), max[1].max(b[1])];
+            [a, b]
+        });
+        for p in bounds.chain(also_m) {
+            min = [min[0].min(p[0]), min[1].min(p[1])];
+            max = [max[0].max(p[0]), max[1].max(p[1])];
         }
         let span = [(max[0] - min[0]).max(0.02), (max[1] - min[1]).max(0.02)];
         let scale =
@@ -85,10 +122,29 @@ impl ChainPanel {
         predicted: Option<&ChainFrame>,
         model: &str,
         note: Option<&str>,
+        map: Option<&WallMap<'_>>,
     ) {
         ui.horizontal(|ui| {
             ui.checkbox(&mut self.show_prediction, "prediction");
             ui.checkbox(&mut self.show_difference, "difference");
+            if let Some(map) = map {
+                if ui.checkbox(&mut self.show_map, "wall map").changed() {
+                    ui.ctx().request_repaint();
+                }
+                match map.coverage.filter(|_| self.show_map) {
+                    Some(Ok(c)) => {
+                        ui.label(coverage_summary(
+                            c,
+                            map.points_m.len(),
+                            map.settings.complete_within_m * 1e3,
+                        ));
+                    }
+                    Some(Err(e)) => {
+                        ui.label(RichText::new(format!("wall map: {e}")).color(Color32::RED));
+                    }
+                    None => {}
+                }
+            }
             if let (Some(m), Some(p)) = (measured, predicted)
                 && let Some(d) = m.difference(p)
             {
@@ -123,7 +179,17 @@ impl ChainPanel {
         let predicted = predicted.filter(|_| self.show_prediction);
         let mut frames = vec![measured];
         frames.extend(predicted);
-        let to = ToScreen::fit(rect.shrink(8.0), &frames);
+        let map = map.filter(|_| self.show_map);
+        let mapped = map.and_then(|m| m.coverage.and_then(Result::ok).map(|c| (m, c)));
+        // With a map: the wall passed in view too, below the legend's three lines.
+        let mut fit_rect = rect.shrink(8.0);
+        if mapped.is_some() {
+            fit_rect.min.y = (fit_rect.min.y + 44.0).min(fit_rect.max.y);
+        }
+        let map_points_m = mapped
+            .into_iter()
+            .flat_map(|(_, c)| c.samples.iter().map(|s| [s.point_m.x, s.point_m.y]));
+        let to = ToScreen::fit(fit_rect, &frames, map_points_m);
         let painter = painter.with_clip_rect(rect);
 
         // The track (the stage's soft limits), the wall, the base and the stage carriage.
@@ -136,6 +202,16 @@ impl ChainPanel {
         for wall in &measured.walls_m {
             let points: Vec<Pos2> = wall.iter().map(|p| to.pos(*p)).collect();
             painter.add(Shape::line(points, Stroke::new(5.0, WALL_COLOUR)));
+        }
+        if let Some((map, coverage)) = mapped {
+            paint_wall_map(
+                &painter,
+                &to,
+                map,
+                coverage,
+                to.pos(measured.base_m),
+                ui.visuals().strong_text_color(),
+            );
         }
         let base = to.pos(measured.base_m);
         painter.rect_filled(
@@ -244,14 +320,230 @@ impl ChainPanel {
         if predicted.is_some() {
             legend.push_str(&format!("\norange dashed: predicted ({model})"));
         }
-        painter.text(
-            rect.left_top() + Vec2::new(8.0, 6.0),
-            Align2::LEFT_TOP,
+        if mapped.is_some() {
+            legend.push_str(
+                "\nwall map: the wall passed, shaded by the distance to the nearest estimated \
+                 contact point (dots)",
+            );
+        }
+        let at = rect.left_top() + Vec2::new(8.0, 6.0);
+        let galley = painter.layout_no_wrap(
             legend,
             FontId::proportional(12.0),
             ui.visuals().text_color(),
         );
+        if mapped.is_some() {
+            // The map's band may run under the legend: keep the legend readable.
+            painter.rect_filled(
+                Rect::from_min_size(at, galley.size()).expand(2.0),
+                3.0,
+                ui.visuals().panel_fill.gamma_multiply(0.6),
+            );
+        }
+        painter.galley(at, galley, ui.visuals().text_color());
+        if let Some((map, _)) = mapped {
+            paint_colour_bar(
+                &painter,
+                rect,
+                map.settings.complete_within_m * 1e3,
+                ui.visuals(),
+            );
+        }
     }
+}
+
+/// How far the map's band is drawn from the wall line, points: beside it on the solid side,
+/// so that the estimated points on the wall do not hide its colours.
+const MAP_OFFSET_PX: f32 = 7.5;
+
+/// The wall samples of `coverage` as a band beside the wall on its solid side (asked of
+/// `map.walls`, or away from `base`, which is in free space), shaded by their error (consecutive samples of one wall in
+/// one colour band drawn as one line, on a dark underlay), then `map`'s estimated points as
+/// dots in `marker` (at most one per 2 x 2 pixels: thousands of points crowd a few).
+fn paint_wall_map(
+    painter: &egui::Painter,
+    to: &ToScreen,
+    map: &WallMap<'_>,
+    coverage: &Coverage,
+    base: Pos2,
+    marker: Color32,
+) {
+    let within_mm = map.settings.complete_within_m * 1e3;
+    // Samples farther apart than this are on pieces of the wall not passed in one go.
+    let gap_m = 3.0 * map.settings.spacing_m;
+    let clip = painter.clip_rect();
+    let mut lines: Vec<(Vec<Pos2>, Color32)> = Vec::new();
+    let mut lone: Vec<(Pos2, Color32)> = Vec::new();
+    let mut current: Option<(usize, Vec<Pos2>, Color32)> = None;
+    let samples = &coverage.samples;
+    let joined = |a: usize, b: usize| {
+        let (a, b) = (&samples[a], &samples[b]);
+        a.wall == b.wall && (b.point_m - a.point_m).norm() <= gap_m
+    };
+    // The neighbours of sample `k` along its run (itself at a run's ends).
+    let neighbours = |k: usize| {
+        let before = k.checked_sub(1).filter(|&j| joined(j, k)).unwrap_or(k);
+        let after = Some(k + 1)
+            .filter(|&j| j < samples.len() && joined(k, j))
+            .unwrap_or(k);
+        (before, after)
+    };
+    // The unit normal at sample `k`, the tangent turned left, metres.
+    let left_normal_m = |k: usize| {
+        let (before, after) = neighbours(k);
+        let t = samples[after].point_m - samples[before].point_m;
+        Vector2::new(-t.y, t.x).try_normalize(0.0)
+    };
+    // Per run of joined samples, which way the solid side is: +1 on the left of the run's
+    // direction, -1 on its right (asked of the wall once, at the run's middle; without the
+    // wall, away from the base, which is in free space).
+    let mut side = vec![1.0_f32; samples.len()];
+    let mut start = 0;
+    while start < samples.len() {
+        let mut end = start;
+        while end + 1 < samples.len() && joined(end, end + 1) {
+            end += 1;
+        }
+        let middle = (start + end) / 2;
+        let here_m = samples[middle].point_m;
+        let sign = match (left_normal_m(middle), map.walls.get(samples[middle].wall)) {
+            (Some(n), Some(wall)) => {
+                let probe_m = here_m + n * map.settings.spacing_m;
+                if wall.signed_distance(&probe_m).gap_m < 0.0 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            }
+            (Some(n), None) => {
+                let to_base = base - to.pos([here_m.x, here_m.y]);
+                // Screen y points down: the normal on screen is (n.x, -n.y).
+                if f64::from(to_base.x) * n.x - f64::from(to_base.y) * n.y > 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                }
+            }
+            (None, _) => 1.0,
+        };
+        side[start..=end].fill(sign);
+        start = end + 1;
+    }
+    // Each sample on screen, moved off the wall to its solid side.
+    let shifted: Vec<Pos2> = (0..samples.len())
+        .map(|k| {
+            let at = to.pos([samples[k].point_m.x, samples[k].point_m.y]);
+            match left_normal_m(k) {
+                Some(n) => {
+                    let normal_px = Vec2::new(n.x as f32, -(n.y as f32)) * side[k];
+                    at + normal_px * MAP_OFFSET_PX
+                }
+                None => at,
+            }
+        })
+        .collect();
+    for (k, sample) in samples.iter().enumerate() {
+        let here = shifted[k];
+        let (band, colour) = coverage_band(sample.error_mm, within_mm);
+        let next = Some(k + 1).filter(|&j| j < samples.len() && joined(k, j));
+        match next {
+            Some(next) => {
+                let there = shifted[next];
+                match &mut current {
+                    Some((b, points, _)) if *b == band => points.push(there),
+                    _ => {
+                        lines.extend(current.take().map(|(_, p, c)| (p, c)));
+                        current = Some((band, vec![here, there], colour));
+                    }
+                }
+            }
+            None => match current.take() {
+                Some((_, p, c)) => lines.push((p, c)),
+                None => lone.push((here, colour)),
+            },
+        }
+    }
+    lines.extend(current.take().map(|(_, p, c)| (p, c)));
+    let near = clip.expand(8.0);
+    let visible = |points: &[Pos2]| points.iter().any(|p| near.contains(*p));
+    lines.retain(|(points, _)| visible(points));
+    for (points, _) in &lines {
+        painter.add(Shape::line(
+            points.clone(),
+            Stroke::new(9.0, MAP_UNDERLAY_COLOUR),
+        ));
+    }
+    for (points, colour) in lines {
+        painter.add(Shape::line(points, Stroke::new(6.0, colour)));
+    }
+    for (at, colour) in lone.into_iter().filter(|(at, _)| near.contains(*at)) {
+        painter.circle(at, 2.5, colour, Stroke::new(1.5, MAP_UNDERLAY_COLOUR));
+    }
+    let mut drawn = HashSet::new();
+    for p in map.points_m {
+        let at = to.pos([p.x, p.y]);
+        if clip.contains(at) && drawn.insert(((at.x / 2.0) as i32, (at.y / 2.0) as i32)) {
+            painter.circle_filled(at, 1.6, marker);
+        }
+    }
+}
+
+/// The map's colour bar in the lower right corner of `rect`: the scale from 0 (captured) to
+/// `within_mm` and beyond (missed), with the estimated points' dot.
+fn paint_colour_bar(painter: &egui::Painter, rect: Rect, within_mm: f64, visuals: &egui::Visuals) {
+    let (width, height) = (180.0, 12.0);
+    let origin = rect.right_bottom() + Vec2::new(-width - 16.0, -height - 42.0);
+    let frame = Rect::from_min_size(
+        origin + Vec2::new(-8.0, -22.0),
+        Vec2::new(width + 16.0, height + 58.0),
+    );
+    painter.rect_filled(frame, 4.0, visuals.panel_fill.gamma_multiply(0.9));
+    let text = visuals.text_color();
+    painter.text(
+        origin + Vec2::new(0.0, -4.0),
+        Align2::LEFT_BOTTOM,
+        "wall map: coverage error, mm",
+        FontId::proportional(11.0),
+        text,
+    );
+    let slices = COLOUR_BANDS + 1;
+    let slice = width / slices as f32;
+    for k in 0..slices {
+        let error_mm = within_mm * k as f64 / COLOUR_BANDS as f64;
+        let r = Rect::from_min_size(
+            origin + Vec2::new(slice * k as f32, 0.0),
+            Vec2::new(slice + 0.5, height),
+        );
+        painter.rect_filled(r, 0.0, coverage_colour(Some(error_mm), within_mm));
+    }
+    painter.rect_stroke(
+        Rect::from_min_size(origin, Vec2::new(width, height)),
+        0.0,
+        Stroke::new(1.0, MAP_UNDERLAY_COLOUR),
+        egui::StrokeKind::Outside,
+    );
+    let below = origin + Vec2::new(0.0, height + 3.0);
+    painter.text(
+        below,
+        Align2::LEFT_TOP,
+        "0 captured",
+        FontId::proportional(11.0),
+        text,
+    );
+    painter.text(
+        below + Vec2::new(width, 0.0),
+        Align2::RIGHT_TOP,
+        format!(">= {within_mm} missed"),
+        FontId::proportional(11.0),
+        text,
+    );
+    painter.text(
+        below + Vec2::new(0.0, 16.0),
+        Align2::LEFT_TOP,
+        "\u{2022} estimated contact points",
+        FontId::proportional(11.0),
+        text,
+    );
 }
 
 /// How [`paint_lit_switches`] marks a switch that fires.

@@ -1,10 +1,11 @@
 //! The monitor's interaction tests, one binary (each test binary links the whole GUI stack):
 //! against a real antennad on the simulated rig ([`live`]), on a recorded trial
-//! ([`recorded_trial`]) and on a scene file's simulated sweep ([`scene_sweep`]), driven
-//! through egui_kittest.
+//! ([`recorded_trial`]) and on a scene file's simulated sweep ([`scene_sweep`]) with its wall
+//! map ([`mapping`]), driven through egui_kittest.
 #![allow(clippy::unwrap_used)]
 
 mod live;
+mod mapping;
 mod recorded_trial;
 mod scene_sweep;
 mod support;
