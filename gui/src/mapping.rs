@@ -30,8 +30,7 @@ use nalgebra::Vector2;
 use sim_core::sweep::SweepStep;
 use sim_core::{
     Chain, Coverage, CoverageAccumulator, CoverageError, CoverageSettings, EstimatedContact,
-    MappingError, Section, SensorSettings, Sensors, TouchLayout, Wall, estimate_contacts,
-    wall_coverage,
+    MappingError, Section, SensorSettings, Sensors, Wall, estimate_contacts, wall_coverage,
 };
 
 use crate::error::MonitorError;
@@ -225,7 +224,7 @@ impl SweepMapping {
             &step.base_m,
             &self.sensed_theta_rad,
             &self.touch_bits,
-            &TouchLayout::default(),
+            &self.sensors.touch_layout(),
             &mut self.estimates,
         )
         .inspect_err(|_| self.estimates.clear())

@@ -131,13 +131,20 @@ pub fn touch_bits_from_contacts(
     Ok(())
 }
 
-/// Where a touched switch puts its estimated contact point on its link.
+/// Where a touched switch puts its estimated contact point.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct TouchLayout {
     /// Offset of the estimated point from the link axis along the link's left (`+y`) normal,
     /// metres (`0`: on the axis, where the simulated links touch; the robot's half-width
     /// toward the wall side otherwise).
     pub lateral_offset_m: f64,
+    /// Where a touch on the switch under a hair's pivot is placed: `false` (the default) on
+    /// the link like any other switch; `true` at the tip of the hair open against its stop
+    /// (the robot knows its hairs' geometry but not their angle, and a hair touching lightly
+    /// stays open). A hair's tip touches up to its length away from the link (18 mm on the
+    /// seed's robot), so on an antenna with hairs this places the point where the hair
+    /// meets the wall rather than on the link.
+    pub hair_tips: bool,
 }
 
 impl TouchLayout {
@@ -222,10 +229,27 @@ pub fn estimate_contacts(
         let (sin, cos) = phi_rad.sin_cos();
         let along = Vector2::new(cos, sin);
         let left = Vector2::new(-sin, cos);
+        // The hair whose pivot's switch is estimated at the hair's open tip, if any.
+        let hair = if layout.hair_tips && length_m > 0.0 {
+            chain.hairs().get(link).copied().flatten().map(|h| {
+                let pivot_switch = switch_for_fraction(1.0 - h.pivot_from_distal_end_m / length_m);
+                let tip = h.tip_in_link_m(h.open_angle_rad);
+                // The link frame's origin is the distal end.
+                let tip_m = joint_m + along * (length_m + tip.x) + left * tip.y;
+                (pivot_switch, tip_m)
+            })
+        } else {
+            None
+        };
         for switch in (0..SWITCHES_PER_SEGMENT).filter(|k| bits & (1 << k) != 0) {
-            let point_m = joint_m
-                + along * (TouchLayout::switch_fraction(switch) * length_m)
-                + left * layout.lateral_offset_m;
+            let point_m = match hair {
+                Some((pivot_switch, tip_m)) if pivot_switch == switch => tip_m,
+                _ => {
+                    joint_m
+                        + along * (TouchLayout::switch_fraction(switch) * length_m)
+                        + left * layout.lateral_offset_m
+                }
+            };
             out.push(EstimatedContact {
                 link,
                 switch,

@@ -97,6 +97,9 @@ pub struct SensorSettings {
     pub sample_rate_hz: Option<f64>,
     /// The seed of the noise and of drawn calibration errors.
     pub seed: u64,
+    /// Whether a touch on the switch under a hair's pivot is estimated at the hair's open
+    /// tip instead of on the link ([`crate::TouchLayout::hair_tips`]; `false`: on the link).
+    pub hair_tip_points: bool,
 }
 
 impl Default for SensorSettings {
@@ -178,9 +181,11 @@ impl SensorSettings {
         touch_debounce_samples: 1,
         sample_rate_hz: None,
         seed: 0,
+        hair_tip_points: false,
     };
 
-    /// Whether every setting is at its ideal value (the seed aside).
+    /// Whether every setting is at its ideal value (the seed aside; hair touches placed on
+    /// the link, as the ideal estimate always did).
     pub fn is_ideal(&self) -> bool {
         self.angle_noise_counts == 0.0
             && self.offset_counts.is_none()
@@ -188,6 +193,7 @@ impl SensorSettings {
             && self.touch_threshold_n == 0.0
             && self.touch_debounce_samples == 1
             && self.sample_rate_hz.is_none()
+            && !self.hair_tip_points
     }
 
     /// Checks every setting for a chain of `n` flagellar joints.
@@ -321,6 +327,14 @@ impl Sensors {
     /// The settings.
     pub fn settings(&self) -> &SensorSettings {
         &self.settings
+    }
+
+    /// Where the robot places the point of each touched switch ([`crate::estimate_contacts`]).
+    pub fn touch_layout(&self) -> crate::TouchLayout {
+        crate::TouchLayout {
+            hair_tips: self.settings.hair_tip_points,
+            ..crate::TouchLayout::default()
+        }
     }
 
     /// The calibration offsets in use per link `0..=n` (entry 0 is zero), counts.

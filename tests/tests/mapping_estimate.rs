@@ -131,6 +131,7 @@ fn a_known_offset_gives_the_known_error() {
     let mut out = Vec::new();
     let layout = TouchLayout {
         lateral_offset_m: 0.003,
+        ..TouchLayout::default()
     };
     estimate_contacts(&chain, &base, &theta, &bits, &layout, &mut out).unwrap();
     assert_eq!((out.len(), out[0].link, out[0].switch), (1, 6, 1));
@@ -268,6 +269,65 @@ proptest! {
                 })
                 .sum();
             prop_assert!((q.point_m - e.point_m).norm() <= bound_m * 1.001 + 1e-15);
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// With `hair_tips`, the switch under a hair's pivot places its point at the hair's tip
+    /// open against its stop (sim-core's own hair kinematics, `hair_poses`); every other
+    /// switch, and every switch without `hair_tips`, stays on the link.
+    #[test]
+    fn hair_switches_estimate_the_open_hair_tip(
+        counts in prop::collection::vec(-300i32..300, 8),
+        link in 1usize..=8,
+        right in any::<bool>(),
+        proximal in any::<bool>(),
+        pivot_fraction in 0.05..0.95f64,
+    ) {
+        use sim_core::{Hair, HairDirection, HairSide, hair_poses};
+        let hair = Hair {
+            side: if right { HairSide::Right } else { HairSide::Left },
+            direction: if proximal { HairDirection::Proximal } else { HairDirection::Distal },
+            pivot_from_distal_end_m: pivot_fraction * 0.04,
+            ..Hair::seed(0.04)
+        };
+        let chain = Chain::builder(8)
+            .link_length_m(0.04)
+            .base_angle_rad(30f64.to_radians())
+            .stiffness_nm_per_rad(0.01)
+            .hair_on_every_flagellar_link(hair)
+            .build()
+            .unwrap();
+        let base = v(0.01, -0.02);
+        let mut theta = vec![30f64.to_radians()];
+        theta.extend(counts.iter().map(|&c| f64::from(c) * ANGLE_QUANTUM_RAD));
+        let pivot_switch = switch_for_fraction(1.0 - pivot_fraction);
+        let mut bits = vec![0u8; 9];
+        bits[link] = 0b1111;
+        let mut with_tips = Vec::new();
+        let tips = TouchLayout { hair_tips: true, ..TouchLayout::default() };
+        estimate_contacts(&chain, &base, &theta, &bits, &tips, &mut with_tips).unwrap();
+        let mut on_link = Vec::new();
+        estimate_contacts(&chain, &base, &theta, &bits, &TouchLayout::default(), &mut on_link)
+            .unwrap();
+        let open: Vec<f64> = chain
+            .hairs()
+            .iter()
+            .map(|h| h.map_or(0.0, |h| h.open_angle_rad))
+            .collect();
+        let poses = hair_poses(&chain, &theta, &open, Frame::GROUND).unwrap();
+        let tip = poses.iter().find(|p| p.link == link).unwrap().tip_m + base;
+        prop_assert_eq!(with_tips.len(), 4);
+        for (a, b) in with_tips.iter().zip(&on_link) {
+            prop_assert_eq!((a.link, a.switch), (b.link, b.switch));
+            if a.switch == pivot_switch {
+                prop_assert!((a.point_m - tip).norm() < 1e-12, "{:?} vs {:?}", a.point_m, tip);
+            } else {
+                prop_assert_eq!(a.point_m, b.point_m);
+            }
         }
     }
 }

@@ -521,7 +521,7 @@ fn sensors_table_reaches_the_settings() {
             "\n[sensors]\nangle_noise_counts = 1\noffset_counts = 4.0\n\
              gain_error = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -0.02]\n\
              touch_threshold_n = 0.002\ntouch_debounce_samples = 3\nsample_rate_hz = 50\n\
-             seed = 9\n",
+             seed = 9\nhair_tip_points = true\n",
         ),
         "s.toml",
     )
@@ -536,6 +536,7 @@ fn sensors_table_reaches_the_settings() {
             touch_debounce_samples: 3,
             sample_rate_hz: Some(50.0),
             seed: 9,
+            hair_tip_points: true,
         }
     );
     // An empty table is the ideal sensors.
@@ -552,7 +553,7 @@ fn sensors_table_errors() {
         &with("\n[sensors]\nnoise_counts = 1.0\n"),
         "28:1: unknown key `noise_counts` in [sensors]; allowed: angle_noise_counts, \
          offset_counts, gain_error, touch_threshold_n, touch_debounce_samples, sample_rate_hz, \
-         seed",
+         seed, hair_tip_points",
     );
     expect(
         "sensors_noise.toml",

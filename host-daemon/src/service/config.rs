@@ -768,6 +768,8 @@ impl Config {
             touch_debounce_samples: FIRMWARE_DEBOUNCE_SAMPLES,
             sample_rate_hz: Some(self.bus.poll_hz),
             seed: sensors.seed,
+            // The daemon reports words; where a hair's touch is placed is the host's estimate.
+            hair_tip_points: false,
         }
     }
 

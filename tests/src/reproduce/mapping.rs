@@ -12,7 +12,7 @@
 use sim_core::sweep::{Sweep, SweepScene};
 use sim_core::{
     CoverageAccumulator, MappingAccumulator, SensorSettings, Sensors, Sinusoid, StiffnessProfile,
-    TouchLayout, Wall, WallSample, WallShape, estimate_contacts,
+    Wall, WallSample, WallShape, estimate_contacts,
 };
 
 use super::{ReproduceError, with_profile};
@@ -187,7 +187,7 @@ fn map(
                     &step.base_m,
                     &sensed,
                     &touch,
-                    &TouchLayout::default(),
+                    &sensors.touch_layout(),
                     &mut estimates,
                 )
             });

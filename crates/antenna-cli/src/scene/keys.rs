@@ -94,6 +94,7 @@ pub const SENSORS_KEYS: &[&str] = &[
     "touch_debounce_samples",
     "sample_rate_hz",
     "seed",
+    "hair_tip_points",
 ];
 
 /// Every table with its allowed keys, for naming the table of an unknown key.

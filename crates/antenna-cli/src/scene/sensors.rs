@@ -33,6 +33,7 @@ pub(crate) struct RawSensors {
     touch_debounce_samples: Option<Spanned<i64>>,
     sample_rate_hz: Option<Spanned<f64>>,
     seed: Option<Spanned<i64>>,
+    hair_tip_points: Option<Spanned<bool>>,
 }
 
 /// `offset_counts`, `gain_error`: a number (the spread drawn per joint) or a list (one value
@@ -118,6 +119,9 @@ impl RawSensors {
                     format!("{} must be >= 0", v.get_ref()),
                 )
             })?;
+        }
+        if let Some(v) = &self.hair_tip_points {
+            settings.hair_tip_points = *v.get_ref();
         }
         settings
             .validate(n)

@@ -51,7 +51,7 @@ impl StepMetrics {
         match Sensors::new(&SensorSettings::IDEAL, chain.n()) {
             Ok(mut sensors) => Self::sensed(chain, walls, step, &mut sensors),
             // Ideal settings are valid for any chain.
-            Err(_) => Self::sensed_by(chain, walls, step, None, true),
+            Err(_) => Self::sensed_by(chain, walls, step, None, true, TouchLayout::default()),
         }
     }
 
@@ -78,7 +78,8 @@ impl StepMetrics {
         } else {
             None
         };
-        Self::sensed_by(chain, walls, step, sample, ideal)
+        let layout = sensors.touch_layout();
+        Self::sensed_by(chain, walls, step, sample, ideal, layout)
     }
 
     fn sensed_by(
@@ -87,6 +88,7 @@ impl StepMetrics {
         step: &SweepStep,
         sample: Option<SensorSample>,
         ideal_sensors: bool,
+        layout: TouchLayout,
     ) -> StepMetrics {
         let base = step.base_m;
         let wall_distance_m = walls
@@ -107,7 +109,7 @@ impl StepMetrics {
                 &base,
                 &sample.theta_rad,
                 &sample.touch_bits,
-                &TouchLayout::default(),
+                &layout,
                 &mut estimates,
             )
             .is_ok();

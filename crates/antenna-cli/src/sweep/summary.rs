@@ -126,6 +126,8 @@ pub struct SensorsSummary {
     pub touch_debounce_samples: u32,
     /// The seed of the noise and of drawn calibration errors.
     pub seed: u64,
+    /// Whether a hair's touch is placed at the hair's open tip (`false`: on the link).
+    pub hair_tip_points: bool,
 }
 
 impl SensorsSummary {
@@ -145,6 +147,7 @@ impl SensorsSummary {
             touch_threshold_n: settings.touch_threshold_n,
             touch_debounce_samples: settings.touch_debounce_samples,
             seed: settings.seed,
+            hair_tip_points: settings.hair_tip_points,
         })
     }
 }
