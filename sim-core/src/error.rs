@@ -31,6 +31,8 @@ pub enum ChainField {
     HairPreload,
     /// The spring stiffness of the hair on link `index`.
     HairStiffness,
+    /// The root stiffness of the hair on link `index` (a compliant hair).
+    HairRootStiffness,
 }
 
 impl fmt::Display for ChainField {
@@ -48,6 +50,7 @@ impl fmt::Display for ChainField {
             Self::HairLateralOffset => "hair.lateral_offset_m",
             Self::HairPreload => "hair.preload_nm",
             Self::HairStiffness => "hair.stiffness_nm_per_rad",
+            Self::HairRootStiffness => "hair.root_stiffness_nm_per_rad",
         })
     }
 }

@@ -7,8 +7,11 @@
 //!   midpoint), `w` = `lateral_offset_m` (the segment's half-width; the seed: 0), and
 //!   `sigma = +1` for a hair on the left (`+y`, counter-clockwise) side, `-1` on the right.
 //! - the hair angle `beta` is the angle between the rod and the link: `0` folded along the
-//!   link, `open_angle_rad` (45 degrees on the robot) open against its stop. It cannot open
-//!   further: `0 <= beta <= open_angle_rad`, see [`Hair::fold_limit`].
+//!   link, `open_angle_rad` (45 degrees on the robot) open against its stop. A rigid hair
+//!   (the default) cannot open further: `0 <= beta <= open_angle_rad`. A hair with a
+//!   compliant root ([`Hair::root_stiffness_nm_per_rad`]) bends past its stop under load, up
+//!   to [`Hair::max_angle_rad`] (the rod folded back within [`HAIR_BEND_MARGIN_RAD`] of its
+//!   link); see [`Hair::fold_limit`].
 //! - rod direction `delta = sigma beta` (pointing distally) or `pi - sigma beta` (pointing
 //!   proximally, the seed's control experiment); tip `p' + l_h (cos delta, sin delta)`.
 //!
@@ -22,6 +25,11 @@ use crate::chain::finite;
 use crate::jacobian::hybrid_into_unchecked;
 use crate::positions::frame_pose_unchecked;
 use crate::{Chain, ChainError, ChainField, Frame, FramePoses, JointLimit, KinematicsError, Pose2};
+
+/// How close to its own link a hair with a compliant root may bend past its stop: its angle
+/// stays at most `pi - HAIR_BEND_MARGIN_RAD` (5 degrees short of the rod lying folded back
+/// along the link, on the hair's own side), see [`Hair::max_angle_rad`].
+pub const HAIR_BEND_MARGIN_RAD: f64 = core::f64::consts::PI / 36.0;
 
 /// Which side of its link a hair is on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -63,6 +71,13 @@ pub struct Hair {
     /// Stiffness of the hair's torsion spring, N m / rad (`>= 0`): folding the hair to angle
     /// `beta` takes the torque `preload_nm + stiffness_nm_per_rad (open_angle_rad - beta)`.
     pub stiffness_nm_per_rad: f64,
+    /// Stiffness of the hair's root, N m / rad (`> 0` and finite), or `None` for a rigid
+    /// hair (today's hair, the limit of an infinitely stiff root). With a root stiffness
+    /// `k_r` the stop is compliant: past it (`beta > open_angle_rad`) the root bends, adding
+    /// the energy `k_r / 2 (beta - open_angle_rad)^2` to the torsion spring's (whose terms go
+    /// on as they are), up to [`Hair::max_angle_rad`]. A free hair then rests at
+    /// [`Hair::rest_angle_rad`], `preload / (k_h + k_r)` past its stop.
+    pub root_stiffness_nm_per_rad: Option<f64>,
 }
 
 impl Hair {
@@ -81,13 +96,43 @@ impl Hair {
             direction: HairDirection::Distal,
             preload_nm: 1e-4,
             stiffness_nm_per_rad: 2e-4,
+            root_stiffness_nm_per_rad: None,
         }
     }
 
-    /// The range of the hair angle: `0 <= beta <= open_angle_rad`, as a [`JointLimit`] so the
-    /// limit map `g` applies to hairs too (seed 3.2.1: `theta' = g'(q')`).
+    /// The largest hair angle, radians: `open_angle_rad` for a rigid hair; with a compliant
+    /// root, `pi - HAIR_BEND_MARGIN_RAD` (the root bent until the rod is folded back within
+    /// [`HAIR_BEND_MARGIN_RAD`] of its link; never below `open_angle_rad`).
+    pub fn max_angle_rad(&self) -> f64 {
+        match self.root_stiffness_nm_per_rad {
+            None => self.open_angle_rad,
+            Some(_) => (core::f64::consts::PI - HAIR_BEND_MARGIN_RAD).max(self.open_angle_rad),
+        }
+    }
+
+    /// The angle of a free hair, radians: against its stop (`open_angle_rad`) if rigid; with
+    /// a compliant root, where the preload balances the root's bending, `open_angle_rad +
+    /// preload / (k_h + k_r)` (at most [`Self::max_angle_rad`]).
+    pub fn rest_angle_rad(&self) -> f64 {
+        match self.root_stiffness_nm_per_rad {
+            None => self.open_angle_rad,
+            Some(k_r) => (self.open_angle_rad
+                + self.preload_nm / (self.stiffness_nm_per_rad + k_r))
+                .min(self.max_angle_rad()),
+        }
+    }
+
+    /// Whether the hair at `beta_rad` is open against its stop, or bent beyond it (a
+    /// compliant root), within `tolerance_rad`.
+    pub fn on_stop(&self, beta_rad: f64, tolerance_rad: f64) -> bool {
+        beta_rad >= self.open_angle_rad - tolerance_rad
+    }
+
+    /// The range of the hair angle: `0 <= beta <= max_angle_rad` (`open_angle_rad` for a
+    /// rigid hair), as a [`JointLimit`] so the limit map `g` applies to hairs too (seed
+    /// 3.2.1: `theta' = g'(q')`).
     pub fn fold_limit(&self) -> JointLimit {
-        JointLimit::new(0.0, self.open_angle_rad)
+        JointLimit::new(0.0, self.max_angle_rad())
     }
 
     fn sigma(&self) -> f64 {
@@ -135,15 +180,38 @@ impl Hair {
 
     /// The spring's torque on the hair at angle `beta_rad`, as a gradient: `dU_h / d beta =
     /// -preload - k_h (open - beta)` (negative: it pushes the hair open), with
-    /// `U_h = preload (open - beta) + k_h / 2 (open - beta)^2`.
+    /// `U_h = preload (open - beta) + k_h / 2 (open - beta)^2`; with a compliant root, past
+    /// the stop, plus the root's `k_r (beta - open)`.
     pub fn spring_gradient_nm(&self, beta_rad: f64) -> f64 {
-        -self.preload_nm - self.stiffness_nm_per_rad * (self.open_angle_rad - beta_rad)
+        let spring =
+            -self.preload_nm - self.stiffness_nm_per_rad * (self.open_angle_rad - beta_rad);
+        match self.root_stiffness_nm_per_rad {
+            Some(k_r) if beta_rad > self.open_angle_rad => {
+                spring + k_r * (beta_rad - self.open_angle_rad)
+            }
+            _ => spring,
+        }
     }
 
-    /// The spring energy `U_h(beta)`, joules (zero when open against the stop).
+    /// The spring energy `U_h(beta)`, joules (zero when open against the stop); with a
+    /// compliant root, past the stop, plus the root's `k_r / 2 (beta - open)^2`.
     pub fn spring_energy_j(&self, beta_rad: f64) -> f64 {
         let folded = self.open_angle_rad - beta_rad;
-        self.preload_nm * folded + 0.5 * self.stiffness_nm_per_rad * folded * folded
+        let spring = self.preload_nm * folded + 0.5 * self.stiffness_nm_per_rad * folded * folded;
+        match self.root_stiffness_nm_per_rad {
+            Some(k_r) if folded < 0.0 => spring + 0.5 * k_r * folded * folded,
+            _ => spring,
+        }
+    }
+
+    /// The spring's stiffness at `beta_rad`, `d^2 U_h / d beta^2`, N m / rad: `k_h`, plus the
+    /// root's `k_r` at and past the stop (at the stop itself, the side the preload pushes the
+    /// hair to).
+    pub fn spring_hessian_nm_per_rad(&self, beta_rad: f64) -> f64 {
+        match self.root_stiffness_nm_per_rad {
+            Some(k_r) if beta_rad >= self.open_angle_rad => self.stiffness_nm_per_rad + k_r,
+            _ => self.stiffness_nm_per_rad,
+        }
     }
 
     pub(crate) fn validate(&self, link: usize, link_length_m: f64) -> Result<(), ChainError> {
@@ -182,6 +250,11 @@ impl Hair {
         }
         if self.stiffness_nm_per_rad < 0.0 {
             return bad(ChainField::HairStiffness, self.stiffness_nm_per_rad);
+        }
+        if let Some(k_r) = self.root_stiffness_nm_per_rad
+            && !(k_r > 0.0 && k_r.is_finite())
+        {
+            return bad(ChainField::HairRootStiffness, k_r);
         }
         Ok(())
     }
@@ -388,4 +461,115 @@ pub fn hair_tip_jacobian(
     out[(1, n + 1)] = d.y;
     out[(2, n + 1)] = rate;
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    //! The hair spring's energy, gradient and Hessian against central differences, rigid
+    //! and with a compliant root (before, past and at the stop), and the root's validation.
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use proptest::prelude::*;
+
+    fn compliant(k_r: f64) -> Hair {
+        Hair {
+            root_stiffness_nm_per_rad: Some(k_r),
+            ..Hair::seed(0.04)
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn gradient_and_hessian_match_central_differences(
+            log_k_r in -4.0..2.0f64,
+            preload in 0.0..1e-3f64,
+            k_h in 0.0..1e-2f64,
+            offset in -0.7..1.5f64,
+            rigid in prop::bool::ANY,
+        ) {
+            let hair = Hair {
+                preload_nm: preload,
+                stiffness_nm_per_rad: k_h,
+                root_stiffness_nm_per_rad: (!rigid).then(|| 10f64.powf(log_k_r)),
+                ..Hair::seed(0.04)
+            };
+            let beta = hair.open_angle_rad + offset;
+            // Central differences of a piecewise quadratic are exact away from the stop.
+            prop_assume!((beta - hair.open_angle_rad).abs() > 1e-4);
+            let h = 1e-6;
+            let fd_grad = (hair.spring_energy_j(beta + h) - hair.spring_energy_j(beta - h)) / (2.0 * h);
+            let grad = hair.spring_gradient_nm(beta);
+            prop_assert!((fd_grad - grad).abs() <= 1e-7 * (1.0 + grad.abs()), "{fd_grad} vs {grad}");
+            let fd_hess =
+                (hair.spring_gradient_nm(beta + h) - hair.spring_gradient_nm(beta - h)) / (2.0 * h);
+            let hess = hair.spring_hessian_nm_per_rad(beta);
+            prop_assert!((fd_hess - hess).abs() <= 1e-6 * (1.0 + hess.abs()), "{fd_hess} vs {hess}");
+            if offset > 0.0 && !rigid {
+                prop_assert_eq!(hess, k_h + 10f64.powf(log_k_r));
+            } else {
+                prop_assert_eq!(hess, k_h);
+            }
+        }
+    }
+
+    #[test]
+    fn at_the_stop_the_root_adds_nothing_but_its_stiffness() {
+        let rigid = Hair::seed(0.04);
+        let hair = compliant(0.05);
+        let open = hair.open_angle_rad;
+        assert_eq!(hair.spring_energy_j(open), 0.0);
+        assert_eq!(
+            hair.spring_gradient_nm(open),
+            rigid.spring_gradient_nm(open)
+        );
+        assert_eq!(hair.spring_hessian_nm_per_rad(open), 0.05 + 2e-4);
+        // The gradient is continuous through the stop.
+        let below = hair.spring_gradient_nm(open - 1e-9);
+        let above = hair.spring_gradient_nm(open + 1e-9);
+        assert!((above - below).abs() < 1e-10);
+        // A free hair rests where the gradient vanishes, past its stop.
+        let rest = hair.rest_angle_rad();
+        assert!(rest > open);
+        assert!(hair.spring_gradient_nm(rest).abs() < 1e-18);
+        assert!(hair.on_stop(rest, 0.0) && !hair.on_stop(open - 1e-6, 0.0));
+    }
+
+    #[test]
+    fn a_rigid_hair_keeps_its_stop_as_its_limit_and_rest() {
+        let hair = Hair::seed(0.04);
+        assert_eq!(hair.max_angle_rad(), hair.open_angle_rad);
+        assert_eq!(hair.rest_angle_rad(), hair.open_angle_rad);
+        assert_eq!(hair.fold_limit(), JointLimit::new(0.0, hair.open_angle_rad));
+        let bent = compliant(1.0);
+        assert_eq!(
+            bent.max_angle_rad(),
+            core::f64::consts::PI - HAIR_BEND_MARGIN_RAD
+        );
+        assert_eq!(bent.fold_limit().ccw_rad, bent.max_angle_rad());
+    }
+
+    #[test]
+    fn a_root_stiffness_must_be_positive_and_finite() {
+        for k_r in [0.0, -1e-3, f64::NAN, f64::INFINITY] {
+            let e = compliant(k_r).validate(3, 0.04).unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    ChainError::HairOutOfRange {
+                        field: ChainField::HairRootStiffness,
+                        index: 3,
+                        ..
+                    }
+                ),
+                "{k_r}: {e:?}"
+            );
+            assert!(
+                e.to_string().contains("hair.root_stiffness_nm_per_rad[3]"),
+                "{e}"
+            );
+        }
+        compliant(1e-6).validate(3, 0.04).unwrap();
+        assert!(Chain::builder(2).hair(1, compliant(0.0)).build().is_err());
+    }
 }

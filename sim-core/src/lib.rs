@@ -143,8 +143,8 @@ pub use equilibrium::{
 pub use error::{ChainError, ChainField, KinematicsError};
 pub use frame::Frame;
 pub use hair::{
-    Hair, HairDirection, HairPose, HairSide, HairVelocity, hair_pose, hair_poses,
-    hair_tip_jacobian, hair_velocities,
+    HAIR_BEND_MARGIN_RAD, Hair, HairDirection, HairPose, HairSide, HairVelocity, hair_pose,
+    hair_poses, hair_tip_jacobian, hair_velocities,
 };
 pub use identify::{
     DampingSource, FrequencySource, Identification, IdentifyError, IdentifyOptions,

@@ -178,6 +178,7 @@ fn hair_strategy() -> impl Strategy<Value = Hair> {
             },
             preload_nm: 0.0,
             stiffness_nm_per_rad: 0.0,
+            root_stiffness_nm_per_rad: None,
         })
 }
 

@@ -673,6 +673,20 @@ fn ci_sample_spans_every_axis() {
         assert!(cases.iter().any(|c| c.profile == p), "no {}", p.name());
     }
     assert!(cases.iter().any(|c| c.hairs) && cases.iter().any(|c| !c.hairs));
+    // Compliant hairs over a wide range, and rigid ones beside them.
+    let roots: Vec<f64> = cases
+        .iter()
+        .flat_map(|c| c.root_stiffnesses_nm_per_rad())
+        .collect();
+    assert!(roots.iter().any(|&k| k < 1e-3) && roots.iter().any(|&k| k > 1.0));
+    assert!(cases.iter().any(|c| {
+        c.scene
+            .chain
+            .hairs()
+            .iter()
+            .flatten()
+            .any(|h| h.root_stiffness_nm_per_rad.is_none())
+    }));
     assert!(cases.iter().any(|c| c.wall.corner_at.is_some()));
 }
 

@@ -75,7 +75,8 @@ fn hairs_zones_and_contact_settings_reach_sim_core() {
             "[[walls]]",
             "[antenna.hairs]\nlinks = [5, 7, 8]\ndirection = \"proximal\"\nside = \"right\"\n\
              length_m = 0.03\nopen_angle_deg = 40.0\nlateral_offset_m = 0.004\n\
-             preload_n_m = 2e-4\nstiffness_n_m_per_rad = 1e-4\n\n[[walls]]",
+             preload_n_m = 2e-4\nstiffness_n_m_per_rad = 1e-4\n\
+             root_stiffness_n_m_per_rad = 0.02\n\n[[walls]]",
         )
         .replace(
             "solid = \"left\"",
@@ -103,6 +104,22 @@ fn hairs_zones_and_contact_settings_reach_sim_core() {
     assert_eq!(hair.lateral_offset_m, 0.004);
     assert_eq!(hair.preload_nm, 2e-4);
     assert_eq!(hair.stiffness_nm_per_rad, 1e-4);
+    assert_eq!(hair.root_stiffness_nm_per_rad, Some(0.02));
+    assert_eq!(
+        Scene::parse(
+            WALL_SCENE
+                .replace("[[walls]]", "[antenna.hairs]\n\n[[walls]]")
+                .as_str(),
+            "s.toml"
+        )
+        .unwrap()
+        .chain
+        .hairs()[1]
+            .unwrap()
+            .root_stiffness_nm_per_rad,
+        None,
+        "absent: a rigid hair"
+    );
     let surfaces = &scene.walls[0].surfaces;
     assert_eq!(surfaces.axis(), ZoneAxis::WorldX);
     assert_eq!(
@@ -199,7 +216,7 @@ fn hairs_table_errors() {
         &hairs("colour = 1"),
         "12:1: unknown key `colour` in [antenna.hairs]; allowed: links, direction, side, \
          length_m, open_angle_deg, pivot_from_distal_end_m, lateral_offset_m, preload_n_m, \
-         stiffness_n_m_per_rad",
+         stiffness_n_m_per_rad, root_stiffness_n_m_per_rad",
     );
     expect(
         "hairs_links.toml",
@@ -240,6 +257,21 @@ fn hairs_table_errors() {
         "hairs_preload.toml",
         &hairs("preload_n_m = -1e-4"),
         "12:15: `preload_n_m` in [antenna.hairs]: -0.0001 must be >= 0",
+    );
+    expect(
+        "hairs_root_zero.toml",
+        &hairs("root_stiffness_n_m_per_rad = 0.0"),
+        "12:30: `root_stiffness_n_m_per_rad` in [antenna.hairs]: 0 must be > 0",
+    );
+    expect(
+        "hairs_root_negative.toml",
+        &hairs("root_stiffness_n_m_per_rad = -0.01"),
+        "12:30: `root_stiffness_n_m_per_rad` in [antenna.hairs]: -0.01 must be > 0",
+    );
+    expect(
+        "hairs_root_nan.toml",
+        &hairs("root_stiffness_n_m_per_rad = nan"),
+        "12:30: `root_stiffness_n_m_per_rad` in [antenna.hairs]",
     );
 }
 

@@ -45,8 +45,8 @@ impl QuasiStatic {
                 .position(|&l| l == link)
                 .and_then(|i| x.get(n + i))
                 .copied()
-                .unwrap_or(hair.open_angle_rad);
-            let on_stop = beta >= hair.open_angle_rad - 1e-12;
+                .unwrap_or(hair.rest_angle_rad());
+            let on_stop = hair.on_stop(beta, 1e-12);
             let surface = self
                 .pieces
                 .surface_at(&self.walls, pair.key.piece, &pair.geo.point_m);

@@ -300,7 +300,7 @@ impl QuasiStatic {
             {
                 g -= rate.dot(&c.force_n());
             }
-            if beta >= hair.open_angle_rad - ON_LIMIT_RAD {
+            if beta >= hair.max_angle_rad() - ON_LIMIT_RAD {
                 out.limit_sign_violation_nm = worst(out.limit_sign_violation_nm, g);
             } else if beta <= ON_LIMIT_RAD {
                 out.limit_sign_violation_nm = worst(out.limit_sign_violation_nm, -g);

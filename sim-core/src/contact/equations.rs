@@ -189,7 +189,7 @@ impl Equations {
                 .max(1e-9);
             self.scale.push(s);
             self.lo.push(0.0);
-            self.hi.push(hair.open_angle_rad);
+            self.hi.push(hair.max_angle_rad());
         }
         self.r.clear();
         self.r.resize(m, 0.0);

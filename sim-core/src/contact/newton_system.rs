@@ -528,7 +528,7 @@ fn hair_terms(eq: &Equations, p: &StepProblem<'_>, pairs: &[Pair], h: usize) -> 
     let hair = hair_of(p.chain, link);
     let pivot = eq.posture.hair_pivot(hair, link);
     let mut mixed = 0.0;
-    let mut diag = hair.stiffness_nm_per_rad;
+    let mut diag = hair.spring_hessian_nm_per_rad(eq.beta[link]);
     for pair in pairs.iter().filter(|q| q.key.hair_link() == Some(link)) {
         if let Some(rate) = pair.geo.hair_rate {
             let force = pair.force_n();
@@ -752,6 +752,64 @@ mod tests {
             beta,
             pairs,
             hand,
+        }
+    }
+
+    /// [`case`] with compliant hairs (root stiffness 0.001 to 1 N m/rad): the last bent past
+    /// its stop, the other folded short of it.
+    fn compliant_case(seed: u64, wall_kind: usize) -> Case {
+        let mut c = case(seed, wall_kind);
+        let mut s = seed ^ 0x5eed;
+        let n = c.chain.n();
+        let mut builder = c.chain.to_builder();
+        for (h, &l) in c.hair_links.iter().enumerate() {
+            let mut hair = c.chain.hairs()[l].unwrap();
+            hair.root_stiffness_nm_per_rad = Some(10f64.powf(-3.0 + 3.0 * lcg(&mut s)));
+            builder = builder.hair(l, hair);
+            let open = hair.open_angle_rad;
+            c.beta[l] = if l == n {
+                open + 0.05 + 0.8 * lcg(&mut s)
+            } else {
+                open - 0.05 - 0.3 * lcg(&mut s)
+            };
+            c.x[n + h] = c.beta[l];
+        }
+        c.chain = builder.build().unwrap();
+        c
+    }
+
+    #[test]
+    fn the_hessian_with_compliant_hairs_matches_central_differences() {
+        for seed in 0..12u64 {
+            let c = compliant_case(seed, (seed % 3) as usize);
+            let p = problem(&c);
+            let mut eq = Equations::default();
+            let mut pairs = c.pairs.clone();
+            eq.prepare(&p);
+            let n = c.chain.n();
+            assert!(eq.hi[n + 1] > c.x[n + 1], "the bent hair is inside its box");
+            eq.load(&c.x, &pairs);
+            eq.evaluate(&p, &mut pairs);
+            let mut sys = NewtonSystem::default();
+            let hess = sys.dense_hessian(&eq, &p, &pairs);
+            let m = c.x.len();
+            let h = 1e-6;
+            for b in 0..m {
+                let mut plus = c.x.clone();
+                plus[b] += h;
+                let mut minus = c.x.clone();
+                minus[b] -= h;
+                let rp = r_at(&mut eq, &p, &pairs, &plus);
+                let rm = r_at(&mut eq, &p, &pairs, &minus);
+                for a in 0..m {
+                    let fd = (rp[a] - rm[a]) / (2.0 * h);
+                    let an = hess[(a, b)];
+                    assert!(
+                        (fd - an).abs() <= 1e-5 * (1.0 + an.abs().max(fd.abs())),
+                        "seed {seed}: dr[{a}]/dx[{b}]: closed form {an}, differences {fd}"
+                    );
+                }
+            }
         }
     }
 

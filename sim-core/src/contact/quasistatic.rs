@@ -76,7 +76,7 @@ struct SavedState {
 
 impl QuasiStatic {
     /// A chain at `theta_rad` (`n + 1` entries, `theta_0` the base angle) with its base pivot
-    /// at `base_m`, among `walls`. Hairs start open. No contact forces act yet: call
+    /// at `base_m`, among `walls`. Hairs start open (at [`crate::Hair::rest_angle_rad`]). No contact forces act yet: call
     /// [`Self::settle`] to let a posture touching a wall come to rest.
     ///
     /// # Errors
@@ -121,7 +121,7 @@ impl QuasiStatic {
         let beta = chain
             .hairs()
             .iter()
-            .map(|h| h.map_or(0.0, |h| h.open_angle_rad))
+            .map(|h| h.map_or(0.0, |h| h.rest_angle_rad()))
             .collect();
         let pieces = Pieces::new(&walls);
         let mut sim = QuasiStatic {
@@ -195,7 +195,8 @@ impl QuasiStatic {
     }
 
     /// The hair angles per link (`n + 1`; `0` on links without a hair), radians: the open
-    /// angle unless a contact folds the hair.
+    /// angle ([`crate::Hair::rest_angle_rad`]) unless a contact folds the hair (or bends a
+    /// compliant one past its stop).
     pub fn hair_angles_rad(&self) -> &[f64] {
         &self.beta
     }
@@ -549,7 +550,7 @@ impl QuasiStatic {
             .hairs()
             .iter()
             .zip(&self.beta)
-            .all(|(h, &b)| h.is_none_or(|h| b == h.open_angle_rad));
+            .all(|(h, &b)| h.is_none_or(|h| b == h.rest_angle_rad()));
         if !hairs_open {
             return false;
         }
@@ -591,7 +592,7 @@ impl QuasiStatic {
         self.theta[1..].copy_from_slice(&accepted.x[..n]);
         for (link, hair) in self.chain.hairs().iter().enumerate() {
             if let Some(hair) = hair {
-                self.beta[link] = hair.open_angle_rad;
+                self.beta[link] = hair.rest_angle_rad();
             }
         }
         for (h, &link) in accepted.hair_links.iter().enumerate() {

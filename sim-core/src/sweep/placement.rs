@@ -415,7 +415,7 @@ fn deepest_crossing(
     let open: Vec<f64> = chain
         .hairs()
         .iter()
-        .map(|h| h.map_or(0.0, |h| h.open_angle_rad))
+        .map(|h| h.map_or(0.0, |h| h.rest_angle_rad()))
         .collect();
     if let Ok(hairs) = crate::hair_poses(chain, theta, &open, crate::Frame::GROUND) {
         for h in hairs {

@@ -95,6 +95,33 @@ pub fn lock_angle_deg(hair: &Hair) -> f64 {
     rise.atan2(run).to_degrees()
 }
 
+/// `base` with every hair's root stiffness set to `root_stiffness_nm_per_rad` (`None`: rigid
+/// hairs, the scene as written). [`scene_for`] copies it to the hairs it lays out.
+///
+/// # Errors
+/// [`ReproduceError`] for a root stiffness that is not positive and finite.
+pub fn with_root_stiffness(
+    base: &SweepScene,
+    root_stiffness_nm_per_rad: Option<f64>,
+) -> Result<SweepScene, ReproduceError> {
+    let mut builder = base.chain.to_builder().without_hairs();
+    for (link, hair) in base.chain.hairs().iter().enumerate() {
+        if let Some(hair) = hair {
+            builder = builder.hair(
+                link,
+                Hair {
+                    root_stiffness_nm_per_rad,
+                    ..*hair
+                },
+            );
+        }
+    }
+    Ok(SweepScene {
+        chain: builder.build()?,
+        ..base.clone()
+    })
+}
+
 /// The base scene with `surface`, `layout`, `base_angle_deg` and the hair length changed.
 ///
 /// # Errors

@@ -4,7 +4,10 @@
 //! The antenna is the 4.2.1 robot stretched or cut into `N` links: 0.36 m long, `N` links of
 //! `0.36 / N` m (`N - 1` flexible joints), joint limits +-90 deg, stiffness normalized to
 //! 0.004..0.082 N m/rad by one of the seven Table 4.1 profiles, and on every flexible link
-//! either no hair or a distal hair of 0.45 link lengths pivoting at the link's middle. The
+//! either no hair or a distal hair of 0.45 link lengths pivoting at the link's middle, each
+//! hair rigid or (half of them, from a random stream of their own so that every other draw
+//! is as it was before compliant hairs) with a compliant root of 1e-4..10 N m/rad,
+//! log-uniform. The
 //! base starts at the origin at 20-40 deg and moves along `+x` at 16.7 or 24 mm/s in steps of
 //! 0.01 s. The wall (see [`super::walls`]) lies on the antenna's left, its baseline at
 //! -15..+5 deg (closing in on the base or about level), smooth with `mu` in
@@ -219,7 +222,7 @@ impl PosturePoints {
         let open: Vec<f64> = chain
             .hairs()
             .iter()
-            .map(|h| h.map_or(0.0, |h| h.open_angle_rad))
+            .map(|h| h.map_or(0.0, |h| h.rest_angle_rad()))
             .collect();
         let hair_tips_m = hair_poses(chain, theta, &open, Frame::GROUND)?
             .into_iter()
@@ -320,6 +323,36 @@ pub fn antenna(
                     ..Hair::seed(l)
                 },
             );
+        }
+    }
+    Ok(builder.build()?)
+}
+
+/// The share of hairs given a compliant root.
+pub const COMPLIANT_SHARE: f64 = 0.5;
+/// The range of root stiffnesses, N m/rad (log-uniform).
+pub const ROOT_STIFFNESS_RANGE_NM_PER_RAD: (f64, f64) = (1e-4, 10.0);
+/// Mixed into the case's seed for the root stiffnesses' own stream.
+const ROOT_STREAM: u64 = 0x726f_6f74;
+
+/// `chain` with a compliant root on [`COMPLIANT_SHARE`] of its hairs, drawn from `rng`.
+///
+/// # Errors
+/// [`StressError::Chain`].
+pub fn with_compliant_roots(chain: Chain, rng: &mut impl Rng) -> Result<Chain, StressError> {
+    if chain.hairs().iter().all(Option::is_none) {
+        return Ok(chain);
+    }
+    let (lo, hi) = ROOT_STIFFNESS_RANGE_NM_PER_RAD;
+    let mut builder = chain.to_builder().without_hairs();
+    for (link, hair) in chain.hairs().iter().enumerate() {
+        if let Some(hair) = hair {
+            let mut hair = *hair;
+            if rng.random_bool(COMPLIANT_SHARE) {
+                let k = lo * (hi / lo).powf(rng.random::<f64>());
+                hair.root_stiffness_nm_per_rad = Some(k);
+            }
+            builder = builder.hair(link, hair);
         }
     }
     Ok(builder.build()?)
@@ -522,6 +555,7 @@ impl Case {
         let drawn_steps = (sample.duration_s(rng, links) / STEP_S).round() as usize;
         let travel = speed * drawn_steps as f64 * STEP_S;
         let chain = antenna(links, &profile, hairs, base_angle_deg.to_radians())?;
+        let chain = with_compliant_roots(chain, &mut case_rng(seed ^ ROOT_STREAM, index))?;
         let link_m = ANTENNA_LENGTH_M / links as f64;
         let base = Vector2::zeros();
         let anchor = kind == WallKind::Polyline && rng.random_bool(ANCHOR_SHARE);
@@ -728,6 +762,34 @@ impl Case {
         })
     }
 
+    /// The root stiffnesses of the compliant hairs, N m/rad, by link.
+    pub fn root_stiffnesses_nm_per_rad(&self) -> Vec<f64> {
+        self.scene
+            .chain
+            .hairs()
+            .iter()
+            .flatten()
+            .filter_map(|h| h.root_stiffness_nm_per_rad)
+            .collect()
+    }
+
+    /// `none`, `distal`, or `distal` and the compliant hairs' range of root stiffness.
+    fn hairs_name(&self) -> String {
+        if !self.hairs {
+            return "none".into();
+        }
+        let k = self.root_stiffnesses_nm_per_rad();
+        if k.is_empty() {
+            return "distal".into();
+        }
+        let lo = k.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = k.iter().copied().fold(0.0, f64::max);
+        format!(
+            "distal({}-compliant,k_r={lo:.1e}..{hi:.1e}N*m/rad)",
+            k.len()
+        )
+    }
+
     /// The steps the sweep takes.
     pub fn steps(&self) -> usize {
         self.scene.motion.steps()
@@ -744,7 +806,7 @@ impl Case {
             self.index,
             self.links,
             self.profile.name(),
-            if self.hairs { "distal" } else { "none" },
+            self.hairs_name(),
             self.base_angle_deg,
             self.speed_m_per_s * 1e3,
             self.steps(),

@@ -31,6 +31,7 @@ pub(crate) struct RawHairs {
     lateral_offset_m: Option<Spanned<f64>>,
     preload_n_m: Option<Spanned<f64>>,
     stiffness_n_m_per_rad: Option<Spanned<f64>>,
+    root_stiffness_n_m_per_rad: Option<Spanned<f64>>,
 }
 
 /// `links`: `"all"` or a list of link numbers.
@@ -185,6 +186,10 @@ impl RawHairs {
         }
         if let Some(v) = &self.stiffness_n_m_per_rad {
             hair.stiffness_nm_per_rad = non_negative(source, HAIRS, "stiffness_n_m_per_rad", v)?;
+        }
+        if let Some(v) = &self.root_stiffness_n_m_per_rad {
+            hair.root_stiffness_nm_per_rad =
+                Some(positive(source, HAIRS, "root_stiffness_n_m_per_rad", v)?);
         }
         let pivot_given = self.pivot_from_distal_end_m.is_some();
         if let Some(v) = &self.pivot_from_distal_end_m {

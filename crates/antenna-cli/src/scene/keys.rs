@@ -35,6 +35,7 @@ pub const HAIRS_KEYS: &[&str] = &[
     "lateral_offset_m",
     "preload_n_m",
     "stiffness_n_m_per_rad",
+    "root_stiffness_n_m_per_rad",
 ];
 /// Keys allowed in `[base]`.
 pub const BASE_KEYS: &[&str] = &["position_m"];
