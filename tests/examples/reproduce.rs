@@ -252,8 +252,10 @@ fn flipping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::erro
         md,
         "`examples/flipping_3_3_1.toml`; test `tests/tests/reproduce_flipping.rs`. Flip: the \
          distal segment beyond 90 deg to the wall.\n\n\
-         **Not reproduced with the seed's hair geometry.** With its {:.0} mm hairs, model.md \
-         7's anchored hair stops the distal segment where the segment's end meets the wall: \
+         **With the seed's 18 mm hairs: reproduced at 30 deg when the hair's root gives \
+         (a root stiffness of 1e-3 to 2e-3 N m/rad, \"Compliant 18 mm hairs\" below), and at \
+         60 and 70 deg; not at 10 and 20 deg; not with a rigid hair.** With its {:.0} mm \
+         rigid hairs, model.md 7's anchored hair stops the distal segment where the segment's end meets the wall: \
          the lock angle is {:.1} deg, short of a flip: at 10, 20 and 30 deg the distal \
          segment rises to it and stays (at 60 deg it flips late, at 70 deg not at all). \
          The seed's antenna flipped, so its hair (or its segment's end) must give way past \

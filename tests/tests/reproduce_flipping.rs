@@ -106,6 +106,26 @@ fn compliant_seed_hairs_flip_only_on_the_rough_wall_with_distal_hairs() {
             }
         }
     }
+    // The seed's base-angle control (rough wall, distal hairs): it flipped at 10, 20, 60 and
+    // 70 deg too. At this root 60 and 70 deg flip; 10 and 20 deg do not (docs/reproduction.md
+    // says so).
+    for (deg, flips) in [(10.0, false), (20.0, false), (60.0, true), (70.0, true)] {
+        let run = flipping::run(
+            &compliant,
+            WallSurface::Rough,
+            HairLayout::Distal,
+            deg,
+            hair.length_m,
+        )
+        .unwrap();
+        assert_eq!(
+            run.flipped(),
+            flips,
+            "{deg} deg: flip {:?}, max {:.1} deg",
+            run.flip_t_s,
+            run.max_distal_angle_deg
+        );
+    }
     // Stiffer roots hold the distal segment short of a flip again; a stiff one near the
     // rigid hair's lock.
     let lock = flipping::lock_angle_deg(&hair);
