@@ -154,17 +154,11 @@ fn a_bad_configuration_names_the_key_and_exits_with_failure() {
     );
 }
 
-#[test]
-fn bad_sensor_settings_are_refused_before_the_daemon_starts() {
-    let path = std::env::temp_dir().join(format!("antennad-sensors-{}.toml", std::process::id()));
-    std::fs::write(
-        &path,
-        "[sim.sensors]
-seed = 1
-angle_noise_counts = -2.0
-",
-    )
-    .unwrap();
+/// Runs antennad on a config file of `text` (named after `name`) as a one-trial run without
+/// recording; asserts that it exits with failure and returns its stderr.
+fn refused(name: &str, text: &str) -> String {
+    let path = std::env::temp_dir().join(format!("antennad-{name}-{}.toml", std::process::id()));
+    std::fs::write(&path, text).unwrap();
     let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
         .arg("--config")
         .arg(&path)
@@ -177,8 +171,16 @@ angle_noise_counts = -2.0
         .output()
         .unwrap();
     std::fs::remove_file(&path).ok();
-    let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+#[test]
+fn bad_sensor_settings_are_refused_before_the_daemon_starts() {
+    let stderr = refused(
+        "sensors",
+        "[sim.sensors]\nseed = 1\nangle_noise_counts = -2.0\n",
+    );
     assert!(
         stderr.contains(":3:1: `sim.sensors.angle_noise_counts`: must be finite and at least 0"),
         "{stderr}"
@@ -348,23 +350,8 @@ fn kill_9_during_a_trial_leaves_every_poll_up_to_the_last_flush() {
 
 #[test]
 fn a_missing_i2c_device_names_the_key_and_the_path() {
-    let path = std::env::temp_dir().join(format!("antennad-i2c-{}.toml", std::process::id()));
     // 100 Hz: a rate the default 100 kHz bus carries (9 segments at 1 kHz it does not).
-    std::fs::write(&path, "[bus]\ndevice = \"/dev/i2c-250\"\npoll_hz = 100.0\n").unwrap();
-    let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
-        .arg("--config")
-        .arg(&path)
-        .args([
-            "--exit-after-trial",
-            "--listen",
-            "127.0.0.1:0",
-            "--no-record",
-        ])
-        .output()
-        .unwrap();
-    std::fs::remove_file(&path).ok();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(!output.status.success());
+    let stderr = refused("i2c", "[bus]\ndevice = \"/dev/i2c-250\"\npoll_hz = 100.0\n");
     assert!(
         stderr.contains("`bus.device` = \"/dev/i2c-250\": cannot open the I2C bus"),
         "{stderr}"
@@ -417,23 +404,8 @@ fn with_a_stage_configured_no_trial_starts_by_itself_and_it_waits_idle() {
 
 #[test]
 fn a_poll_rate_the_bus_cannot_carry_is_refused_with_the_arithmetic() {
-    let path = std::env::temp_dir().join(format!("antennad-rate-{}.toml", std::process::id()));
     // The default nine segments at the default 1 kHz, on a real device at the default 100 kHz.
-    std::fs::write(&path, "[bus]\ndevice = \"/dev/i2c-250\"\n").unwrap();
-    let output = Command::new(env!("CARGO_BIN_EXE_antennad"))
-        .arg("--config")
-        .arg(&path)
-        .args([
-            "--exit-after-trial",
-            "--listen",
-            "127.0.0.1:0",
-            "--no-record",
-        ])
-        .output()
-        .unwrap();
-    std::fs::remove_file(&path).ok();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(!output.status.success());
+    let stderr = refused("rate", "[bus]\ndevice = \"/dev/i2c-250\"\n");
     for part in [
         "`bus.poll_hz`",
         "9 segments x 38 + 57 = 399 bit times",

@@ -784,31 +784,39 @@ mod tests {
             let c = compliant_case(seed, (seed % 3) as usize);
             let p = problem(&c);
             let mut eq = Equations::default();
-            let mut pairs = c.pairs.clone();
             eq.prepare(&p);
             let n = c.chain.n();
             assert!(eq.hi[n + 1] > c.x[n + 1], "the bent hair is inside its box");
-            eq.load(&c.x, &pairs);
-            eq.evaluate(&p, &mut pairs);
-            let mut sys = NewtonSystem::default();
-            let hess = sys.dense_hessian(&eq, &p, &pairs);
-            let m = c.x.len();
-            let h = 1e-6;
-            for b in 0..m {
-                let mut plus = c.x.clone();
-                plus[b] += h;
-                let mut minus = c.x.clone();
-                minus[b] -= h;
-                let rp = r_at(&mut eq, &p, &pairs, &plus);
-                let rm = r_at(&mut eq, &p, &pairs, &minus);
-                for a in 0..m {
-                    let fd = (rp[a] - rm[a]) / (2.0 * h);
-                    let an = hess[(a, b)];
-                    assert!(
-                        (fd - an).abs() <= 1e-5 * (1.0 + an.abs().max(fd.abs())),
-                        "seed {seed}: dr[{a}]/dx[{b}]: closed form {an}, differences {fd}"
-                    );
-                }
+            assert_hessian_matches_differences(&c, seed);
+        }
+    }
+
+    /// The closed-form Hessian of case `c` against central differences of `r`.
+    fn assert_hessian_matches_differences(c: &Case, seed: u64) {
+        let p = problem(c);
+        let mut eq = Equations::default();
+        let mut pairs = c.pairs.clone();
+        eq.prepare(&p);
+        eq.load(&c.x, &pairs);
+        eq.evaluate(&p, &mut pairs);
+        let mut sys = NewtonSystem::default();
+        let hess = sys.dense_hessian(&eq, &p, &pairs);
+        let m = c.x.len();
+        let h = 1e-6;
+        for b in 0..m {
+            let mut plus = c.x.clone();
+            plus[b] += h;
+            let mut minus = c.x.clone();
+            minus[b] -= h;
+            let rp = r_at(&mut eq, &p, &pairs, &plus);
+            let rm = r_at(&mut eq, &p, &pairs, &minus);
+            for a in 0..m {
+                let fd = (rp[a] - rm[a]) / (2.0 * h);
+                let an = hess[(a, b)];
+                assert!(
+                    (fd - an).abs() <= 1e-5 * (1.0 + an.abs().max(fd.abs())),
+                    "seed {seed}: dr[{a}]/dx[{b}]: closed form {an}, differences {fd}"
+                );
             }
         }
     }
@@ -843,33 +851,7 @@ mod tests {
     #[test]
     fn the_hessian_of_every_pair_kind_matches_central_differences() {
         for seed in 0..24u64 {
-            let c = case(seed, (seed % 3) as usize);
-            let p = problem(&c);
-            let mut eq = Equations::default();
-            let mut pairs = c.pairs.clone();
-            eq.prepare(&p);
-            eq.load(&c.x, &pairs);
-            eq.evaluate(&p, &mut pairs);
-            let mut sys = NewtonSystem::default();
-            let hess = sys.dense_hessian(&eq, &p, &pairs);
-            let m = c.x.len();
-            let h = 1e-6;
-            for b in 0..m {
-                let mut plus = c.x.clone();
-                plus[b] += h;
-                let mut minus = c.x.clone();
-                minus[b] -= h;
-                let rp = r_at(&mut eq, &p, &pairs, &plus);
-                let rm = r_at(&mut eq, &p, &pairs, &minus);
-                for a in 0..m {
-                    let fd = (rp[a] - rm[a]) / (2.0 * h);
-                    let an = hess[(a, b)];
-                    assert!(
-                        (fd - an).abs() <= 1e-5 * (1.0 + an.abs().max(fd.abs())),
-                        "seed {seed}: dr[{a}]/dx[{b}]: closed form {an}, differences {fd}"
-                    );
-                }
-            }
+            assert_hessian_matches_differences(&case(seed, (seed % 3) as usize), seed);
         }
     }
 
