@@ -173,6 +173,7 @@ pub use positions::{FramePoses, Pose2, frame_pose, frame_poses, frame_poses_into
 pub use profile::{ProfileError, StiffnessProfile, joint_positions};
 pub use sensor::{
     CalibrationError, FIRMWARE_DEBOUNCE_SAMPLES, SensorError, SensorField, SensorSettings, Sensors,
+    closes_switch,
 };
 pub use tip_force::{
     FreeBodyForces, TIP_FORCE_RANK_TOLERANCE, TipForce, TipForceError, joints_on_limit,

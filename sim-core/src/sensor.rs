@@ -257,6 +257,13 @@ impl SensorSettings {
     }
 }
 
+/// Whether `contact` closes the touch switch under it for a switch that needs
+/// `touch_threshold_n`: always at zero (the ideal switch), otherwise when the magnitude of the
+/// wall's force there is at least the threshold.
+pub fn closes_switch(contact: &Contact, touch_threshold_n: f64) -> bool {
+    touch_threshold_n == 0.0 || contact.force_n().norm() >= touch_threshold_n
+}
+
 /// Sensors in use: the settings, the calibration drawn from them, the noise generator, the
 /// debouncers' history and the sampling clock.
 #[derive(Clone, Debug)]
@@ -447,7 +454,7 @@ impl Sensors {
                 .raw
                 .get_mut(link)
                 .ok_or(MappingError::LinkOutOfRange { link, n: links - 1 })?;
-            if threshold == 0.0 || contact.force_n().norm() >= threshold {
+            if closes_switch(contact, threshold) {
                 *bits |= 1 << switch_for_fraction(contact.s);
             }
         }

@@ -4,7 +4,8 @@ use antenna_protocol::TouchBits;
 use nalgebra::Vector2;
 use sim_core::contact::{ContactSettings, QuasiStatic};
 use sim_core::{
-    Chain, ChainContact, Line, SolidSide, Surface, SurfaceMap, Wall, touch_bits_from_contacts,
+    Chain, ChainContact, Line, SolidSide, Surface, SurfaceMap, Wall, closes_switch,
+    touch_bits_from_contacts,
 };
 
 use crate::spec::{AntennaSpec, FlatWallSpec};
@@ -167,7 +168,7 @@ impl SimPhysics {
         self.contacts.extend(
             contacts
                 .iter()
-                .filter(|c| threshold_n == 0.0 || c.force_n().norm() >= threshold_n)
+                .filter(|c| closes_switch(c, threshold_n))
                 .map(|c| c.chain_contact()),
         );
         touch_bits_from_contacts(&self.contacts, &mut self.touch_bits)
