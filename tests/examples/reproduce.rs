@@ -234,16 +234,20 @@ fn wall_following(md: &mut String, figures: bool) -> Result<(), Box<dyn std::err
     Ok(())
 }
 
-fn flipping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error::Error>> {
-    let base = reproduce::load_scene("flipping_3_3_1.toml")?;
-    let seed_hair = base
-        .chain
+/// The hair of the 3.3.1 scene (every hair of it is the same).
+fn first_hair(base: &sim_core::sweep::SweepScene) -> Result<sim_core::Hair, &'static str> {
+    base.chain
         .hairs()
         .iter()
         .flatten()
         .next()
         .copied()
-        .ok_or("the 3.3.1 scene has no hairs")?;
+        .ok_or("the 3.3.1 scene has no hairs")
+}
+
+fn flipping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error::Error>> {
+    let base = reproduce::load_scene("flipping_3_3_1.toml")?;
+    let seed_hair = first_hair(&base)?;
     writeln!(
         md,
         "## 2. Seed 3.3.1: distally pointing hairs make the antenna flip\n"
@@ -374,14 +378,7 @@ fn compliant_flipping_runs(
     figures: bool,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let base = reproduce::load_scene("flipping_3_3_1.toml")?;
-    let hair = base
-        .chain
-        .hairs()
-        .iter()
-        .flatten()
-        .next()
-        .copied()
-        .ok_or("the 3.3.1 scene has no hairs")?;
+    let hair = first_hair(&base)?;
     let hair_m = hair.length_m;
     writeln!(
         md,
@@ -422,30 +419,12 @@ fn compliant_flipping_runs(
     let jobs: Vec<(usize, usize)> = (0..stiffnesses.len())
         .flat_map(|i| (0..COMPLIANT_CASES.len()).map(move |j| (i, j)))
         .collect();
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let results = std::sync::Mutex::new(Vec::new());
-    std::thread::scope(|scope| {
-        for _ in 0..2 {
-            scope.spawn(|| {
-                loop {
-                    let at = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    let Some(&(i, j)) = jobs.get(at) else {
-                        break;
-                    };
-                    let (surface, layout, deg) = COMPLIANT_CASES[j];
-                    let run = flipping::with_root_stiffness(&base, stiffnesses[i])
-                        .and_then(|scene| flipping::run(&scene, surface, layout, deg, hair_m));
-                    results
-                        .lock()
-                        .unwrap_or_else(std::sync::PoisonError::into_inner)
-                        .push((i, j, run.map_err(|e| e.to_string())));
-                }
-            });
-        }
+    let mut results = on_all_cores(&jobs, |&(i, j)| {
+        let (surface, layout, deg) = COMPLIANT_CASES[j];
+        let run = flipping::with_root_stiffness(&base, stiffnesses[i])
+            .and_then(|scene| flipping::run(&scene, surface, layout, deg, hair_m));
+        Some((i, j, run.map_err(|e| e.to_string())))
     });
-    let mut results = results
-        .into_inner()
-        .unwrap_or_else(std::sync::PoisonError::into_inner);
     results.sort_by_key(|&(i, j, _)| (i, j));
     let mut series: Vec<Series> = Vec::new();
     for (i, k) in stiffnesses.iter().enumerate() {
