@@ -7,6 +7,7 @@ use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::log::LogWriter;
@@ -94,7 +95,8 @@ impl Stop {
 #[derive(Debug)]
 pub struct Evaluator<'a> {
     spec: &'a OptimizeSpec,
-    jobs: usize,
+    /// `jobs` threads (`None`: the system gave none, the sweeps run on the caller's).
+    pool: Option<rayon::ThreadPool>,
     interrupt: Option<Arc<AtomicBool>>,
     inner: Mutex<Inner>,
 }
@@ -114,8 +116,8 @@ struct Inner {
 }
 
 impl<'a> Evaluator<'a> {
-    /// An evaluator of `spec`'s scenes on `jobs` threads, drawing a progress bar on stderr
-    /// when `progress` (and stderr is a terminal).
+    /// An evaluator of `spec`'s scenes on a rayon pool of `jobs` threads, drawing a progress
+    /// bar on stderr when `progress` (and stderr is a terminal).
     pub fn new(spec: &'a OptimizeSpec, jobs: usize, progress: bool) -> Evaluator<'a> {
         let mut bar = Progress::new(spec.budget, "sweeps");
         if !progress {
@@ -123,7 +125,10 @@ impl<'a> Evaluator<'a> {
         }
         Evaluator {
             spec,
-            jobs: jobs.max(1),
+            pool: rayon::ThreadPoolBuilder::new()
+                .num_threads(jobs.max(1))
+                .build()
+                .ok(),
             interrupt: None,
             inner: Mutex::new(Inner {
                 records: Vec::new(),
@@ -309,64 +314,40 @@ impl<'a> Evaluator<'a> {
     fn sweep_all(&self, todo: &[&[f64]]) -> Vec<Vec<SceneResult>> {
         let scenes = self.spec.scenes.len();
         let work = todo.len() * scenes;
-        let slots: Vec<Mutex<Option<SceneResult>>> = (0..work).map(|_| Mutex::new(None)).collect();
-        let next = AtomicUsize::new(0);
-        std::thread::scope(|scope| {
-            for _ in 0..self.jobs.min(work) {
-                scope.spawn(|| {
-                    loop {
-                        let w = next.fetch_add(1, Ordering::Relaxed);
-                        if w >= work {
-                            break;
-                        }
-                        let (set, scene) = (w / scenes, w % scenes);
-                        let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
-                            sweep_one(
-                                &self.spec.scenes[scene].1,
-                                scene,
-                                todo[set],
-                                self.spec.objective,
-                            )
-                        }))
-                        .unwrap_or_else(|panic| SceneResult {
-                            scene,
-                            objective_value: None,
-                            outcome: "failed".to_string(),
-                            why: Some(format!("the sweep panicked: {}", panic_message(&*panic))),
-                        });
-                        if let Ok(mut slot) = slots[w].lock() {
-                            *slot = Some(result);
-                        }
-                        let mut inner = self.lock();
-                        let done = inner.sweeps + w + 1;
-                        let note = match inner.best {
-                            Some(b) => format!(", best {:.4} mm", b * 1000.0),
-                            None => String::new(),
-                        };
-                        inner.progress.set_noted(done.min(self.spec.budget), &note);
-                    }
-                });
-            }
-        });
-        let mut results = Vec::with_capacity(todo.len());
-        let mut slots = slots.into_iter();
-        for _ in 0..todo.len() {
-            let row: Vec<SceneResult> = (0..scenes)
-                .map(|scene| {
-                    slots
-                        .next()
-                        .and_then(|m| m.into_inner().ok().flatten())
-                        .unwrap_or_else(|| SceneResult {
-                            scene,
-                            objective_value: None,
-                            outcome: "failed".to_string(),
-                            why: Some("the sweep left no result".to_string()),
-                        })
-                })
-                .collect();
-            results.push(row);
+        let finished = AtomicUsize::new(0);
+        let sweep = |w: usize| {
+            let (set, scene) = (w / scenes, w % scenes);
+            let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
+                sweep_one(
+                    &self.spec.scenes[scene].1,
+                    scene,
+                    todo[set],
+                    self.spec.objective,
+                )
+            }))
+            .unwrap_or_else(|panic| SceneResult {
+                scene,
+                objective_value: None,
+                outcome: "failed".to_string(),
+                why: Some(format!("the sweep panicked: {}", panic_message(&*panic))),
+            });
+            let mut inner = self.lock();
+            let done = inner.sweeps + finished.fetch_add(1, Ordering::Relaxed) + 1;
+            let note = match inner.best {
+                Some(b) => format!(", best {:.4} mm", b * 1000.0),
+                None => String::new(),
+            };
+            inner.progress.set_noted(done.min(self.spec.budget), &note);
+            result
+        };
+        let mut results: std::vec::IntoIter<SceneResult> = match &self.pool {
+            Some(pool) => pool.install(|| (0..work).into_par_iter().map(sweep).collect()),
+            None => (0..work).map(sweep).collect::<Vec<_>>(),
         }
-        results
+        .into_iter();
+        (0..todo.len())
+            .map(|_| results.by_ref().take(scenes).collect())
+            .collect()
     }
 
     /// Every evaluation so far, in order.

@@ -1,8 +1,8 @@
-//! Running a study: the grid points of one shard on a pool of threads (each sweep is
-//! independent), the rows handed back in grid order as they become ready.
+//! Running a study: the grid points of one shard on a rayon pool of `--jobs` threads (each
+//! sweep is independent), the rows handed back in grid order as they become ready.
 
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 
 use super::{Shard, Study, StudyRow};
@@ -33,8 +33,10 @@ pub struct RunCounts {
     pub relaxed: usize,
 }
 
-/// Runs the grid points of `options.shard` on `options.jobs` threads and hands each row to
-/// `on_row` in increasing grid order. Stops early (and returns the error) if `on_row` fails.
+/// Runs the grid points of `options.shard` on a pool of `options.jobs` threads and hands each
+/// row to `on_row` in increasing grid order, as soon as it and every row before it are ready.
+/// Stops early (and returns the error) if `on_row` fails: the sweeps under way finish, no new
+/// one starts.
 ///
 /// # Errors
 /// The first error of `on_row` (e.g. the output closed).
@@ -44,56 +46,84 @@ pub fn run_study<E>(
     on_row: &mut dyn FnMut(&StudyRow) -> Result<(), E>,
 ) -> Result<RunCounts, E> {
     let indices: Vec<usize> = options.shard.indices(study.len()).collect();
-    let next = AtomicUsize::new(0);
     let mut progress = Progress::new(indices.len(), "runs");
     if !options.progress {
         progress.finish();
     }
-    let mut counts = RunCounts::default();
-    std::thread::scope(|scope| {
-        let (tx, rx) = mpsc::channel::<(usize, StudyRow)>();
-        let workers = options.jobs.clamp(1, indices.len().max(1));
-        for _ in 0..workers {
-            let tx = tx.clone();
-            let (indices, next) = (&indices, &next);
-            scope.spawn(move || {
-                loop {
-                    let k = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(&index) = indices.get(k) else {
-                        break;
-                    };
-                    if tx.send((k, run_point(study, index))).is_err() {
-                        break;
-                    }
+    let mut rows = InOrder {
+        progress,
+        pending: BTreeMap::new(),
+        counts: RunCounts::default(),
+    };
+    let threads = options.jobs.clamp(1, indices.len().max(1));
+    let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build() else {
+        // No threads to be had: sweep on this one.
+        for (k, &index) in indices.iter().enumerate() {
+            rows.deliver(k, run_point(study, index), on_row)?;
+        }
+        rows.progress.finish();
+        return Ok(rows.counts);
+    };
+    let stop = AtomicBool::new(false);
+    let (tx, rx) = mpsc::channel::<(usize, StudyRow)>();
+    // The points are queued in grid order (first in, first out) and this thread takes the
+    // rows as they come back.
+    pool.in_place_scope_fifo(|scope| {
+        for (k, &index) in indices.iter().enumerate() {
+            let (tx, stop) = (tx.clone(), &stop);
+            scope.spawn_fifo(move |_| {
+                if !stop.load(Ordering::Relaxed) {
+                    // The receiver is gone only once a row could not be taken.
+                    let _ = tx.send((k, run_point(study, index)));
                 }
             });
         }
         drop(tx);
-        let mut pending = BTreeMap::new();
         for (k, row) in rx {
-            pending.insert(k, row);
-            while let Some(row) = pending.remove(&counts.runs) {
-                if let Err(e) = on_row(&row) {
-                    // Stop the workers: nothing takes their rows any more.
-                    next.store(indices.len(), Ordering::Relaxed);
-                    return Err(e);
-                }
-                counts.runs += 1;
-                match row.status.as_str() {
-                    "ok" => {}
-                    "jammed" => counts.jammed += 1,
-                    _ => counts.failed += 1,
-                }
-                if row.relaxed_steps.is_some_and(|r| r > 0) {
-                    counts.relaxed += 1;
-                }
-                progress.set(counts.runs);
+            if let Err(e) = rows.deliver(k, row, on_row) {
+                // Nothing takes the rows any more: start no new sweep.
+                stop.store(true, Ordering::Relaxed);
+                return Err(e);
             }
         }
         Ok(())
     })?;
-    progress.finish();
-    Ok(counts)
+    rows.progress.finish();
+    Ok(rows.counts)
+}
+
+/// The rows that came back before the ones ahead of them, and what was handed on.
+struct InOrder {
+    progress: Progress,
+    pending: BTreeMap<usize, StudyRow>,
+    counts: RunCounts,
+}
+
+impl InOrder {
+    /// Takes the `k`-th row of the shard and hands on every row now ready, in order.
+    fn deliver<E>(
+        &mut self,
+        k: usize,
+        row: StudyRow,
+        on_row: &mut dyn FnMut(&StudyRow) -> Result<(), E>,
+    ) -> Result<(), E> {
+        self.pending.insert(k, row);
+        while let Some(row) = self.pending.remove(&self.counts.runs) {
+            on_row(&row)?;
+            let counts = &mut self.counts;
+            counts.runs += 1;
+            match row.status.as_str() {
+                "ok" => {}
+                "jammed" => counts.jammed += 1,
+                _ => counts.failed += 1,
+            }
+            if row.relaxed_steps.is_some_and(|r| r > 0) {
+                counts.relaxed += 1;
+            }
+            self.progress.set(counts.runs);
+        }
+        Ok(())
+    }
 }
 
 /// The sweep of grid point `index`, as a row.
