@@ -7,7 +7,11 @@ mod net_support;
 use std::sync::Arc;
 
 use antenna_data::stream::{ControlCommand, ErrorCode, StageTarget, StreamMessage};
-use host_daemon::net::{ControlToken, RecordingHandler, StreamServer};
+use std::time::Duration;
+
+use host_daemon::net::{
+    ControlHandler, ControlToken, RecordingHandler, ServerOptions, StreamServer,
+};
 use net_support::{Client, TOKEN, samples, wait_for_clients};
 
 fn server_with(handler: Arc<RecordingHandler>) -> StreamServer {
@@ -104,10 +108,65 @@ fn wrong_or_missing_token_is_refused_and_the_handler_not_called() {
     server.shutdown();
 }
 
+/// Bytes of filler in each line of the queue-jumping test: lines stay under the protocol's
+/// [`antenna_data::stream::MAX_LINE_BYTES`].
+const FILLER_BYTES: usize = 48 * 1024;
+
+/// A sample message numbered `seq`, made about [`FILLER_BYTES`] long by one segment's error.
+fn bulky_samples(seq: u64, filler: &str) -> StreamMessage {
+    let mut message = samples(seq);
+    if let StreamMessage::Samples { segments, .. } = &mut message {
+        segments[0].error = Some(filler.to_owned());
+    }
+    message
+}
+
+/// The most payload a loopback TCP connection can hold in its buffers (the sender's send
+/// buffer plus the receiver's receive buffer), from the kernel's limits: the larger of the
+/// autotuning maximum and the explicit-setting maximum (doubled, as the kernel doubles a set
+/// size), per direction. 64 MiB when they cannot be read.
+fn socket_buffer_limit_bytes() -> usize {
+    let read = |path: &str, field: usize| -> Option<usize> {
+        std::fs::read_to_string(path)
+            .ok()?
+            .split_whitespace()
+            .nth(field)?
+            .parse()
+            .ok()
+    };
+    let limits = (
+        read("/proc/sys/net/ipv4/tcp_wmem", 2),
+        read("/proc/sys/net/core/wmem_max", 0),
+        read("/proc/sys/net/ipv4/tcp_rmem", 2),
+        read("/proc/sys/net/core/rmem_max", 0),
+    );
+    match limits {
+        (Some(tcp_w), Some(core_w), Some(tcp_r), Some(core_r)) => {
+            tcp_w.max(2 * core_w) + tcp_r.max(2 * core_r)
+        }
+        _ => 64 << 20,
+    }
+}
+
 #[test]
 fn stop_all_needs_no_token_and_jumps_the_stream_queue() {
     let handler = Arc::new(RecordingHandler::new());
-    let server = server_with(Arc::clone(&handler));
+    let socket_bytes = socket_buffer_limit_bytes();
+    // Enough lines that the queue holds half as many bytes again as the socket's buffers.
+    let queue_capacity = (socket_bytes * 3 / 2).div_ceil(FILLER_BYTES) + 16;
+    let server = StreamServer::bind_with(
+        "127.0.0.1:0",
+        ControlToken::new(TOKEN).unwrap(),
+        Arc::clone(&handler) as Arc<dyn ControlHandler>,
+        ServerOptions {
+            queue_capacity,
+            // The client stops reading on purpose: however loaded the machine, it is not
+            // disconnected for lagging before it reads again.
+            write_timeout: Duration::from_secs(120),
+            ..ServerOptions::default()
+        },
+    )
+    .unwrap();
     let mut c = connect(&server);
     for request in [
         r#"{"id":1,"cmd":"stop_all"}"#,
@@ -121,36 +180,61 @@ fn stop_all_needs_no_token_and_jumps_the_stream_queue() {
         handler.calls(),
         vec![ControlCommand::StopAll, ControlCommand::StopAll]
     );
-    // The client stops reading: the socket's buffers fill, then its queue (1024 lines).
+    // The client stops reading. Its lines are made so large that the queue alone holds
+    // more bytes than the socket's buffers can (the kernel's limits, read below): once the
+    // queue is full, the writer can move only part of it into the socket, so the lines at
+    // its tail (the last one queued among them) stay queued until the client reads again,
+    // however fast or slow this machine is.
     wait_for_clients(&server, 1);
-    let mut last_queued = 0;
+    let filler = "x".repeat(FILLER_BYTES);
+    let mut last_queued = None;
     for seq in 0..1_000_000 {
-        if server.publish(&samples(seq)) == 0 {
+        if server.publish(&bulky_samples(seq, &filler)) == 0 {
             break;
         }
-        last_queued = seq;
+        last_queued = Some(seq);
     }
-    // The reply goes out ahead of the stream lines still queued.
+    let last_queued = last_queued.expect("the queue took no line");
+    // The reply goes out ahead of the stream lines still queued: the last line queued before
+    // the request was sent arrives after the reply, and the lines keep their order.
     c.send_line(r#"{"id":3,"cmd":"stop_all"}"#);
+    let mut before_reply = 0u64;
+    let mut previous_seq = None;
     loop {
-        if let StreamMessage::Reply(reply) = c.next_message() {
-            assert_eq!(reply.id, Some(3));
-            break;
+        match c.next_message() {
+            StreamMessage::Reply(reply) => {
+                assert_eq!(reply.id, Some(3));
+                break;
+            }
+            StreamMessage::Samples { seq, .. } => {
+                assert_ne!(
+                    seq, last_queued,
+                    "the last line queued before the request came before the reply"
+                );
+                assert!(previous_seq < Some(seq), "out of order: {seq}");
+                previous_seq = Some(seq);
+                before_reply += 1;
+            }
+            _ => {}
         }
     }
-    let mut after_reply = 0;
+    let mut after_reply = 0u64;
     loop {
         if let StreamMessage::Samples { seq, .. } = c.next_message() {
+            assert!(previous_seq < Some(seq), "out of order: {seq}");
+            previous_seq = Some(seq);
             after_reply += 1;
             if seq == last_queued {
                 break;
             }
         }
     }
-    assert!(
-        after_reply > 500,
-        "only {after_reply} stream lines came after the reply"
+    assert_eq!(
+        before_reply + after_reply,
+        last_queued + 1,
+        "every queued line arrives"
     );
+    eprintln!("{before_reply} stream lines before the reply, {after_reply} after it");
     server.shutdown();
 }
 
