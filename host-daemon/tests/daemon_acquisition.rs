@@ -16,6 +16,21 @@ use std::time::Duration;
 
 const SEGMENTS: usize = 9;
 
+/// How long a wait for the poller may take before the test fails: only a hang takes this
+/// long, however loaded the machine.
+const PATIENCE: Duration = Duration::from_secs(60);
+
+fn wait_until(what: &str, mut ok: impl FnMut() -> bool) {
+    let deadline = std::time::Instant::now() + PATIENCE;
+    while !ok() {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "timed out waiting for {what}"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 fn calibration(k: usize) -> Calibration {
     Calibration::new(1000 + 200 * k as u16, Direction::CounterClockwise)
 }
@@ -73,7 +88,7 @@ fn faults_are_marked_per_segment_while_the_others_keep_polling_on_deadlines() {
     let mut events: Vec<AcquisitionEvent> = Vec::new();
     let mut seen = 0;
     while seen < 300 {
-        let event = receiver.recv_timeout(Duration::from_secs(10)).unwrap();
+        let event = receiver.recv_timeout(PATIENCE).unwrap();
         seen += usize::from(matches!(event, AcquisitionEvent::Poll(_)));
         events.push(event);
     }
@@ -172,21 +187,25 @@ fn a_full_queue_drops_and_counts_without_delaying_polls() {
         Arc::clone(&stop),
     )
     .unwrap();
-    std::thread::sleep(Duration::from_millis(200));
+    // Nobody reads the queue: the poller keeps polling, its events dropped and counted.
+    wait_until("100 events dropped", || counter.dropped() >= 100);
     stop.store(true, Ordering::Relaxed);
     let report = handle.join().unwrap();
-    // Nobody read the queue: 5 events fit, the rest were dropped and counted, and the poller
-    // still made (about) one poll per period.
+    // 5 events fit, the rest were dropped and counted.
     assert_eq!(receiver.try_iter().count(), 5);
     // Besides the polls, a firmware register read is sent every FIRMWARE_READ_INTERVAL
-    // (250 ms): one in these 200 ms, two if the thread ran late.
+    // (250 ms of the poller's clock): the first at once, then at most one for each interval
+    // its deadlines (made or skipped, 2 ms apart) spanned.
     let dropped = counter.dropped();
+    let firmware_reads = (dropped + 5).checked_sub(report.polls);
+    let deadlines = report.polls + report.skipped;
+    let most = 2 + deadlines * 2 / FIRMWARE_READ_INTERVAL.as_millis() as u64;
     assert!(
-        (report.polls - 5 + 1..=report.polls - 5 + 2).contains(&dropped),
-        "{dropped} dropped of {} polls",
-        report.polls
+        firmware_reads.is_some_and(|n| (1..=most).contains(&n)),
+        "{dropped} dropped of {} polls ({} skipped)",
+        report.polls,
+        report.skipped
     );
-    assert!(report.polls + report.skipped >= 80, "{report:?}");
 }
 
 /// A simulated bus that counts its transfers.
@@ -254,11 +273,14 @@ fn housekeeping_is_one_register_read_per_poll_at_most_and_reads_the_firmware() {
         Arc::clone(&stop),
     )
     .unwrap();
-    // Three firmware reads: about 0.5 s.
+    // Three firmware reads (about 0.5 s), and the stuck counter found (polls are counted, so
+    // a broken check ends the test rather than hanging it).
     let mut firmware = Vec::new();
     let mut stale = Vec::new();
-    while firmware.len() < 3 {
-        match receiver.recv_timeout(Duration::from_secs(10)).unwrap() {
+    let mut polls_seen = 0u64;
+    while (firmware.len() < 3 || stale.is_empty()) && polls_seen < 100_000 {
+        match receiver.recv_timeout(PATIENCE).unwrap() {
+            AcquisitionEvent::Poll(_) => polls_seen += 1,
             AcquisitionEvent::Firmware {
                 address, reading, ..
             } => firmware.push((address, reading)),
@@ -272,18 +294,24 @@ fn housekeeping_is_one_register_read_per_poll_at_most_and_reads_the_firmware() {
     let report = handle.join().unwrap();
     // Each segment's status, then its version, then the next segment's; healthy flags.
     assert_eq!(
-        firmware,
+        firmware[..3],
         vec![
             (addresses[0], FirmwareReading::Status(Default::default())),
             (addresses[0], FirmwareReading::Version(1, 0)),
             (addresses[1], FirmwareReading::Status(Default::default())),
         ]
     );
-    // Two intervals passed between the first read and the third.
-    assert!(report.polls >= 2 * FIRMWARE_READ_INTERVAL.as_millis() as u64 / 2);
+    // Two intervals passed between the first read and the third: 500 deadlines of 1 ms,
+    // polled or skipped (half of them asserted, as before).
+    assert!(
+        report.polls + report.skipped >= 2 * FIRMWARE_READ_INTERVAL.as_millis() as u64 / 2,
+        "{} polls, {} skipped",
+        report.polls,
+        report.skipped
+    );
     // Every poll: nine sample reads and at most one register read.
     let per_poll = per_poll.lock().unwrap();
-    assert!(per_poll.len() > 300, "{}", per_poll.len());
+    assert!(per_poll.len() > 200, "{}", per_poll.len());
     assert!(
         per_poll[1..]
             .iter()
