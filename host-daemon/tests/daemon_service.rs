@@ -133,6 +133,20 @@ fn exit_status(child: &mut Child) -> std::process::ExitStatus {
     }
 }
 
+/// The poll deadlines a trial's recording spans, first to last poll number: the deadlines the
+/// poller skipped are the gaps. The numbers only grow.
+fn deadlines_spanned(trial: &antenna_data::record::Trial) -> u64 {
+    let seqs: Vec<u64> = trial.segments.iter().map(|m| m.seq.unwrap()).collect();
+    assert!(
+        seqs.windows(2).all(|w| w[1] > w[0]),
+        "poll numbers out of order"
+    );
+    match (seqs.first(), seqs.last()) {
+        (Some(first), Some(last)) => last - first + 1,
+        _ => 0,
+    }
+}
+
 fn antennad() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_antennad"));
     command
@@ -306,7 +320,10 @@ fn a_closed_stdout_does_not_stop_the_daemon() {
     assert!(!text.contains("panicked"), "{text}");
     let trial = TrialReader::read(dir.join("data/wall-sweep.mcap")).unwrap();
     assert!(trial.truncated.is_none());
-    assert!(trial.segments.len() > 500, "{} polls", trial.segments.len());
+    // 1 s at 1 kHz: every deadline polled or skipped (the skipped ones leave gaps in the poll
+    // numbers), however loaded the machine.
+    let deadlines = deadlines_spanned(&trial);
+    assert!(deadlines > 900, "{deadlines} deadlines");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -334,23 +351,16 @@ fn a_stdout_nobody_reads_does_not_stall_the_daemon() {
     let mut log = Log::of(&mut child);
     log.wait_for("ended (its duration passed)");
     let trial = TrialReader::read(dir.join("data/wall-sweep.mcap")).unwrap();
-    // 2 s at 1 kHz, with room for deadlines skipped on a loaded machine.
-    assert!(
-        trial.segments.len() > 1500,
-        "{} polls",
-        trial.segments.len()
-    );
-    let started = Instant::now();
+    // 2 s at 1 kHz: every deadline polled or skipped (the skipped ones leave gaps in the
+    // poll numbers), however loaded the machine; the trial ended on its own clock.
+    let deadlines = deadlines_spanned(&trial);
+    assert!(deadlines > 1900, "{deadlines} deadlines");
+    // The exit waits at most a second for stdout: it comes (a daemon stalled on the pipe
+    // would never exit, and `exit_status` gives up after PATIENCE).
     kill(&child, "-TERM");
     let status = exit_status(&mut child);
     let text = log.rest();
     assert!(status.success(), "{status}\n{text}");
-    // The exit waits at most a second for stdout; generous for a loaded machine.
-    assert!(
-        started.elapsed() < Duration::from_secs(10),
-        "{:?}",
-        started.elapsed()
-    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
