@@ -8,7 +8,11 @@ use serialport::{SerialPort, TTYPort};
 use std::time::{Duration, Instant};
 
 const READ_TIMEOUT: Duration = Duration::from_millis(5);
-const REPLY_TIMEOUT: Duration = Duration::from_millis(200);
+/// Generous: a reply only takes this long when something is broken, however loaded the
+/// machine (the emulator answers within milliseconds).
+const REPLY_TIMEOUT: Duration = Duration::from_secs(30);
+/// How long a move the tests expect to finish may take before they fail (ditto).
+const PATIENCE: Duration = Duration::from_secs(30);
 
 fn rig() -> (VxmEmulator, Vxm<TTYPort>) {
     let (master, mut slave) = TTYPort::pair().expect("a pseudo-terminal pair");
@@ -19,9 +23,9 @@ fn rig() -> (VxmEmulator, Vxm<TTYPort>) {
     (emulator, Vxm::new(slave).with_reply_timeout(REPLY_TIMEOUT))
 }
 
-/// Waits (at most a second) until the emulator has received `expected`, then checks it.
+/// Waits (at most [`PATIENCE`]) until the emulator has received `expected`, then checks it.
 fn assert_received(emulator: &VxmEmulator, expected: &str) {
-    let deadline = Instant::now() + Duration::from_secs(1);
+    let deadline = Instant::now() + PATIENCE;
     while emulator.received().len() < expected.len() && Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(2));
     }
@@ -39,14 +43,14 @@ fn every_command_sends_its_exact_bytes_and_moves_arrive() {
     assert!(emulator.is_online());
 
     vxm.start_relative_steps(400).unwrap();
-    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    vxm.wait_done(PATIENCE).unwrap();
     assert_eq!(vxm.position_steps().unwrap(), 400);
     assert_eq!(vxm.status().unwrap(), VxmStatus::Ready);
     assert_eq!(emulator.speed_steps_per_s(), 4000);
 
     vxm.start_absolute_steps(-400).unwrap();
     assert_eq!(vxm.status().unwrap(), VxmStatus::Busy);
-    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    vxm.wait_done(PATIENCE).unwrap();
     assert_eq!(vxm.position_steps().unwrap(), -400);
     vxm.kill().unwrap();
     vxm.decelerate().unwrap();
@@ -81,18 +85,21 @@ fn out_of_range_speed_and_distance_are_refused_before_sending() {
 fn moves_take_their_time_at_the_set_speed() {
     let (_emulator, mut vxm) = rig();
     vxm.online().unwrap();
-    vxm.set_speed_steps_per_s(2000).unwrap();
+    // 3 s at 1000 steps/s: long enough that a test thread held up on a loaded machine still
+    // finds it moving after 50 ms.
+    vxm.set_speed_steps_per_s(1000).unwrap();
     let start = Instant::now();
-    vxm.start_relative_steps(1000).unwrap();
+    vxm.start_relative_steps(3000).unwrap();
     assert!(matches!(
         vxm.wait_done(Duration::from_millis(50)),
         Err(VxmError::Timeout { expected: "^", .. })
     ));
     let mid = vxm.position_steps().unwrap();
-    assert!((1..1000).contains(&mid), "mid-move position {mid}");
-    vxm.wait_done(Duration::from_secs(1)).unwrap();
-    assert!(start.elapsed() >= Duration::from_millis(490));
-    assert_eq!(vxm.position_steps().unwrap(), 1000);
+    assert!((1..3000).contains(&mid), "mid-move position {mid}");
+    vxm.wait_done(PATIENCE).unwrap();
+    // A lower bound: the move cannot end sooner, however fast the machine.
+    assert!(start.elapsed() >= Duration::from_millis(2990));
+    assert_eq!(vxm.position_steps().unwrap(), 3000);
 }
 
 #[test]
@@ -103,8 +110,9 @@ fn kill_mid_move_stops_short_and_no_caret_follows() {
     vxm.start_relative_steps(5000).unwrap();
     std::thread::sleep(Duration::from_millis(100));
     vxm.kill().unwrap();
+    // Stopped short of the 5 s move's end, however late the kill came.
     let stopped = vxm.position_steps().unwrap();
-    assert!((20..1000).contains(&stopped), "stopped at {stopped}");
+    assert!((20..5000).contains(&stopped), "stopped at {stopped}");
     assert_eq!(vxm.status().unwrap(), VxmStatus::Ready);
     assert!(matches!(
         vxm.wait_done(Duration::from_millis(50)),
@@ -124,8 +132,9 @@ fn a_vxm_that_never_sends_the_caret_times_out() {
     let start = Instant::now();
     let error = vxm.wait_done(Duration::from_millis(150)).unwrap_err();
     assert!(matches!(error, VxmError::Timeout { expected: "^", .. }));
+    // It waited its own timeout, not the (much longer) reply timeout.
     assert!(start.elapsed() >= Duration::from_millis(150));
-    assert!(start.elapsed() < Duration::from_secs(1));
+    assert!(start.elapsed() < REPLY_TIMEOUT);
     // The move itself happened; only the caret is missing.
     assert_eq!(vxm.position_steps().unwrap(), 100);
 }
@@ -158,7 +167,7 @@ fn a_vanished_device_is_a_typed_error_and_reconnecting_by_path_restores_it() {
     vxm.online().unwrap();
     vxm.set_speed_steps_per_s(6000).unwrap();
     vxm.start_relative_steps(300).unwrap();
-    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    vxm.wait_done(PATIENCE).unwrap();
 
     emulator.close();
     assert!(matches!(
@@ -181,7 +190,7 @@ fn a_vanished_device_is_a_typed_error_and_reconnecting_by_path_restores_it() {
     assert!(!power_cycled, "a VXM that kept its power does not echo");
     assert_eq!(vxm.position_steps().unwrap(), 300);
     vxm.start_relative_steps(-300).unwrap();
-    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    vxm.wait_done(PATIENCE).unwrap();
     assert_eq!(vxm.position_steps().unwrap(), 0);
     assert_received(&emulator, "VFXC,S1M6000,I1M-300,RX");
 }
@@ -194,7 +203,7 @@ fn soft_limits_refuse_a_move_and_nothing_is_sent() {
     let mut stage = stage
         .online()
         .unwrap()
-        .home(HomingDirection::Negative, Duration::from_secs(2))
+        .home(HomingDirection::Negative, PATIENCE)
         .unwrap();
     stage.set_speed_mm_per_s(40.0).unwrap();
     assert_received(&emulator, "FC,S1M2000,I1M-0,IA1M-0,RX");
@@ -229,7 +238,7 @@ fn soft_limits_refuse_a_move_and_nothing_is_sent() {
     assert_eq!(emulator.received(), b"X");
     assert!(!emulator.is_busy());
 
-    stage.move_absolute_mm(2.0, Duration::from_secs(1)).unwrap();
+    stage.move_absolute_mm(2.0, PATIENCE).unwrap();
     assert_eq!(stage.position_mm().unwrap(), 2.0);
     assert_eq!(emulator.position_steps(), 200);
 }
@@ -241,13 +250,13 @@ fn homing_runs_to_the_limit_switch_and_a_power_cycle_shows_as_an_echo() {
     vxm.set_speed_steps_per_s(4000).unwrap();
     vxm.start_homing(HomingDirection::Negative).unwrap();
     assert_eq!(vxm.status().unwrap(), VxmStatus::Busy);
-    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    vxm.wait_done(PATIENCE).unwrap();
     // Zero is the switch, 400 steps below where it started.
     assert_eq!(vxm.position_steps().unwrap(), 0);
     assert_eq!(emulator.negative_limit_steps(), 0);
     assert_received(&emulator, "FC,S1M4000,I1M-0,IA1M-0,RVX");
     vxm.start_absolute_steps(200).unwrap();
-    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    vxm.wait_done(PATIENCE).unwrap();
 
     // Power lost and back: the register reads zero 200 steps from the switch, and the VXM
     // echoes. The driver says so instead of trusting the zero.
@@ -264,11 +273,13 @@ fn homing_runs_to_the_limit_switch_and_a_power_cycle_shows_as_an_echo() {
     // Homing again finds the switch.
     vxm.online().unwrap();
     vxm.start_homing(HomingDirection::Negative).unwrap();
-    vxm.wait_done(Duration::from_secs(1)).unwrap();
+    vxm.wait_done(PATIENCE).unwrap();
     assert_eq!(vxm.position_steps().unwrap(), 0);
     assert_eq!(emulator.negative_limit_steps(), 0);
 }
 
+/// The kill line does not wait behind a query the VXM never answers: its `K` arrives before
+/// the query times out. How soon is a benchmark figure (printed here), not asserted.
 #[test]
 fn the_kill_line_reaches_the_vxm_while_a_query_hangs() {
     let (master, mut slave) = TTYPort::pair().unwrap();
@@ -278,7 +289,7 @@ fn the_kill_line_reaches_the_vxm_while_a_query_hangs() {
     let kill = VxmKill::new();
     assert!(!kill.kill().unwrap(), "unarmed: nothing sent");
     kill.arm(port.as_ref()).unwrap();
-    let mut vxm = Vxm::new(port).with_reply_timeout(Duration::from_secs(2));
+    let mut vxm = Vxm::new(port).with_reply_timeout(Duration::from_secs(5));
     vxm.online().unwrap();
     vxm.set_speed_steps_per_s(100).unwrap();
     vxm.start_relative_steps(1000).unwrap();
@@ -287,19 +298,26 @@ fn the_kill_line_reaches_the_vxm_while_a_query_hangs() {
         let answer = vxm.position_steps();
         (vxm, answer)
     });
-    std::thread::sleep(Duration::from_millis(100));
+    // The query is out, and hangs.
+    let deadline = Instant::now() + PATIENCE;
+    while !emulator.received().ends_with(b"X") {
+        assert!(Instant::now() < deadline, "no query");
+        std::thread::sleep(Duration::from_millis(1));
+    }
     let sent = Instant::now();
     assert!(kill.kill().unwrap());
     while !emulator.received().contains(&b'K') {
-        assert!(sent.elapsed() < Duration::from_secs(1), "no K");
+        // The query was still waiting when the kill went through.
+        assert!(
+            !query.is_finished(),
+            "the query timed out before the K came"
+        );
         std::thread::sleep(Duration::from_micros(200));
     }
     let latency = sent.elapsed();
     assert!(!emulator.is_busy(), "the move was killed");
-    // The query was still waiting when the kill went through.
-    assert!(!query.is_finished());
+    assert!(emulator.position_steps() < 1000);
     let (_vxm, answer) = query.join().unwrap();
     assert!(matches!(answer, Err(VxmError::Timeout { .. })));
-    // Generous: a loaded machine with two shared cores.
-    assert!(latency < Duration::from_millis(500), "{latency:?}");
+    eprintln!("kill line to K at the VXM: {latency:?}");
 }
