@@ -96,6 +96,12 @@ fn a_thousand_wrong_tokens_are_slowed_logged_and_cut_off() {
 /// Idle readers: connected, reading the stream, never sending a line.
 struct Readers {
     streams: Vec<TcpStream>,
+    /// Per stream: whether the server has sent it anything (it handled the connection).
+    heard: Vec<bool>,
+    /// Per stream: whether it was told it was dropped to make room.
+    evicted: Vec<bool>,
+    /// Per stream: whether it is closed.
+    closed: Vec<bool>,
 }
 
 impl Readers {
@@ -108,17 +114,24 @@ impl Readers {
                 s
             })
             .collect();
-        Self { streams }
+        Self {
+            streams,
+            heard: vec![false; n],
+            evicted: vec![false; n],
+            closed: vec![false; n],
+        }
     }
 
-    /// Reads what each has; returns how many are still open and how many were told they
-    /// were dropped to make room.
+    /// Reads what each has; returns how many are still open and how many were told (so far)
+    /// they were dropped to make room.
     fn drain(&mut self) -> (usize, usize) {
-        let (mut open, mut evicted) = (0, 0);
         let mut buffer = vec![0u8; 1 << 16];
-        for stream in &mut self.streams {
+        for (k, stream) in self.streams.iter_mut().enumerate() {
+            if self.closed[k] {
+                continue;
+            }
             let mut text = Vec::new();
-            let closed = loop {
+            self.closed[k] = loop {
                 match stream.read(&mut buffer) {
                     Ok(0) => break true,
                     Ok(n) => text.extend_from_slice(&buffer[..n]),
@@ -126,23 +139,49 @@ impl Readers {
                     Err(_) => break true,
                 }
             };
+            self.heard[k] |= !text.is_empty() || self.closed[k];
             if String::from_utf8_lossy(&text).contains("\"error\":\"evicted\"") {
-                evicted += 1;
-            }
-            if !closed {
-                open += 1;
+                self.evicted[k] = true;
             }
         }
+        self.counts()
+    }
+
+    /// How many are still open, and how many were told they were dropped to make room.
+    fn counts(&self) -> (usize, usize) {
+        let open = self.closed.iter().filter(|&&c| !c).count();
+        let evicted = self.evicted.iter().filter(|&&e| e).count();
         (open, evicted)
     }
+
+    /// Drains until `settled` holds; returns the last counts. Gives up after [`PATIENCE`]
+    /// (only a hang takes that long), returning what it saw.
+    fn drain_until(&mut self, settled: impl Fn(&Self) -> bool) -> (usize, usize) {
+        let deadline = Instant::now() + PATIENCE;
+        loop {
+            let counts = self.drain();
+            if settled(self) || Instant::now() >= deadline {
+                return counts;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+
+    /// Whether the server has answered every connection (a hello, or a notice and close).
+    fn all_heard(&self) -> bool {
+        self.heard.iter().all(|&h| h)
+    }
 }
+
+/// How long to wait for the server to handle connections before the test fails: only a
+/// hang takes this long, however loaded the machine.
+const PATIENCE: Duration = Duration::from_secs(60);
 
 #[test]
 fn forty_idle_readers_cannot_lock_out_an_operator_or_a_stop() {
     let (daemon, dir) = start("lockout");
     let mut readers = Readers::connect(&daemon, 40);
-    std::thread::sleep(Duration::from_millis(300));
-    let (open, evicted) = readers.drain();
+    let (open, evicted) = readers.drain_until(|r| r.counts() == (16, 24));
     // One address may hold 16 connections: the oldest readers made room for the newest.
     assert_eq!(open, 16, "{open} readers open");
     assert_eq!(evicted, 24);
@@ -158,9 +197,13 @@ fn forty_idle_readers_cannot_lock_out_an_operator_or_a_stop() {
     assert_eq!(daemon.trial().as_deref(), Some("wall-sweep"));
     // 40 more readers: the operator's connection is never the one dropped.
     let mut more = Readers::connect(&daemon, 40);
-    std::thread::sleep(Duration::from_millis(300));
+    // Once the server has handled each of them.
+    more.drain_until(Readers::all_heard);
+    assert!(
+        more.all_heard(),
+        "the server never handled every connection"
+    );
     readers.drain();
-    more.drain();
     operator.send_line(&format!(
         r#"{{"id":3,"token":"{TOKEN}","cmd":"move_stage","relative_m":0.01}}"#
     ));

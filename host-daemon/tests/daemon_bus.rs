@@ -21,6 +21,10 @@ fn config(dir: &std::path::Path) -> Config {
     config
 }
 
+/// How long a wait for the daemon may take before the test fails: only a hang takes this
+/// long, however loaded the machine.
+const PATIENCE: Duration = Duration::from_secs(60);
+
 #[test]
 fn a_bus_that_hangs_shows_as_stalled_and_shutdown_still_finalizes_the_recording() {
     let dir = std::env::temp_dir().join(format!("antennad-hang-{}", std::process::id()));
@@ -44,10 +48,7 @@ fn a_bus_that_hangs_shows_as_stalled_and_shutdown_still_finalizes_the_recording(
     // The status says the polling thread is stalled, with a note saying so.
     let started = Instant::now();
     let (polling, note) = loop {
-        assert!(
-            started.elapsed() < Duration::from_secs(20),
-            "no stalled status"
-        );
+        assert!(started.elapsed() < PATIENCE, "no stalled status");
         if let StreamMessage::Status {
             polling: Some(polling),
             note,
@@ -69,13 +70,13 @@ fn a_bus_that_hangs_shows_as_stalled_and_shutdown_still_finalizes_the_recording(
     assert!(note.unwrap().contains("polling stalled"));
 
     // Shutdown does not wait on the stuck transfer: it gives the thread a bounded wait
-    // (1 s) and finalizes the recording. Asserted against a generous 10 s for a loaded
-    // machine; what it must not do is hang.
+    // (1 s) and finalizes the recording. What it must not do is hang (only a hang takes
+    // PATIENCE); the summary says the thread was left behind.
     let stopping = Instant::now();
     let log = daemon.log_lines();
     let summary = daemon.shutdown().unwrap();
     let took = stopping.elapsed();
-    assert!(took < Duration::from_secs(10), "shutdown took {took:?}");
+    assert!(took < PATIENCE, "shutdown took {took:?}");
     assert!(took >= Duration::from_millis(900), "it did wait: {took:?}");
     assert!(summary.poll_thread_stuck);
     assert!(summary.polls >= 100, "{summary:?}");
@@ -107,10 +108,7 @@ fn the_firmware_status_and_version_are_read_and_shown_in_status() {
     // segments' are known after about a second.
     let started = Instant::now();
     let segments = loop {
-        assert!(
-            started.elapsed() < Duration::from_secs(20),
-            "no firmware in status"
-        );
+        assert!(started.elapsed() < PATIENCE, "no firmware in status");
         if let StreamMessage::Status {
             segments,
             polling: Some(polling),

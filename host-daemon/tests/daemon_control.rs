@@ -40,7 +40,7 @@ fn config(dir: &std::path::Path) -> Config {
 /// refused for homing under way, which a loaded machine can make last.
 fn start(config: Config) -> (DaemonHandle, Client) {
     let daemon = Daemon::start(config, DaemonOptions::default()).unwrap();
-    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    let deadline = std::time::Instant::now() + Duration::from_secs(60);
     while !daemon.log_lines().iter().any(|l| l.contains("stage homed")) {
         assert!(
             std::time::Instant::now() < deadline,
@@ -69,10 +69,10 @@ struct Watched {
     touch_bits_seen: Vec<u8>,
 }
 
-/// Reads samples until `done(stage_m, base_deg)` holds (at most 20 s), checking that every
+/// Reads samples until `done(stage_m, base_deg)` holds (at most 60 s), checking that every
 /// segment of every poll reads, with its four touch bits, and that `contact` is any of them.
 fn watch(client: &mut Client, mut done: impl FnMut(Option<f64>, Option<f64>) -> bool) -> Watched {
-    let deadline = Instant::now() + Duration::from_secs(20);
+    let deadline = Instant::now() + Duration::from_secs(60);
     let mut seen = Watched {
         stage: Vec::new(),
         touch_bits_seen: vec![0; 9],

@@ -152,10 +152,13 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
             (window as usize..=251).contains(&polls.len()),
             "segment {k}"
         );
+        // Its first and last poll span the window, less the deadlines skipped (a skipped
+        // deadline at either end shortens it).
         let (first, last) = (polls[0], polls[polls.len() - 1]);
         assert!(
-            (248..=251).contains(&(last - first)),
-            "segment {k}: {first}..={last}"
+            (248 - summary.skipped.min(248)..=251).contains(&(last - first)),
+            "segment {k}: {first}..={last}, {} skipped",
+            summary.skipped
         );
         // One unbroken window: every recorded poll inside it is flagged.
         let inside = seqs
@@ -165,7 +168,13 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
         assert_eq!(inside, polls.len(), "segment {k}");
     }
     let stuck = flagged(6, |s| s.stale);
-    assert!(stuck.len() > 300 && stuck.len() <= 525, "{}", stuck.len());
+    // 1 s at 500 Hz, less the polls before the check found it and any deadline skipped.
+    assert!(
+        stuck.len() as u64 + summary.skipped > 300 && stuck.len() <= 525,
+        "{}, {} skipped",
+        stuck.len(),
+        summary.skipped
+    );
     for m in &trial.segments {
         for (k, s) in m.segments.iter().enumerate() {
             let faulty = (k == 2 && s.nack) || (k == 4 && s.pec_error);

@@ -111,10 +111,17 @@ fn a_full_disk_refuses_a_trial_and_ends_a_running_one_while_polling_goes_on() {
     disk.0.store(1_000_000_000, Ordering::SeqCst);
     client.send_line(&start);
     assert!(client.next_reply().ok);
-    std::thread::sleep(Duration::from_millis(500));
+    // 100 polls of the trial streamed (and so recorded), however long that takes here.
+    let mut polled = 0;
+    while polled < 100 {
+        if let StreamMessage::Samples { .. } = client.next_message() {
+            polled += 1;
+        }
+    }
     // ...until the disk fills up: it ends within the second, with the reason recorded.
     disk.0.store(1_000_000, Ordering::SeqCst);
-    let deadline = Instant::now() + Duration::from_secs(10);
+    // Only a hang takes this long, however loaded the machine.
+    let deadline = Instant::now() + Duration::from_secs(60);
     while daemon.trial().is_some() {
         assert!(Instant::now() < deadline, "the trial did not end");
         std::thread::sleep(Duration::from_millis(20));
