@@ -1,106 +1,58 @@
-//! A one-line progress bar on stderr for long commands (`antenna sweep`, `antenna study`):
-//! drawn only when stderr is a terminal, at most ten times a second, and cleared at the end,
-//! so that redirected output stays clean.
+//! Progress bars on stderr for long commands (`antenna sweep`, `antenna study`, `antenna
+//! optimize`): indicatif's, drawn only when stderr is a terminal (at most ten times a second)
+//! and cleared at the end, so that redirected output stays clean: off a terminal nothing is
+//! written.
 
-use std::io::{IsTerminal as _, Write as _};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-/// Width of the bar, characters.
-const BAR_WIDTH: usize = 30;
-/// Least time between two redraws.
-const REDRAW_EVERY: Duration = Duration::from_millis(100);
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressFinish, ProgressState, ProgressStyle};
 
-/// A progress bar over `total` units of work.
-#[derive(Debug)]
-pub struct Progress {
-    total: usize,
-    unit: &'static str,
-    started: Instant,
-    last_drawn: Option<Instant>,
-    enabled: bool,
+/// Redraws per second, at most.
+const REDRAW_HZ: u8 = 10;
+/// The bar's line: `[########----------------------] 50/200 steps (25 %), 10.0 s, 30 s left`,
+/// then the message (e.g. `", best 46.3 mm"`).
+const TEMPLATE: &str = "[{bar:30}] {pos}/{len} {prefix} ({percent} %), {elapsed_s}{left}{msg}";
+
+/// A progress bar over `total` `unit`s (e.g. "steps") on stderr, drawn when `enabled` and
+/// stderr is a terminal, cleared when finished or dropped. Its position is the units done;
+/// its message follows the line.
+pub fn bar(total: usize, unit: &'static str, enabled: bool) -> ProgressBar {
+    let target = if enabled {
+        ProgressDrawTarget::stderr_with_hz(REDRAW_HZ)
+    } else {
+        ProgressDrawTarget::hidden()
+    };
+    let style = ProgressStyle::with_template(TEMPLATE)
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("#-")
+        .with_key("elapsed_s", write_elapsed)
+        .with_key("left", write_left);
+    ProgressBar::with_draw_target(Some(total as u64), target)
+        .with_style(style)
+        .with_prefix(unit)
+        .with_finish(ProgressFinish::AndClear)
 }
 
-impl Progress {
-    /// A bar over `total` `unit`s (e.g. "steps"), shown when stderr is a terminal.
-    pub fn new(total: usize, unit: &'static str) -> Progress {
-        Progress {
-            total,
-            unit,
-            started: Instant::now(),
-            last_drawn: None,
-            enabled: std::io::stderr().is_terminal(),
-        }
-    }
+/// `10.0 s`: the time since the bar started.
+fn write_elapsed(state: &ProgressState, w: &mut dyn std::fmt::Write) {
+    let _ = write!(w, "{:.1} s", state.elapsed().as_secs_f64());
+}
 
-    /// Whether the bar is drawn at all.
-    pub fn is_enabled(&self) -> bool {
-        self.enabled
-    }
-
-    /// Shows that `done` units are done (redrawn at most every 100 ms, and at the end).
-    pub fn set(&mut self, done: usize) {
-        self.set_noted(done, "");
-    }
-
-    /// As [`Self::set`], with `note` after the bar's text (e.g. `", best 46.3 mm"`).
-    pub fn set_noted(&mut self, done: usize, note: &str) {
-        if !self.enabled {
-            return;
-        }
-        let now = Instant::now();
-        let due = self
-            .last_drawn
-            .is_none_or(|t| now.duration_since(t) >= REDRAW_EVERY);
-        if !due && done < self.total {
-            return;
-        }
-        self.last_drawn = Some(now);
-        let line = self.line(done, now.duration_since(self.started));
-        let mut err = std::io::stderr().lock();
-        let _ = write!(err, "\r{line}{note}\x1b[K");
-        let _ = err.flush();
-    }
-
-    /// The bar's text for `done` units after `elapsed`.
-    pub fn line(&self, done: usize, elapsed: Duration) -> String {
-        let fraction = if self.total == 0 {
-            1.0
-        } else {
-            (done as f64 / self.total as f64).clamp(0.0, 1.0)
-        };
-        let filled = (fraction * BAR_WIDTH as f64).round() as usize;
-        let bar: String = "#".repeat(filled) + &"-".repeat(BAR_WIDTH - filled);
-        let elapsed_s = elapsed.as_secs_f64();
-        let eta = if done > 0 && done < self.total {
-            let left_s = elapsed_s * (self.total - done) as f64 / done as f64;
-            let decimals = if left_s < 10.0 { 1 } else { 0 };
-            format!(", {left_s:.decimals$} s left")
-        } else {
-            String::new()
-        };
-        format!(
-            "[{bar}] {done}/{} {} ({:.0} %), {elapsed_s:.1} s{eta}",
-            self.total,
-            self.unit,
-            100.0 * fraction
-        )
-    }
-
-    /// Clears the bar's line.
-    pub fn finish(&mut self) {
-        if self.enabled && self.last_drawn.is_some() {
-            let mut err = std::io::stderr().lock();
-            let _ = write!(err, "\r\x1b[K");
-            let _ = err.flush();
-        }
-        self.enabled = false;
+/// indicatif's estimate of the time left, while some but not all units are done.
+fn write_left(state: &ProgressState, w: &mut dyn std::fmt::Write) {
+    let running = state
+        .len()
+        .is_some_and(|len| (1..len).contains(&state.pos()));
+    if running {
+        let _ = w.write_str(&time_left(state.eta()));
     }
 }
 
-impl Drop for Progress {
-    fn drop(&mut self) {
-        self.finish();
-    }
+/// `, 1.0 s left` (one decimal under 10 s), `, 30 s left`.
+fn time_left(left: Duration) -> String {
+    let left_s = left.as_secs_f64();
+    let decimals = if left_s < 10.0 { 1 } else { 0 };
+    format!(", {left_s:.decimals$} s left")
 }
 
 #[cfg(test)]
@@ -108,18 +60,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_line_shows_the_fraction_and_what_is_left() {
-        let p = Progress::new(200, "steps");
-        let line = p.line(50, Duration::from_secs(10));
-        assert!(line.starts_with("[########----------------------] 50/200 steps (25 %)"));
-        assert!(line.ends_with("10.0 s, 30 s left"), "{line}");
-        let soon = p.line(150, Duration::from_secs(3));
-        assert!(soon.ends_with("3.0 s, 1.0 s left"), "{soon}");
-        assert!(p.line(200, Duration::from_secs(1)).contains("(100 %)"));
-        assert!(
-            Progress::new(0, "runs")
-                .line(0, Duration::ZERO)
-                .contains("(100 %)")
-        );
+    fn the_time_left_has_a_decimal_under_ten_seconds() {
+        assert_eq!(time_left(Duration::from_secs(30)), ", 30 s left");
+        assert_eq!(time_left(Duration::from_secs(1)), ", 1.0 s left");
+    }
+
+    #[test]
+    fn a_bar_not_enabled_is_hidden_and_counts() {
+        let bar = bar(200, "steps", false);
+        assert!(bar.is_hidden());
+        bar.set_position(50);
+        assert_eq!((bar.position(), bar.length()), (50, Some(200)));
+        bar.finish_and_clear();
+        assert!(bar.is_finished());
     }
 }

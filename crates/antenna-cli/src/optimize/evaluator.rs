@@ -7,12 +7,13 @@ use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
+use indicatif::ProgressBar;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::log::LogWriter;
 use super::{Objective, OptimizeSpec};
-use crate::progress::Progress;
+use crate::progress;
 use crate::scene::{Scene, StiffnessSpec};
 use crate::sweep::SweepRun;
 
@@ -112,17 +113,13 @@ struct Inner {
     replayed: usize,
     idle_calls: usize,
     best: Option<f64>,
-    progress: Progress,
+    progress: ProgressBar,
 }
 
 impl<'a> Evaluator<'a> {
     /// An evaluator of `spec`'s scenes on a rayon pool of `jobs` threads, drawing a progress
     /// bar on stderr when `progress` (and stderr is a terminal).
     pub fn new(spec: &'a OptimizeSpec, jobs: usize, progress: bool) -> Evaluator<'a> {
-        let mut bar = Progress::new(spec.budget, "sweeps");
-        if !progress {
-            bar.finish();
-        }
         Evaluator {
             spec,
             pool: rayon::ThreadPoolBuilder::new()
@@ -139,7 +136,7 @@ impl<'a> Evaluator<'a> {
                 replayed: 0,
                 idle_calls: 0,
                 best: None,
-                progress: bar,
+                progress: progress::bar(spec.budget, "sweeps", progress),
             }),
         }
     }
@@ -331,13 +328,16 @@ impl<'a> Evaluator<'a> {
                 outcome: "failed".to_string(),
                 why: Some(format!("the sweep panicked: {}", panic_message(&*panic))),
             });
-            let mut inner = self.lock();
+            let inner = self.lock();
             let done = inner.sweeps + finished.fetch_add(1, Ordering::Relaxed) + 1;
             let note = match inner.best {
                 Some(b) => format!(", best {:.4} mm", b * 1000.0),
                 None => String::new(),
             };
-            inner.progress.set_noted(done.min(self.spec.budget), &note);
+            inner.progress.set_message(note);
+            inner
+                .progress
+                .set_position(done.min(self.spec.budget) as u64);
             result
         };
         let mut results: std::vec::IntoIter<SceneResult> = match &self.pool {
@@ -367,7 +367,7 @@ impl<'a> Evaluator<'a> {
 
     /// Clears the progress bar.
     pub fn finish(&self) {
-        self.lock().progress.finish();
+        self.lock().progress.finish_and_clear();
     }
 }
 

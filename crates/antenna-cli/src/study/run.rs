@@ -5,8 +5,10 @@ use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 
+use indicatif::ProgressBar;
+
 use super::{Shard, Study, StudyRow};
-use crate::progress::Progress;
+use crate::progress;
 use crate::sweep::SweepRun;
 
 /// How to run a study.
@@ -46,12 +48,8 @@ pub fn run_study<E>(
     on_row: &mut dyn FnMut(&StudyRow) -> Result<(), E>,
 ) -> Result<RunCounts, E> {
     let indices: Vec<usize> = options.shard.indices(study.len()).collect();
-    let mut progress = Progress::new(indices.len(), "runs");
-    if !options.progress {
-        progress.finish();
-    }
     let mut rows = InOrder {
-        progress,
+        progress: progress::bar(indices.len(), "runs", options.progress),
         pending: BTreeMap::new(),
         counts: RunCounts::default(),
     };
@@ -61,7 +59,7 @@ pub fn run_study<E>(
         for (k, &index) in indices.iter().enumerate() {
             rows.deliver(k, run_point(study, index), on_row)?;
         }
-        rows.progress.finish();
+        rows.progress.finish_and_clear();
         return Ok(rows.counts);
     };
     let stop = AtomicBool::new(false);
@@ -88,13 +86,13 @@ pub fn run_study<E>(
         }
         Ok(())
     })?;
-    rows.progress.finish();
+    rows.progress.finish_and_clear();
     Ok(rows.counts)
 }
 
 /// The rows that came back before the ones ahead of them, and what was handed on.
 struct InOrder {
-    progress: Progress,
+    progress: ProgressBar,
     pending: BTreeMap<usize, StudyRow>,
     counts: RunCounts,
 }
@@ -120,7 +118,7 @@ impl InOrder {
             if row.relaxed_steps.is_some_and(|r| r > 0) {
                 counts.relaxed += 1;
             }
-            self.progress.set(counts.runs);
+            self.progress.set_position(counts.runs as u64);
         }
         Ok(())
     }

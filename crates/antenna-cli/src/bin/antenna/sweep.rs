@@ -4,7 +4,7 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use antenna_cli::progress::Progress;
+use antenna_cli::progress;
 use antenna_cli::scene::Scene;
 use antenna_cli::scene::motion::MAX_SWEEP_STEPS;
 use antenna_cli::sweep::plot::SweepPlot;
@@ -109,7 +109,7 @@ pub(crate) fn run(args: &SweepArgs) -> Result<(), Failure> {
         writeln!(out, "placement: {}", run.placement_note()).map_err(write_error)?;
     }
     out.flush().map_err(write_error)?;
-    let mut progress = Progress::new(steps, "steps");
+    let progress = progress::bar(steps, "steps", true);
     let mut failure: Option<SweepFailure> = None;
     // JSON lines reach a reader (a pipe, `tail -f`) at least every FLUSH_EVERY.
     let mut flushed = Instant::now();
@@ -127,7 +127,7 @@ pub(crate) fn run(args: &SweepArgs) -> Result<(), Failure> {
                 if let Some(plot) = &mut plot {
                     plot.push(&state);
                 }
-                progress.set(state.step.step);
+                progress.set_position(state.step.step as u64);
             }
             Err(e) => {
                 failure = Some(e);
@@ -135,7 +135,7 @@ pub(crate) fn run(args: &SweepArgs) -> Result<(), Failure> {
             }
         }
     }
-    progress.finish();
+    progress.finish_and_clear();
     let summary = run.summary();
     if args.jsonl {
         // Also after a step that failed or jammed: the summary of the steps done, with its
