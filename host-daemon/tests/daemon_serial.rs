@@ -218,7 +218,8 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
     let vxm = VxmEmulator::spawn_at(vxm_master, 800);
     std::os::unix::fs::symlink(&vxm_path, &link).unwrap();
     wait_for("the stage to come back", PATIENCE, || log_has("stage back"));
-    assert!(vxm.is_online(), "the daemon put the VXM on line again");
+    // The daemon put the VXM on line again (the emulator reads its bytes on its own thread).
+    wait_for("the VXM on line again", PATIENCE, || vxm.is_online());
     let mut back = false;
     let deadline = Instant::now() + PATIENCE;
     while !back {
@@ -446,7 +447,11 @@ fn a_trial_whose_stage_loses_power_or_vanishes_ends_with_the_reason_recorded() {
         assert!(reply.ok, "{reply:?}");
     };
 
-    // A power cycle mid-move.
+    // A power cycle mid-move (the trial's, not the homing's: homed first, however long that
+    // takes here).
+    wait_for("the VXM homed", PATIENCE, || {
+        log_has(&daemon, "stage homed")
+    });
     start(1);
     wait_for("the move", PATIENCE, || vxm.is_busy());
     std::thread::sleep(Duration::from_millis(200));
@@ -525,17 +530,22 @@ fn stop_all_reaches_the_vxm_while_a_query_to_it_hangs() {
     for id in 0..3 {
         // A fresh query: sent after the received bytes were cleared, so it is at most as old
         // as the moment it is seen here, and cannot time out before `asked + QUERY_TIMEOUT`.
+        // (A K from the previous stop's motion thread may still come before it.)
         vxm.clear_received();
         wait_for("a query", PATIENCE, || vxm.received().contains(&b'X'));
         let asked = Instant::now();
+        let query_at = vxm.received().iter().position(|&b| b == b'X').unwrap();
         client.send_line(&format!(r#"{{"id":{id},"cmd":"stop_all"}}"#));
-        wait_for("the K", PATIENCE, || vxm.received().contains(&b'K'));
+        wait_for("the K", PATIENCE, || {
+            vxm.received()[query_at..].contains(&b'K')
+        });
         let killed = asked.elapsed();
         latencies.push(killed);
         let received = vxm.received();
-        let k = received.iter().position(|&b| b == b'K').unwrap();
+        let after_query = &received[query_at..];
+        let k = after_query.iter().position(|&b| b == b'K').unwrap();
         assert_eq!(
-            received[..k].iter().filter(|&&b| b == b'X').count(),
+            after_query[..k].iter().filter(|&&b| b == b'X').count(),
             1,
             "the K came after a second query: {:?}",
             String::from_utf8_lossy(&received)
