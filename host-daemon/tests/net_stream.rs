@@ -148,9 +148,14 @@ fn slow_client_gets_exact_lag_counts_and_stays_connected() {
     for seq in 0..N {
         server.publish(&samples(seq));
     }
-    let reader = thread::spawn(move || follow_exactly(&mut slow, N));
+    // The reader hands the client back: dropping it would close the connection, which the
+    // server may then reap before the count below.
+    let reader = thread::spawn(move || {
+        let counts = follow_exactly(&mut slow, N);
+        (slow, counts)
+    });
     publish_tail_until(&server, N, || reader.is_finished());
-    let (received, dropped) = reader.join().unwrap();
+    let (_slow, (received, dropped)) = reader.join().unwrap();
     assert!(dropped > 0, "the slow client should have been lagged");
     assert!(received > 0);
     assert_eq!(
