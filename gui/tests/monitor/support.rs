@@ -10,6 +10,10 @@ use egui_kittest::Harness;
 use host_daemon::service::config::Config;
 use host_daemon::service::daemon::{Daemon, DaemonHandle, DaemonOptions};
 
+/// How long a wait for something the daemon or the monitor does may take before the test
+/// fails: only a hang takes this long, however loaded the machine.
+pub const PATIENCE_S: f64 = 60.0;
+
 /// The control token the test daemons use (test constant, not the crate's).
 pub const TOKEN: &str = "monitor-test-token";
 
@@ -34,13 +38,10 @@ pub fn config(dir: &std::path::Path) -> Config {
 /// waits until its stage is homed, so a move command is not refused for homing under way.
 pub fn start_daemon(config: Config) -> DaemonHandle {
     let daemon = Daemon::start(config, DaemonOptions::default()).unwrap();
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let deadline = Instant::now() + Duration::from_secs_f64(PATIENCE_S);
     while !daemon.log_lines().iter().any(|l| l.contains("stage homed")) {
-        assert!(
-            std::time::Instant::now() < deadline,
-            "the stage never homed"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(10));
+        assert!(Instant::now() < deadline, "the stage never homed");
+        std::thread::sleep(Duration::from_millis(10));
     }
     daemon
 }
@@ -88,23 +89,45 @@ pub fn step_until(
     }
 }
 
+/// Steps a frame, waits `pause`, steps another; returns the least and most time (s) that
+/// passed between the two frames' clock readings: the time between the two steps, and the
+/// time around them. What plays in real time moves on by an amount between the two.
+pub fn step_around(harness: &mut Harness<'_, MonitorApp>, pause: Duration) -> (f64, f64) {
+    let before_first = Instant::now();
+    harness.step();
+    let after_first = Instant::now();
+    std::thread::sleep(pause);
+    let before_second = Instant::now();
+    harness.step();
+    let after_second = Instant::now();
+    (
+        (before_second - after_first).as_secs_f64(),
+        (after_second - before_first).as_secs_f64(),
+    )
+}
+
 /// Steps until the monitor is connected and holds at least `seconds` of samples.
 pub fn wait_for_history(harness: &mut Harness<'_, MonitorApp>, seconds: f64) {
-    step_until(harness, &format!("{seconds} s of samples"), 20.0, |h| {
-        let state = h.state().live().unwrap().lock();
-        state
-            .history
-            .first_t_s()
-            .zip(state.history.latest_t_s())
-            .is_some_and(|(a, b)| b - a >= seconds)
-    });
+    step_until(
+        harness,
+        &format!("{seconds} s of samples"),
+        PATIENCE_S,
+        |h| {
+            let state = h.state().live().unwrap().lock();
+            state
+                .history
+                .first_t_s()
+                .zip(state.history.latest_t_s())
+                .is_some_and(|(a, b)| b - a >= seconds)
+        },
+    );
 }
 
 /// Steps the harness until a widget whose label contains `text` is on screen (the state a
-/// label shows can change after the frame that was last drawn); panics after 10 s.
+/// label shows can change after the frame that was last drawn); panics after [`PATIENCE_S`].
 pub fn expect_label(harness: &mut Harness<'_, MonitorApp>, text: &str) {
     use egui_kittest::kittest::Queryable;
-    step_until(harness, &format!("the label {text:?}"), 10.0, |h| {
+    step_until(harness, &format!("the label {text:?}"), PATIENCE_S, |h| {
         h.query_by_label_contains(text).is_some()
     });
 }
