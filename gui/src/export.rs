@@ -27,37 +27,45 @@ pub fn write_csv(
     out: &mut impl Write,
 ) -> std::io::Result<usize> {
     let n = history.segment_count();
-    let mut header = String::from("t_s,seq,stage_position_m,servo_angle_deg");
+    let mut csv = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(out);
+    let mut header: Vec<String> = ["t_s", "seq", "stage_position_m", "servo_angle_deg"]
+        .map(str::to_owned)
+        .to_vec();
     for k in 1..=n {
-        header.push_str(&format!(",s{k}_angle_rad,s{k}_touch,s{k}_health"));
+        header.extend([
+            format!("s{k}_angle_rad"),
+            format!("s{k}_touch"),
+            format!("s{k}_health"),
+        ]);
     }
-    writeln!(out, "{header}")?;
+    csv.write_record(&header)?;
     let range = history.index_range(t0_s, t1_s);
     let rows = range.len();
     let opt = |v: Option<f64>| v.map_or_else(String::new, |v| v.to_string());
-    let mut line = String::new();
+    let mut record: Vec<String> = Vec::with_capacity(4 + 3 * n);
     for i in range {
         let Some(sample) = history.sample(i) else {
             continue;
         };
-        line.clear();
-        line.push_str(&format!(
-            "{},{},{},{}",
-            sample.t_s,
+        record.clear();
+        record.extend([
+            sample.t_s.to_string(),
             sample.seq.map_or_else(String::new, |s| s.to_string()),
             opt(sample.stage_position_m),
             opt(sample.servo_angle_rad.map(f64::to_degrees)),
-        ));
+        ]);
         for s in &sample.segments {
-            line.push_str(&format!(
-                ",{},{},{}",
+            record.extend([
                 opt(s.angle_rad),
                 s.touch_bits.map_or_else(String::new, |t| t.to_string()),
-                s.health.as_str()
-            ));
+                s.health.as_str().to_owned(),
+            ]);
         }
-        writeln!(out, "{line}")?;
+        csv.write_record(&record)?;
     }
+    csv.flush()?;
     Ok(rows)
 }
 
@@ -353,6 +361,8 @@ mod tests {
         );
         assert_eq!(lines[1], "0.1,100,0.5,,0.25,8,ok,,,nack");
         assert!(lines[101].starts_with("0.2,200,"));
+        // Lines end in a bare newline, the last one too; nothing is quoted.
+        assert!(text.ends_with("nack\n") && !text.contains('\r') && !text.contains('"'));
     }
 
     #[test]
