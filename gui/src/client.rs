@@ -21,7 +21,9 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use antenna_data::stream::{SegmentSample, SegmentStatus, StreamMessage};
+use antenna_data::stream::{
+    ControlRequest, SegmentSample, SegmentStatus, StreamMessage, WireCommand,
+};
 
 use crate::error::MonitorError;
 use crate::history::{Health, History, Sample, SegmentReading};
@@ -142,19 +144,38 @@ impl Command {
         !matches!(self, Command::StopAll)
     }
 
-    /// The request line (without the newline); an empty `token` is left out.
-    pub fn request_line(&self, id: u64, token: &str) -> String {
-        let mut request = serde_json::json!({"id": id, "cmd": self.name()});
-        if !token.is_empty() {
-            request["token"] = token.into();
-        }
+    /// The command as antenna-data's wire type writes it.
+    pub fn wire(&self) -> WireCommand {
         match self {
-            Command::StartTrial { name } => request["name"] = name.as_str().into(),
-            Command::MoveStage { position_m } => request["position_m"] = (*position_m).into(),
-            Command::SetBaseAngle { angle_deg } => request["angle_deg"] = (*angle_deg).into(),
-            Command::StopTrial | Command::StopAll | Command::Auth => {}
+            Command::StartTrial { name } => WireCommand::StartTrial {
+                name: name.clone(),
+                metadata: BTreeMap::new(),
+            },
+            Command::StopTrial => WireCommand::StopTrial {},
+            Command::MoveStage { position_m } => WireCommand::MoveStage {
+                position_m: Some(*position_m),
+                relative_m: None,
+                speed_m_per_s: None,
+            },
+            Command::SetBaseAngle { angle_deg } => WireCommand::SetBaseAngle {
+                angle_deg: *angle_deg,
+            },
+            Command::StopAll => WireCommand::StopAll {},
+            Command::Auth => WireCommand::Auth {},
         }
-        request.to_string()
+    }
+
+    /// The request line (without the newline), antenna-data's [`ControlRequest`]; an empty
+    /// `token` is left out.
+    pub fn request_line(&self, id: u64, token: &str) -> Result<String, MonitorError> {
+        let request = ControlRequest {
+            id: Some(id),
+            token: (!token.is_empty()).then(|| token.to_owned()),
+            command: self.wire(),
+        };
+        serde_json::to_string(&request).map_err(|e| {
+            MonitorError::Control(format!("{}: cannot encode the request: {e}", self.name()))
+        })
     }
 }
 
@@ -311,8 +332,9 @@ impl LiveClient {
             state.pending.insert(id, command.name());
         }
         self.next_id += 1;
+        let line = command.request_line(id, token)?;
         self.outgoing
-            .send(command.request_line(id, token))
+            .send(line)
             .map_err(|_| MonitorError::Control("the stream thread has stopped".to_owned()))?;
         Ok(id)
     }
@@ -606,6 +628,7 @@ fn reading(s: &SegmentSample) -> SegmentReading {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use antenna_data::stream::{ControlCommand, Request, RequestEnvelope, StageTarget};
 
     /// Feeds stream lines to a fresh state as the reader thread does.
     fn receive(lines: &[&str]) -> LiveState {
@@ -679,22 +702,59 @@ mod tests {
 
     #[test]
     fn request_lines_follow_the_protocol() {
-        let line = Command::MoveStage { position_m: 0.1 }.request_line(3, "s3cret");
+        let line = Command::MoveStage { position_m: 0.1 }
+            .request_line(3, "s3cret")
+            .unwrap();
         let v: serde_json::Value = serde_json::from_str(&line).unwrap();
         assert_eq!(v["cmd"], "move_stage");
         assert_eq!(v["position_m"], 0.1);
         assert_eq!(v["token"], "s3cret");
         assert_eq!(v["id"], 3);
         assert_eq!(
-            Command::StopAll.request_line(5, ""),
-            r#"{"cmd":"stop_all","id":5}"#
+            Command::StopAll.request_line(5, "").unwrap(),
+            r#"{"id":5,"cmd":"stop_all"}"#
         );
         assert!(!Command::StopAll.needs_token() && Command::Auth.needs_token());
         let line = Command::StartTrial {
             name: "wall-sweep".to_owned(),
         }
-        .request_line(4, "t");
+        .request_line(4, "t")
+        .unwrap();
         assert!(line.contains(r#""name":"wall-sweep""#), "{line}");
+        // Every line is one the daemon's parser accepts, as the command it was.
+        let commands = [
+            (
+                Command::StartTrial {
+                    name: "wall-sweep".to_owned(),
+                },
+                ControlCommand::StartTrial {
+                    name: "wall-sweep".to_owned(),
+                    metadata: BTreeMap::new(),
+                },
+            ),
+            (Command::StopTrial, ControlCommand::StopTrial),
+            (
+                Command::MoveStage { position_m: 0.1 },
+                ControlCommand::MoveStage {
+                    target: StageTarget::Absolute { position_m: 0.1 },
+                    speed_m_per_s: None,
+                },
+            ),
+            (
+                Command::SetBaseAngle { angle_deg: -12.5 },
+                ControlCommand::SetBaseAngle { angle_deg: -12.5 },
+            ),
+            (Command::StopAll, ControlCommand::StopAll),
+        ];
+        for (command, expected) in commands {
+            let line = command.request_line(7, "t").unwrap();
+            let envelope = RequestEnvelope::parse(line.as_bytes()).unwrap();
+            assert_eq!(envelope.id(), Some(7));
+            assert_eq!(envelope.cmd(), command.name());
+            assert_eq!(envelope.command().unwrap(), Request::Control(expected));
+        }
+        let auth = RequestEnvelope::parse(Command::Auth.request_line(8, "t").unwrap().as_bytes());
+        assert_eq!(auth.unwrap().command().unwrap(), Request::Auth);
     }
 
     #[test]
@@ -709,7 +769,8 @@ mod tests {
         options.backoff_min = Duration::from_millis(20);
         options.backoff_max = Duration::from_millis(40);
         let mut client = LiveClient::connect(options).unwrap();
-        let deadline = Instant::now() + Duration::from_secs(5);
+        // Generous: only a hang takes this long, however loaded the machine.
+        let deadline = Instant::now() + Duration::from_secs(60);
         loop {
             let state = client.lock();
             if let ConnectionState::Disconnected { error, .. } = &state.connection {
