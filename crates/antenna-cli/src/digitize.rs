@@ -136,14 +136,14 @@ pub fn digitize(
 /// The points as a `points_file`: a header line `x_m,y_m`, then one `x,y` line per point
 /// with nine decimals (nanometres), each line ending in `\n`.
 pub fn points_csv(points_m: &[Vector2<f64>]) -> String {
-    use std::fmt::Write as _;
-    let mut csv = String::with_capacity(24 * (points_m.len() + 1));
-    csv.push_str("x_m,y_m\n");
+    let mut csv = csv::Writer::from_writer(Vec::with_capacity(24 * (points_m.len() + 1)));
+    // Writing to a Vec cannot fail, and the fields are ASCII.
+    let _ = csv.write_record(["x_m", "y_m"]);
     for p in points_m {
-        // Writing to a String cannot fail.
-        let _ = writeln!(csv, "{:.9},{:.9}", p.x, p.y);
+        let _ = csv.write_record([format!("{:.9}", p.x), format!("{:.9}", p.y)]);
     }
-    csv
+    let bytes = csv.into_inner().unwrap_or_default();
+    String::from_utf8(bytes).unwrap_or_default()
 }
 
 /// `count` points evenly spaced along the arclength of the edges between `vertices_m`, each

@@ -58,6 +58,9 @@ pub enum ExportError {
     /// matrw refused an array.
     #[error("building the MAT-file: {0}")]
     Mat(String),
+    /// The csv writer failed (in memory: not expected).
+    #[error("writing the CSV: {0}")]
+    Csv(String),
 }
 
 fn segment_count(trial: &Trial) -> Result<usize, ExportError> {
@@ -194,31 +197,48 @@ fn cell<T: std::fmt::Display>(value: Option<T>) -> String {
     value.map(|v| v.to_string()).unwrap_or_default()
 }
 
+/// The CSV columns (module docs).
+const CSV_COLUMNS: [&str; 14] = [
+    "poll",
+    "seq",
+    "t_s",
+    "address",
+    "angle_counts",
+    "angle_rad",
+    "touch",
+    "ok",
+    "nack",
+    "pec_error",
+    "bus_error",
+    "stale",
+    "stage_position_m",
+    "base_angle_rad",
+];
+
 /// The CSV text of a trial (columns in the module docs).
 pub fn trial_to_csv(trial: &Trial) -> Result<String, ExportError> {
     segment_count(trial)?;
-    let mut out = String::new();
+    let mut comments = String::new();
     if let Some(metadata) = &trial.metadata {
-        let _ = writeln!(out, "# trial: {}", metadata.trial);
-        let _ = writeln!(out, "# started_unix_s: {}", metadata.started_unix_s);
+        let _ = writeln!(comments, "# trial: {}", metadata.trial);
+        let _ = writeln!(comments, "# started_unix_s: {}", metadata.started_unix_s);
         if let Some(ns) = metadata.started_unix_ns {
-            let _ = writeln!(out, "# started_unix_ns: {ns}");
+            let _ = writeln!(comments, "# started_unix_ns: {ns}");
         }
         for (key, value) in &metadata.notes {
-            let _ = writeln!(out, "# notes.{key}: {}", value.replace('\n', " "));
+            let _ = writeln!(comments, "# notes.{key}: {}", value.replace('\n', " "));
         }
         for line in without_token(&metadata.config).lines() {
-            let _ = writeln!(out, "# config: {line}");
+            let _ = writeln!(comments, "# config: {line}");
         }
     }
     if let Some(why) = &trial.truncated {
-        let _ = writeln!(out, "# truncated: {}", why.replace('\n', " "));
+        let _ = writeln!(comments, "# truncated: {}", why.replace('\n', " "));
     }
-    out.push_str(
-        "poll,seq,t_s,address,angle_counts,angle_rad,touch,ok,nack,pec_error,bus_error,stale,\
-         stage_position_m,base_angle_rad\n",
-    );
-    let flag = |b: bool| if b { '1' } else { '0' };
+    let mut out = csv::Writer::from_writer(comments.into_bytes());
+    let csv_error = |e: csv::Error| ExportError::Csv(e.to_string());
+    out.write_record(CSV_COLUMNS).map_err(csv_error)?;
+    let flag = |b: bool| if b { "1" } else { "0" };
     let (mut stage, mut servo) = (0, 0);
     for (poll, m) in trial.segments.iter().enumerate() {
         while stage < trial.stage.len() && trial.stage[stage].t_s <= m.t_s {
@@ -227,27 +247,31 @@ pub fn trial_to_csv(trial: &Trial) -> Result<String, ExportError> {
         while servo < trial.servo.len() && trial.servo[servo].t_s <= m.t_s {
             servo += 1;
         }
-        let position = stage.checked_sub(1).map(|i| trial.stage[i].position_m);
-        let base = servo.checked_sub(1).map(|i| trial.servo[i].base_angle_rad);
+        let position = cell(stage.checked_sub(1).map(|i| trial.stage[i].position_m));
+        let base = cell(servo.checked_sub(1).map(|i| trial.servo[i].base_angle_rad));
+        let (poll, seq, t_s) = (poll.to_string(), cell(m.seq), m.t_s.to_string());
         for x in &m.segments {
-            let _ = writeln!(
-                out,
-                "{poll},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                cell(m.seq),
-                m.t_s,
-                x.address,
-                cell(x.angle_counts),
-                cell(x.angle_rad),
-                cell(x.touch),
+            out.write_record([
+                poll.as_str(),
+                &seq,
+                &t_s,
+                &x.address.to_string(),
+                &cell(x.angle_counts),
+                &cell(x.angle_rad),
+                &cell(x.touch),
                 flag(x.ok),
                 flag(x.nack),
                 flag(x.pec_error),
                 flag(x.bus_error),
                 flag(x.stale),
-                cell(position),
-                cell(base),
-            );
+                &position,
+                &base,
+            ])
+            .map_err(csv_error)?;
         }
     }
-    Ok(out)
+    let bytes = out
+        .into_inner()
+        .map_err(|e| ExportError::Csv(e.error().to_string()))?;
+    String::from_utf8(bytes).map_err(|e| ExportError::Csv(e.to_string()))
 }

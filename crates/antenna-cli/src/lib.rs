@@ -9,6 +9,7 @@
 //! The binary (`src/bin/antenna/`) parses the command line, prints and picks the exit status;
 //! everything it computes is here so that it can be tested and documented.
 
+mod csv_lines;
 pub mod design;
 pub mod digitize;
 pub mod error;

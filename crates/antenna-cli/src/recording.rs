@@ -1,7 +1,7 @@
 //! Free-oscillation recordings for `antenna identify`: a small CSV format.
 //!
-//! - Blank lines and lines starting with `#` are ignored. Fields are separated by commas, or
-//!   by whitespace when a line has no comma.
+//! - Blank lines and lines starting with `#` are ignored. Fields are separated by commas (read
+//!   with the csv crate, without quoting), or by whitespace when a line has no comma.
 //! - An optional header line names the columns: `t_s` (time, seconds) and either `angle_rad`
 //!   or `angle_deg` (the joint angle). Other columns are ignored.
 //! - Without a header, one column is `angle_rad` and two columns are `t_s, angle_rad`.
@@ -67,6 +67,14 @@ pub enum RecordingError {
         /// The field as written.
         text: String,
     },
+    /// The csv reader could not read a line (not expected of text).
+    #[error("line {line}: cannot read the line: {why}")]
+    Unreadable {
+        /// The line.
+        line: usize,
+        /// The reader's error.
+        why: String,
+    },
     /// Times that do not step uniformly forward.
     #[error(
         "line {line}: time step {step_s} s differs from the mean step {mean_step_s} s by more \
@@ -92,12 +100,23 @@ pub struct Recording {
     pub sample_rate_hz: Option<f64>,
 }
 
-fn fields(line: &str) -> Vec<&str> {
-    if line.contains(',') {
-        line.split(',').map(str::trim).collect()
-    } else {
-        line.split_whitespace().collect()
+/// The data lines of `text` with their 1-based line numbers and fields: read with the csv
+/// crate ([`crate::csv_lines`]), a line without a comma split at whitespace;
+/// blank lines and lines starting with `#` left out.
+fn data_rows(text: &str) -> Result<Vec<(usize, Vec<String>)>, RecordingError> {
+    let mut rows = Vec::new();
+    for record in crate::csv_lines::Records::new(text) {
+        let (line, record) =
+            record.map_err(|(line, why)| RecordingError::Unreadable { line, why })?;
+        let fields: Vec<String> = match record.iter().collect::<Vec<_>>().as_slice() {
+            [] | [""] => continue,
+            [first, ..] if first.starts_with('#') => continue,
+            [only] => only.split_whitespace().map(str::to_string).collect(),
+            fields => fields.iter().map(|f| f.to_string()).collect(),
+        };
+        rows.push((line, fields));
     }
+    Ok(rows)
 }
 
 impl Recording {
@@ -106,21 +125,15 @@ impl Recording {
     /// # Errors
     /// [`RecordingError`] naming the line (and column) that is wrong.
     pub fn parse(text: &str) -> Result<Recording, RecordingError> {
-        let mut rows = text
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i + 1, l.trim()))
-            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
-            .peekable();
-        let Some(&(first_line, first)) = rows.peek() else {
+        let mut rows = data_rows(text)?.into_iter().peekable();
+        let Some((first_line, first_fields)) = rows.peek().cloned() else {
             return Err(RecordingError::Empty);
         };
-        let first_fields = fields(first);
         let is_header = first_fields.iter().any(|f| f.parse::<f64>().is_err());
         let columns: Vec<String>;
         let (time_col, angle_col, angle_in_deg) = if is_header {
             rows.next();
-            columns = first_fields.iter().map(|s| s.to_string()).collect();
+            columns = first_fields;
             let find = |name: &str| columns.iter().position(|c| c == name);
             let time = find("t_s");
             let (angle, deg) = match (find("angle_rad"), find("angle_deg")) {
@@ -156,8 +169,7 @@ impl Recording {
         let mut times = Vec::new();
         let mut lines = Vec::new();
         let mut angle_rad = Vec::new();
-        for (line, row) in rows {
-            let f = fields(row);
+        for (line, f) in rows {
             if f.len() != columns.len() {
                 return Err(RecordingError::RaggedRow {
                     line,
@@ -173,7 +185,7 @@ impl Recording {
                     .ok_or_else(|| RecordingError::BadNumber {
                         line,
                         column: columns[col].clone(),
-                        text: f[col].to_string(),
+                        text: f[col].clone(),
                     })
             };
             let a = number(angle_col)?;

@@ -50,6 +50,9 @@ pub enum PointsFileErrorKind {
     /// The file could not be read (missing, unreadable, not UTF-8).
     #[error("cannot read the points file: {0}")]
     Read(std::io::Error),
+    /// The csv reader could not read a line (not expected of text).
+    #[error("cannot read the line: {0}")]
+    Unreadable(String),
     /// No line holds anything.
     #[error("the file is empty; a points file has one `x_m,y_m` point per line")]
     Empty,
@@ -161,35 +164,33 @@ pub fn parse_points(text: &str) -> Result<Points, (usize, PointsFileErrorKind)> 
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut points_m = Vec::new();
     let mut lines = Vec::new();
-    let mut blank_since: Option<usize> = None;
-    let mut last_content_line = 0;
-    for (index, raw) in text.lines().enumerate() {
-        let line = index + 1;
-        let content = raw.trim();
-        if content.is_empty() {
-            blank_since.get_or_insert(line);
+    let mut last_content_line: usize = 0;
+    // The reader skips empty lines; a line of spaces is one empty field.
+    for record in crate::csv_lines::Records::new(text) {
+        let (line, record) =
+            record.map_err(|(line, why)| (line, PointsFileErrorKind::Unreadable(why)))?;
+        if record.iter().all(str::is_empty) {
             continue;
         }
-        if let Some(blank) = blank_since.take()
-            && last_content_line > 0
-        {
-            return Err((blank, PointsFileErrorKind::EmptyLine));
+        if last_content_line > 0 && line > last_content_line + 1 {
+            // Every line between two that hold something is blank.
+            return Err((last_content_line + 1, PointsFileErrorKind::EmptyLine));
         }
         let first_content = last_content_line == 0;
         last_content_line = line;
-        let fields: Vec<&str> = content.split(',').map(str::trim).collect();
-        if first_content && fields.iter().all(|f| f.parse::<f64>().is_err()) {
+        if first_content && record.iter().all(|f| f.parse::<f64>().is_err()) {
             // A header.
             continue;
         }
-        let [x, y] = fields.as_slice() else {
+        let [x, y] = [0, 1].map(|k| record.get(k).unwrap_or_default());
+        if record.len() != 2 {
             return Err((
                 line,
                 PointsFileErrorKind::FieldCount {
-                    found: fields.len(),
+                    found: record.len(),
                 },
             ));
-        };
+        }
         let x_m = coordinate(x, FIELD_NAMES[0]).map_err(|k| (line, k))?;
         let y_m = coordinate(y, FIELD_NAMES[1]).map_err(|k| (line, k))?;
         points_m.push(Vector2::new(x_m, y_m));

@@ -39,7 +39,7 @@ use crate::scene::surface::RawSurfaceKeys;
 use crate::scene::{Scene, StiffnessSpec};
 pub use axes::{HairLayout, SurfaceChoice, Variant, VariantError};
 pub use grid::Shard;
-pub use row::{StudyFormat, StudyRow};
+pub use row::{CSV_COLUMNS, StudyFormat, StudyRow};
 pub use run::{RunOptions, run_study};
 
 const STUDY: &str = "[study]";

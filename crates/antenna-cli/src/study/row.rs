@@ -1,5 +1,5 @@
-//! One result row per grid point of a study, as CSV (a header, then one line per row) or as
-//! JSON lines (one object per row). The columns are documented in the README and on
+//! One result row per grid point of a study, as CSV (a header, then one line per row, written
+//! with the csv crate) or as JSON lines (one object per row). The columns are documented in the README and on
 //! [`StudyRow`]'s fields; an empty CSV field is a JSON `null`.
 
 use serde::{Deserialize, Serialize};
@@ -194,36 +194,23 @@ impl StudyRow {
         }
     }
 
-    /// The CSV header line.
-    pub fn csv_header() -> String {
-        CSV_COLUMNS.join(",")
-    }
-
-    /// The row as one CSV line (fields with a comma, a quote or a line break are quoted).
-    pub fn csv_line(&self) -> String {
+    /// The row's CSV fields, in [`CSV_COLUMNS`]' order: an absent value is empty, a number
+    /// as JSON writes it (`30.0`), text as it is (the csv writer quotes it where needed).
+    pub fn csv_fields(&self) -> Vec<String> {
         let value = serde_json::to_value(self).unwrap_or_default();
         CSV_COLUMNS
             .iter()
             .map(|c| match &value[*c] {
                 serde_json::Value::Null => String::new(),
-                serde_json::Value::String(s) => csv_field(s),
+                serde_json::Value::String(s) => s.clone(),
                 other => other.to_string(),
             })
-            .collect::<Vec<_>>()
-            .join(",")
+            .collect()
     }
 
     /// The row as one JSON line.
     pub fn json_line(&self) -> String {
         serde_json::to_string(self).unwrap_or_default()
-    }
-}
-
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
     }
 }
 
@@ -275,8 +262,13 @@ mod tests {
         for c in CSV_COLUMNS {
             assert!(value.get(*c).is_some(), "{c}");
         }
-        let line = row.csv_line();
+        let mut csv = csv::Writer::from_writer(Vec::new());
+        csv.write_record(row.csv_fields()).unwrap();
+        let line = String::from_utf8(csv.into_inner().unwrap()).unwrap();
         assert!(line.starts_with("3,linear,30.0,0.2,distal,smooth mu=0.3,failed,\"step 4 (t = 0.04 s) failed: \"\"why\"\", and more\",3,0.03,,,false,"), "{line}");
-        assert!(line.ends_with(",4,1.25,2.5,7.0,0.75,12.0,0,1,3"), "{line}");
+        assert!(
+            line.ends_with(",4,1.25,2.5,7.0,0.75,12.0,0,1,3\n"),
+            "{line}"
+        );
     }
 }

@@ -4,7 +4,7 @@ use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use antenna_cli::study::{RunOptions, Shard, Study, StudyFormat, StudyRow, run_study};
+use antenna_cli::study::{CSV_COLUMNS, RunOptions, Shard, Study, StudyFormat, StudyRow, run_study};
 use anyhow::{Context as _, anyhow};
 use clap::{Args, ValueEnum};
 
@@ -64,12 +64,16 @@ pub(crate) fn run(args: &StudyArgs) -> Result<(), Failure> {
         FormatArg::Csv => StudyFormat::Csv,
         FormatArg::Jsonl => StudyFormat::Jsonl,
     };
-    let mut out: Box<dyn std::io::Write> = match &args.output {
+    let out: Box<dyn std::io::Write> = match &args.output {
         Some(path) => Box::new(std::io::BufWriter::new(
             std::fs::File::create(path)
                 .with_context(|| format!("{}: cannot create the output", path.display()))?,
         )),
         None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+    };
+    let mut out = match format {
+        StudyFormat::Csv => Rows::Csv(Box::new(csv::Writer::from_writer(out))),
+        StudyFormat::Jsonl => Rows::Jsonl(out),
     };
     let runs = shard.indices(study.len()).count();
     eprintln!(
@@ -80,23 +84,27 @@ pub(crate) fn run(args: &StudyArgs) -> Result<(), Failure> {
         jobs.min(runs.max(1))
     );
     let started = Instant::now();
-    if format == StudyFormat::Csv {
-        writeln!(out, "{}", StudyRow::csv_header()).context("writing the rows")?;
+    if let Rows::Csv(csv) = &mut out {
+        csv.write_record(CSV_COLUMNS).context("writing the rows")?;
     }
     let options = RunOptions {
         shard,
         jobs,
         progress: true,
     };
-    let counts = run_study(&study, &options, &mut |row: &StudyRow| {
-        let line = match format {
-            StudyFormat::Csv => row.csv_line(),
-            StudyFormat::Jsonl => row.json_line(),
-        };
-        writeln!(out, "{line}").and_then(|()| out.flush())
+    let counts = run_study(&study, &options, &mut |row: &StudyRow| match &mut out {
+        Rows::Csv(csv) => {
+            csv.write_record(row.csv_fields())?;
+            csv.flush()
+        }
+        Rows::Jsonl(out) => writeln!(out, "{}", row.json_line()).and_then(|()| out.flush()),
     })
     .context("writing the rows")?;
-    out.flush().context("writing the rows")?;
+    match &mut out {
+        Rows::Csv(csv) => csv.flush(),
+        Rows::Jsonl(out) => out.flush(),
+    }
+    .context("writing the rows")?;
     eprintln!(
         "{} sweep(s) in {:.1} s, {} failed, {} jammed, {} with relaxed steps",
         counts.runs,
@@ -114,6 +122,12 @@ pub(crate) fn run(args: &StudyArgs) -> Result<(), Failure> {
         ))));
     }
     Ok(())
+}
+
+/// Where the rows go: a CSV writer (a header, then a line per row) or JSON lines.
+enum Rows {
+    Csv(Box<csv::Writer<Box<dyn std::io::Write>>>),
+    Jsonl(Box<dyn std::io::Write>),
 }
 
 /// `2 profiles x 3 base angles x ...`.
