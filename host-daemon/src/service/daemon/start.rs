@@ -20,6 +20,7 @@ use crate::sim::rig::{SimState, sense, sense_with_faults, sim_bus};
 use antenna_data::stream::SegmentStatus;
 use anyhow::{Context, Result, anyhow, bail};
 use std::collections::{BTreeMap, VecDeque};
+use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::channel;
 use std::sync::{Arc, Mutex};
@@ -106,32 +107,14 @@ impl Daemon {
             realtime_priority: config.bus.realtime_priority,
         };
         let heartbeat = Arc::new(PollHeartbeat::new(clock.elapsed_ns()));
-        let (poll_join, bus_description) = match &sim_state {
-            Some(state) => {
-                let handle = spawn_watched_poller(
-                    Poller::new(sim_bus(&config)?, &addresses),
-                    clock,
-                    settings,
-                    sense_with_faults(sense(Arc::clone(state)), &config),
-                    events.clone(),
-                    Arc::clone(&stop_threads),
-                    Arc::clone(&heartbeat),
-                )
-                .context("starting the polling thread")?;
-                (
-                    bounded_join(handle),
-                    "simulated rig (virtual I2C bus)".to_owned(),
-                )
-            }
-            None => hardware_poller(
-                &config,
-                &addresses,
-                clock,
-                settings,
-                &events,
-                (&stop_threads, &heartbeat),
-            )?,
-        };
+        let (poll_join, bus_description) = start_polling(
+            &config,
+            clock,
+            settings,
+            sim_state.as_ref(),
+            &events,
+            (&stop_threads, &heartbeat),
+        )?;
         // However the daemon stops, it waits this long for the polling thread, not forever.
         let poll_join_bound = stall_bound(settings.period).max(POLL_THREAD_STOP_WAIT);
         let rig = match DaemonRig::open(&config, sim_state.clone()) {
@@ -208,32 +191,12 @@ impl Daemon {
             None
         };
         let local_addr = server.as_ref().map(StreamServer::local_addr);
-        let first = &addresses[0];
-        let last = &addresses[addresses.len() - 1];
         log.line(format!(
-            "antennad: {bus_description}; {} segments at {first:#04x}..={last:#04x}, polling at \
-             {} Hz ({}); {rig_description}",
-            addresses.len(),
-            config.bus.poll_hz,
-            bus_load(&config),
+            "antennad: {bus_description}; {}; {rig_description}",
+            polling_summary(&config)
         ));
         if let Some(addr) = local_addr {
-            let token_source = if token_generated {
-                "generated at start (antennad prints it once)"
-            } else if config.server.token_file.is_some() {
-                "from server.token_file"
-            } else if config.server.token_env.is_some() {
-                "from server.token_env"
-            } else {
-                "the configured server.token"
-            };
-            log.line(format!(
-                "  watch it with: nc {ip} {port}   (or, without nc: cat </dev/tcp/{ip}/{port}; \
-                 newline-delimited JSON, docs/stream-protocol.md; control token: \
-                 {token_source}; stop_all needs none)",
-                ip = addr.ip(),
-                port = addr.port()
-            ));
+            log.line(watch_line(&config, token_generated, addr));
         }
 
         let stop = Arc::new(AtomicBool::new(false));
@@ -338,6 +301,79 @@ impl Daemon {
     }
 }
 
+/// The polling thread: on the simulated bus (its segments sensing `sim_state`, with
+/// `sim.faults`) or the hardware one; what to join it with, and the bus for the start line.
+fn start_polling(
+    config: &Config,
+    clock: TrialClock,
+    settings: PollSettings,
+    sim_state: Option<&Shared<SimState>>,
+    events: &EventSender,
+    (stop, heartbeat): (&Arc<AtomicBool>, &Arc<PollHeartbeat>),
+) -> Result<(PollJoin, String)> {
+    let addresses = config.bus.addresses();
+    let Some(state) = sim_state else {
+        return hardware_poller(
+            config,
+            &addresses,
+            clock,
+            settings,
+            events,
+            (stop, heartbeat),
+        );
+    };
+    let handle = spawn_watched_poller(
+        Poller::new(sim_bus(config)?, &addresses),
+        clock,
+        settings,
+        sense_with_faults(sense(Arc::clone(state)), config),
+        events.clone(),
+        Arc::clone(stop),
+        Arc::clone(heartbeat),
+    )
+    .context("starting the polling thread")?;
+    Ok((
+        bounded_join(handle),
+        "simulated rig (virtual I2C bus)".to_owned(),
+    ))
+}
+
+/// The start line's account of the polling: `"9 segments at 0x20..=0x28, polling at 1000 Hz
+/// (virtual bus: no bit-time limit)"`.
+fn polling_summary(config: &Config) -> String {
+    let addresses = config.bus.addresses();
+    let (first, last) = (
+        addresses.first().copied().unwrap_or_default(),
+        addresses.last().copied().unwrap_or_default(),
+    );
+    format!(
+        "{} segments at {first:#04x}..={last:#04x}, polling at {} Hz ({})",
+        addresses.len(),
+        config.bus.poll_hz,
+        bus_load(config),
+    )
+}
+
+/// How to watch the stream at `addr`, and where the control token came from (never the token).
+fn watch_line(config: &Config, token_generated: bool, addr: SocketAddr) -> String {
+    let token_source = if token_generated {
+        "generated at start (antennad prints it once)"
+    } else if config.server.token_file.is_some() {
+        "from server.token_file"
+    } else if config.server.token_env.is_some() {
+        "from server.token_env"
+    } else {
+        "the configured server.token"
+    };
+    format!(
+        "  watch it with: nc {ip} {port}   (or, without nc: cat </dev/tcp/{ip}/{port}; \
+         newline-delimited JSON, docs/stream-protocol.md; control token: \
+         {token_source}; stop_all needs none)",
+        ip = addr.ip(),
+        port = addr.port()
+    )
+}
+
 /// What a poll costs the bus, for the start line: `"399 bit times a poll, 40 % of the period
 /// at bus.speed_hz = 1000000"` or the simulated bus's `"virtual bus: no bit-time limit"`.
 fn bus_load(config: &Config) -> String {
@@ -409,4 +445,58 @@ fn hardware_poller(
         "`bus.device` = {:?}: hardware I2C needs Linux; use \"sim\"",
         config.bus.device
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_start_line_gives_the_segments_the_rate_and_the_bus_load() {
+        let mut config = Config::default();
+        assert_eq!(
+            polling_summary(&config),
+            "9 segments at 0x20..=0x28, polling at 1000 Hz (virtual bus: no bit-time limit)"
+        );
+        config.bus.device = "/dev/i2c-1".to_owned();
+        config.bus.speed_hz = Some(1_000_000);
+        assert_eq!(
+            bus_load(&config),
+            "399 bit times a poll, 40 % of the period at bus.speed_hz = 1000000"
+        );
+    }
+
+    #[test]
+    fn the_watch_line_says_where_the_token_came_from_never_what_it_is() {
+        let mut config = Config::default();
+        let addr: SocketAddr = "127.0.0.1:7878".parse().unwrap();
+        let line = watch_line(&config, true, addr);
+        assert!(line.contains("nc 127.0.0.1 7878"), "{line}");
+        assert!(line.contains("generated at start"), "{line}");
+        config.server.token_env = Some("ANTENNAD_TOKEN".to_owned());
+        assert!(watch_line(&config, false, addr).contains("from server.token_env"));
+        config.server.token_env = None;
+        config.server.token = Some(ControlToken::new("s3cret-s3cret-s3cret").unwrap());
+        let line = watch_line(&config, false, addr);
+        assert!(line.contains("the configured server.token"), "{line}");
+        assert!(!line.contains("s3cret"), "{line}");
+    }
+
+    #[test]
+    fn an_unknown_first_trial_is_refused_naming_the_trials() {
+        let options = DaemonOptions {
+            first_trial: Some(Some("nope".to_owned())),
+            serve: false,
+            record: false,
+            ..DaemonOptions::default()
+        };
+        let error = Daemon::start(Config::default(), options).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            format!(
+                "no trial \"nope\" in the configuration (trials: {})",
+                trial_names(&Config::default())
+            )
+        );
+    }
 }
