@@ -12,14 +12,14 @@
 //! and `SCHED_FIFO` with a 20 us busy wait; and all of that
 //! once per background load: each `BUSY` is a number of busy-looping processes (`sh -c 'while
 //! :; do :; done'`) started for those runs (default: `0 2`). It prints one Markdown table row
-//! per run. The event consumer only keeps the time stamps (no recording, no TCP server).
+//! per run. It runs antennad itself (`Daemon::start`, no recording, no TCP server); its event
+//! tap only keeps the time stamps.
 
 use anyhow::{Context, Result};
 use host_daemon::service::acquisition::AcquisitionEvent;
 use host_daemon::service::config::Config;
-use host_daemon::sim::rig::{TrialOptions, run_sim_trial};
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use host_daemon::service::daemon::{Daemon, DaemonOptions, EventTap};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// utime + stime of this process, seconds (clock ticks of 1/100 s, Linux's USER_HZ).
@@ -114,29 +114,50 @@ fn main() -> Result<()> {
         // Let the load average feel the load.
         std::thread::sleep(Duration::from_secs(if busy > 0 { 5 } else { 0 }));
         for (mode, spin_us, priority) in modes {
-            let mut stamps: Vec<(u64, u64)> = Vec::with_capacity((seconds * 1200.0) as usize);
-            let mut refused = None;
-            let options = TrialOptions {
-                duration: Some(Duration::from_secs_f64(seconds)),
-                spin: Some(Duration::from_micros(spin_us)),
-                realtime_priority: Some(priority),
-                ..TrialOptions::default()
+            // The event tap keeps the polls' time stamps and a refused real-time request.
+            type Seen = (Vec<(u64, u64)>, Option<String>);
+            let seen: Arc<Mutex<Seen>> = Arc::new(Mutex::new((
+                Vec::with_capacity((seconds * 1200.0) as usize),
+                None,
+            )));
+            let on_event = {
+                let seen = Arc::clone(&seen);
+                EventTap::new(move |event| {
+                    let Ok(mut seen) = seen.lock() else { return };
+                    match event {
+                        AcquisitionEvent::Poll(p) => seen.0.push((p.t_ns, p.deadline_ns)),
+                        AcquisitionEvent::Note { text, .. } if text.contains("refused") => {
+                            seen.1 = Some(text.clone());
+                        }
+                        _ => {}
+                    }
+                })
             };
+            let mut run_config = config.clone();
+            run_config.bus.spin_us = spin_us;
+            run_config.bus.realtime_priority = priority;
             let cpu_before = cpu_s()?;
             let wall = Instant::now();
-            let summary = run_sim_trial(
-                &config,
-                &config.trials[0],
-                options,
-                Arc::new(AtomicBool::new(false)),
-                |event| match event {
-                    AcquisitionEvent::Poll(p) => stamps.push((p.t_ns, p.deadline_ns)),
-                    AcquisitionEvent::Note { text, .. } if text.contains("refused") => {
-                        refused = Some(text.clone());
-                    }
-                    _ => {}
+            // The daemon itself on the simulated rig, no recording, no TCP server.
+            let summary = Daemon::start(
+                run_config,
+                DaemonOptions {
+                    first_trial: Some(None),
+                    first_trial_duration: Some(Duration::from_secs_f64(seconds)),
+                    exit_after_trial: true,
+                    record: false,
+                    serve: false,
+                    queue: 8192,
+                    on_event: Some(on_event),
+                    ..DaemonOptions::default()
                 },
-            )?;
+            )?
+            .wait()?;
+            let (stamps, refused) = std::mem::take(
+                &mut *seen
+                    .lock()
+                    .map_err(|_| anyhow::anyhow!("the event tap panicked"))?,
+            );
             let cpu = (cpu_s()? - cpu_before) / wall.elapsed().as_secs_f64();
             let rss_mb = status_kb("VmRSS:")? as f64 / 1024.0;
             let mut periods: Vec<f64> = stamps

@@ -22,11 +22,10 @@ use antenna_data::record::{
 use anyhow::{Context, Result};
 use host_daemon::service::acquisition::AcquisitionEvent;
 use host_daemon::service::config::Config;
+use host_daemon::service::daemon::{Daemon, DaemonOptions, EventTap};
 use host_daemon::service::samples::record_sample;
-use host_daemon::sim::rig::{TrialOptions, run_sim_trial};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// utime + stime of this process, seconds (clock ticks of 1/100 s, Linux's USER_HZ).
@@ -59,13 +58,65 @@ struct Run {
     sync_ms: Vec<f64>,
 }
 
+/// What the event tap keeps of a run: the recorder, the polls' time stamps, the syncs' times.
+struct Tap {
+    recorder: Option<TrialRecorder>,
+    stamps: Vec<u64>,
+    sync_ms: Vec<f64>,
+    failed: Option<anyhow::Error>,
+}
+
+impl Tap {
+    /// Records `event` as antennad's hub does (when recording).
+    fn take(&mut self, event: &AcquisitionEvent, calibrations: &[antenna_protocol::Calibration]) {
+        let Some(recorder) = self.recorder.as_mut() else {
+            if let AcquisitionEvent::Poll(p) = event {
+                self.stamps.push(p.t_ns);
+            }
+            return;
+        };
+        let synced = recorder.synced();
+        let started = Instant::now();
+        let result = match event {
+            AcquisitionEvent::Poll(p) => {
+                self.stamps.push(p.t_ns);
+                recorder.record_segments(&SegmentsMessage {
+                    seq: Some(p.seq),
+                    t_s: p.t_ns as f64 * 1e-9,
+                    segments: p
+                        .readings
+                        .iter()
+                        .zip(calibrations)
+                        .enumerate()
+                        .map(|(k, (r, &c))| record_sample(r, c, p.is_stale(k)))
+                        .collect(),
+                })
+            }
+            AcquisitionEvent::Stage { t_ns, position_mm } => recorder.record_stage(&StageMessage {
+                t_s: *t_ns as f64 * 1e-9,
+                position_m: position_mm * 1e-3,
+            }),
+            AcquisitionEvent::Base { t_ns, angle_rad } => recorder.record_servo(&ServoMessage {
+                t_s: *t_ns as f64 * 1e-9,
+                base_angle_rad: *angle_rad,
+            }),
+            _ => Ok(()),
+        };
+        if recorder.synced() != synced {
+            self.sync_ms.push(started.elapsed().as_secs_f64() * 1e3);
+        }
+        if let Err(e) = result {
+            self.failed.get_or_insert(e.into());
+        }
+    }
+}
+
 fn run(
     config: &Config,
     seconds: f64,
     options: Option<RecorderOptions>,
     path: &Path,
 ) -> Result<Run> {
-    let calibrations = config.bus.calibrations();
     let metadata = TrialMetadata {
         trial: "record-cost".to_owned(),
         started_unix_s: 0.0,
@@ -75,75 +126,57 @@ fn run(
         rig: Some(host_daemon::service::daemon::rig_info(config)),
     };
     let _ = std::fs::remove_file(path);
-    let mut recorder = options
+    let recorder = options
         .map(|o| TrialRecorder::create_with(path, &metadata, o))
         .transpose()?;
-    let mut stamps: Vec<u64> = Vec::with_capacity((seconds * 1200.0) as usize);
-    let mut sync_ms = Vec::new();
-    let mut failed = None;
+    let tap = Arc::new(Mutex::new(Tap {
+        recorder,
+        stamps: Vec::with_capacity((seconds * 1200.0) as usize),
+        sync_ms: Vec::new(),
+        failed: None,
+    }));
+    let on_event = {
+        let tap = Arc::clone(&tap);
+        let calibrations = config.bus.calibrations();
+        EventTap::new(move |event| {
+            if let Ok(mut tap) = tap.lock() {
+                tap.take(event, &calibrations);
+            }
+        })
+    };
     let cpu_before = cpu_s()?;
     let wall = Instant::now();
-    let summary = run_sim_trial(
-        config,
-        &config.trials[0],
-        TrialOptions {
-            duration: Some(Duration::from_secs_f64(seconds)),
-            ..TrialOptions::default()
+    // The daemon itself on the simulated rig, its own recording off: this one records.
+    let summary = Daemon::start(
+        config.clone(),
+        DaemonOptions {
+            first_trial: Some(None),
+            first_trial_duration: Some(Duration::from_secs_f64(seconds)),
+            exit_after_trial: true,
+            record: false,
+            serve: false,
+            queue: 8192,
+            on_event: Some(on_event),
+            ..DaemonOptions::default()
         },
-        Arc::new(AtomicBool::new(false)),
-        |event| {
-            let Some(recorder) = recorder.as_mut() else {
-                if let AcquisitionEvent::Poll(p) = event {
-                    stamps.push(p.t_ns);
-                }
-                return;
-            };
-            let synced = recorder.synced();
-            let started = Instant::now();
-            let result = match event {
-                AcquisitionEvent::Poll(p) => {
-                    stamps.push(p.t_ns);
-                    recorder.record_segments(&SegmentsMessage {
-                        seq: Some(p.seq),
-                        t_s: p.t_ns as f64 * 1e-9,
-                        segments: p
-                            .readings
-                            .iter()
-                            .zip(&calibrations)
-                            .enumerate()
-                            .map(|(k, (r, &c))| record_sample(r, c, p.is_stale(k)))
-                            .collect(),
-                    })
-                }
-                AcquisitionEvent::Stage { t_ns, position_mm } => {
-                    recorder.record_stage(&StageMessage {
-                        t_s: *t_ns as f64 * 1e-9,
-                        position_m: position_mm * 1e-3,
-                    })
-                }
-                AcquisitionEvent::Base { t_ns, angle_rad } => {
-                    recorder.record_servo(&ServoMessage {
-                        t_s: *t_ns as f64 * 1e-9,
-                        base_angle_rad: *angle_rad,
-                    })
-                }
-                _ => Ok(()),
-            };
-            if recorder.synced() != synced {
-                sync_ms.push(started.elapsed().as_secs_f64() * 1e3);
-            }
-            if let Err(e) = result {
-                failed.get_or_insert(e);
-            }
-        },
-    )?;
+    )?
+    .wait()?;
     let elapsed = wall.elapsed().as_secs_f64();
+    let Tap {
+        recorder,
+        stamps,
+        mut sync_ms,
+        failed,
+    } = Arc::try_unwrap(tap)
+        .map_err(|_| anyhow::anyhow!("the daemon still holds the event tap"))?
+        .into_inner()
+        .map_err(|_| anyhow::anyhow!("the event tap panicked"))?;
     if let Some(recorder) = recorder {
         recorder.finish()?;
     }
     let cpu_percent = 100.0 * (cpu_s()? - cpu_before) / elapsed;
     if let Some(e) = failed {
-        return Err(e.into());
+        return Err(e);
     }
     let period_ns = 1e9 / config.bus.poll_hz;
     let jitter_us = stamps

@@ -8,15 +8,25 @@
 //!
 //! # Layout
 //!
-//! - [`hardware`]: the drivers (the Linux I2C bus and the poller, the VXM stage and its
-//!   homing, the Maestro servo) behind their traits;
-//! - [`sim`]: the simulated rig, the fakes, and the pseudo-terminal emulators of the serial
-//!   devices;
-//! - [`service`]: the daemon (configuration, hub, polling thread and watchdog, the motion loop
-//!   and trial script, systemd);
-//! - [`net`]: the TCP server (token, throttle, admission);
-//! - the segments' bus itself (the Linux bus, the simulated bus, commissioning) is the
-//!   `antenna-bus` crate, shared with the `antenna` command.
+//! Five layers, lowest first; a module imports its own layer and the ones below it, never
+//! one above (`tests/layers.rs` checks every `use` and `crate::` path, the re-exports below
+//! resolved), so no circle of imports closes between them:
+//!
+//! 1. [`config`]: the configuration (schema, validation, where a key is written) and the
+//!    values it must build to be valid (the control token, the stage's and servo's geometry,
+//!    the bus budget); it imports no other layer;
+//! 2. [`hardware`]: the drivers (the Linux I2C bus and the poller, the VXM stage and its
+//!    homing, the Maestro servo) behind their traits, and the rig's view of a stage and a
+//!    servo as trait objects ([`hardware::device`]);
+//! 3. [`sim`]: the device layer's simulated side: the simulated stage, servo and bus, the one
+//!    simulated world whose physics they move, the fakes, and the pseudo-terminal emulators
+//!    of the serial devices;
+//! 4. [`net`]: the TCP server (token, throttle, admission); it needs only `config`;
+//! 5. [`service`]: the daemon (the rig, the hub, control, the polling thread and watchdog,
+//!    the motion loop and trial script, systemd).
+//!
+//! The segments' bus itself (the Linux bus, the simulated bus, commissioning) is the
+//! `antenna-bus` crate, shared with the `antenna` command.
 //!
 //! # Example
 //!
@@ -33,6 +43,7 @@
 //! assert!((Calibration::default().angle_rad(word.angle_counts()) - 0.5).abs() < 0.002);
 //! ```
 
+pub mod config;
 pub mod hardware;
 pub mod net;
 pub mod service;

@@ -4,25 +4,31 @@
 
 use host_daemon::service::acquisition::AcquisitionEvent;
 use host_daemon::service::config::{Config, MoveConfig};
-use host_daemon::sim::rig::{TrialOptions, run_sim_trial};
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use host_daemon::service::daemon::{Daemon, DaemonOptions, DaemonSummary, EventTap};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-fn run(config: &Config) -> (host_daemon::sim::rig::TrialSummary, Vec<AcquisitionEvent>) {
-    let mut events = Vec::new();
-    let options = TrialOptions {
-        duration: Some(Duration::ZERO), // until the moves are done
-        ..TrialOptions::default()
+fn run(config: &Config) -> (DaemonSummary, Vec<AcquisitionEvent>) {
+    let events = Arc::new(Mutex::new(Vec::new()));
+    let tap = {
+        let events = Arc::clone(&events);
+        EventTap::new(move |e| events.lock().unwrap().push(e.clone()))
     };
-    let summary = run_sim_trial(
-        config,
-        &config.trials[0],
-        options,
-        Arc::new(AtomicBool::new(false)),
-        |e| events.push(e.clone()),
-    )
-    .unwrap();
+    let options = DaemonOptions {
+        first_trial: Some(None),
+        first_trial_duration: Some(Duration::ZERO), // until the moves are done
+        exit_after_trial: true,
+        record: false,
+        serve: false,
+        queue: 8192,
+        on_event: Some(tap),
+        ..DaemonOptions::default()
+    };
+    let summary = Daemon::start(config.clone(), options)
+        .unwrap()
+        .wait()
+        .unwrap();
+    let events = std::mem::take(&mut *events.lock().unwrap());
     (summary, events)
 }
 

@@ -70,86 +70,7 @@ pub trait Stage {
     fn kill(&mut self) -> Result<(), Self::Error>;
 }
 
-/// Which limit switch a stage homes against: the one at its near end, where the soft
-/// limits' `min_mm` is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum HomingDirection {
-    /// The limit switch in the negative direction (the VXM's `I1M-0`).
-    Negative,
-    /// The limit switch in the positive direction (the VXM's `I1M0`).
-    Positive,
-}
-
-/// Invalid stage geometry.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-pub enum GeometryError {
-    /// Steps per millimetre must be finite and positive.
-    #[error("steps per mm must be finite and positive, got {0}")]
-    StepsPerMm(f64),
-    /// The soft limits must be finite with min below max, and each within the i32 step range.
-    #[error("soft limits must be finite with min < max, got {min_mm} mm to {max_mm} mm")]
-    Limits {
-        /// Lower limit, millimetres.
-        min_mm: f64,
-        /// Upper limit, millimetres.
-        max_mm: f64,
-    },
-}
-
-/// The stage's scale and soft limits. Step zero is where the stage was homed.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StageGeometry {
-    steps_per_mm: f64,
-    min_steps: i32,
-    max_steps: i32,
-}
-
-impl StageGeometry {
-    /// A stage with `steps_per_mm` motor steps per millimetre that may travel from `min_mm` to
-    /// `max_mm` (relative to home). The step limits are rounded inward.
-    pub fn new(steps_per_mm: f64, min_mm: f64, max_mm: f64) -> Result<Self, GeometryError> {
-        if !(steps_per_mm.is_finite() && steps_per_mm > 0.0) {
-            return Err(GeometryError::StepsPerMm(steps_per_mm));
-        }
-        let min_steps = (min_mm * steps_per_mm).ceil();
-        let max_steps = (max_mm * steps_per_mm).floor();
-        let range = f64::from(i32::MIN)..=f64::from(i32::MAX);
-        if !(min_mm < max_mm
-            && range.contains(&min_steps)
-            && range.contains(&max_steps)
-            && min_steps <= max_steps)
-        {
-            return Err(GeometryError::Limits { min_mm, max_mm });
-        }
-        Ok(Self {
-            steps_per_mm,
-            min_steps: min_steps as i32,
-            max_steps: max_steps as i32,
-        })
-    }
-
-    /// Motor steps per millimetre.
-    pub fn steps_per_mm(&self) -> f64 {
-        self.steps_per_mm
-    }
-
-    /// The soft limits in steps, inclusive.
-    pub fn limits_steps(&self) -> (i32, i32) {
-        (self.min_steps, self.max_steps)
-    }
-
-    /// Millimetres to the nearest step, or `None` if not finite or beyond i32 steps.
-    pub fn steps_for_mm(&self, mm: f64) -> Option<i64> {
-        let steps = (mm * self.steps_per_mm).round();
-        (steps.is_finite() && steps.abs() <= f64::from(i32::MAX)).then_some(steps as i64)
-    }
-
-    /// Steps to millimetres.
-    pub fn mm_for_steps(&self, steps: i32) -> f64 {
-        f64::from(steps) / self.steps_per_mm
-    }
-}
+pub use crate::config::geometry::{GeometryError, HomingDirection, StageGeometry};
 
 /// Why [`LimitedStage`] refused or failed a command.
 #[derive(Debug, thiserror::Error)]
@@ -337,7 +258,7 @@ impl<S: Stage> LimitedStage<S, Homed> {
 
     /// Sets the speed of the following moves, millimetres per second (to the nearest step/s).
     pub fn set_speed_mm_per_s(&mut self, speed_mm_per_s: f64) -> Result<(), StageError<S::Error>> {
-        let steps = (speed_mm_per_s * self.geometry.steps_per_mm).round();
+        let steps = (speed_mm_per_s * self.geometry.steps_per_mm()).round();
         if !(steps.is_finite() && steps >= 1.0 && steps <= f64::from(u32::MAX)) {
             return Err(StageError::InvalidNumber {
                 what: "speed mm/s",

@@ -16,7 +16,7 @@ use antenna_data::stream::{
 use super::auth_throttle::AuthThrottle;
 use super::control::{AuthOutcome, ControlHandler, serve_request};
 use super::server_log::ServerLog;
-use super::token::ControlToken;
+use crate::config::token::ControlToken;
 
 /// Control replies queued for one client at most before its reader waits.
 pub const PRIORITY_CAPACITY: usize = 64;

@@ -6,7 +6,7 @@
 
 use antenna_data::stream::{ControlCommand, ControlReply, ErrorCode, Request, RequestEnvelope};
 
-use super::token::ControlToken;
+use crate::config::token::ControlToken;
 
 /// What the daemon does with control commands.
 ///

@@ -32,11 +32,10 @@ mod control;
 mod fake_handler;
 mod server;
 mod server_log;
-mod token;
 
+pub use crate::config::token::{ControlToken, GENERATED_TOKEN_BYTES, MIN_TOKEN_CHARS, TokenError};
 pub use auth_throttle::AuthPolicy;
 pub use control::{AuthOutcome, ControlHandler, Served, serve_request};
 pub use fake_handler::RecordingHandler;
 pub use server::{DEFAULT_BIND, ServerError, ServerOptions, StreamServer};
 pub use server_log::ServerLog;
-pub use token::{ControlToken, GENERATED_TOKEN_BYTES, MIN_TOKEN_CHARS, TokenError};

@@ -30,7 +30,7 @@ use super::auth_throttle::{AuthPolicy, AuthThrottle};
 use super::connection::{self, Link, Outgoing, PRIORITY_CAPACITY};
 use super::control::ControlHandler;
 use super::server_log::ServerLog;
-use super::token::ControlToken;
+use crate::config::token::ControlToken;
 
 /// The address the daemon listens on unless configured otherwise: loopback only.
 pub const DEFAULT_BIND: &str = "127.0.0.1:7878";

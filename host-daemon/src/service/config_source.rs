@@ -22,7 +22,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use crate::service::config::{Config, ConfigError};
+use crate::config::{Config, ConfigError};
 use std::fmt;
 use std::path::{Path, PathBuf};
 

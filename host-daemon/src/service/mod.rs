@@ -6,7 +6,8 @@
 
 pub mod acquisition;
 pub mod clock;
-pub mod config;
+/// The configuration, now its own layer ([`crate::config`]); kept here under its old path.
+pub use crate::config;
 pub mod config_source;
 pub mod daemon;
 pub mod free_space;

@@ -1,14 +1,13 @@
-//! The motion thread, the one loop that moves the rig (the daemon's, and the jitter bench's
-//! through [`crate::sim::rig::run_sim_trial`]): it samples the stage and the base at their own
+//! The motion thread, the one loop that moves the rig: it samples the stage and the base at their own
 //! rates on the daemon's clock, homes the stage ([`crate::hardware::homing`]) before any move, carries
 //! out motion commands at once (a `stop_all` ahead of anything queued before it), runs a
 //! trial's script ([`crate::service::trial_script`]) and reports the stage and the servo vanishing and
 //! coming back. A script ends early, with the reason, when the stage loses its home (a power
 //! cycle) or stays vanished for [`STAGE_LOST_AFTER`] with moves left.
 
+use crate::config::TrialConfig;
 use crate::service::acquisition::{AcquisitionEvent, EventSender};
 use crate::service::clock::{Schedule, TrialClock};
-use crate::service::config::TrialConfig;
 use crate::service::rig::{DaemonRig, RigError};
 use crate::service::trial_script::{MoveCounts, STAGE_LOST_AFTER, Script, ScriptEnds};
 use std::sync::Arc;

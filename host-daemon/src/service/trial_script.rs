@@ -2,7 +2,7 @@
 //! followed by its pause, waiting (not failing) while the stage is being homed or has briefly
 //! vanished; and how a script's end is told to whoever waits for it ([`ScriptEnds`]).
 
-use crate::service::config::TrialConfig;
+use crate::config::TrialConfig;
 use crate::service::motion::Notes;
 use crate::service::rig::{DaemonRig, RigError};
 use std::sync::Mutex;

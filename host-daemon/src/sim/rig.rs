@@ -1,8 +1,7 @@
 //! The simulated rig, used when no hardware is configured: a virtual I2C bus ([`SimBus`])
-//! whose segments run `firmware-segment`'s own logic, a [`crate::FakeStage`] (homed against
-//! its limit switch like the VXM) and a [`crate::FakeServo`] that move in real time at their
-//! set speeds, and joint angles from sim-core's equilibrium solver as the stage carries the
-//! antenna along a configured wall.
+//! whose segments run `firmware-segment`'s own logic, and one simulated world ([`SimWorld`]):
+//! joint angles from sim-core's equilibrium solver as the stage (simulated,
+//! [`crate::sim::devices::SimStage`], or real) carries the antenna along a configured wall.
 //!
 //! # Contact
 //! The physics is `antenna-sim-physics`' [`SimPhysics`] (shared with `antenna-monitor`'s
@@ -12,29 +11,19 @@
 //!
 //! # Sensors
 //! The segments' sensors are ideal unless `[sim.sensors]` says otherwise
-//! ([`crate::service::config::SimSensorsConfig`]): each segment's Hall sensor then has its
+//! ([`crate::config::SimSensorsConfig`]): each segment's Hall sensor then has its
 //! joint's calibration offset and gain error and seeded noise on each of its ten-bit
 //! conversions, which the firmware's own oversampling turns into the twelve-bit reading
 //! ([`sim_bus`]), and a touch switch closes only for a contact pressing at least
 //! `touch_threshold_n` ([`sim_physics`]). The touch debounce is the firmware's own, and the
 //! sensors are sampled once per poll (`bus.poll_hz`).
 
-use crate::hardware::poll::{Poller, SegmentHealth};
-use crate::service::acquisition::{
-    AcquisitionEvent, PollReport, PollSettings, Shared, event_channel, spawn_poller,
-};
-use crate::service::clock::TrialClock;
-use crate::service::config::{Config, TrialConfig};
-use crate::service::motion::{MotionCommand, MotionShared, RigStatus, spawn_motion};
-use crate::service::rig::DaemonRig;
-use crate::service::trial_script::ScriptEnds;
-use crate::sim::bus::{SimBus, SimSegment};
+use crate::config::{Config, SimFaultKind};
+use crate::sim::bus::{SegmentFault, SimBus, SimSegment};
 use antenna_bus::{HallErrors, HallSensor};
 pub use antenna_sim_physics::{AntennaSpec, FlatWallSpec, SimPhysics, SimState};
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result};
 use sim_core::Sensors;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::channel;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -105,7 +94,7 @@ pub fn sim_bus(config: &Config) -> Result<SimBus> {
 
 /// The polling thread's hook for the simulated rig: the segments sense the shared state and
 /// run one sampling period of their firmware before each poll.
-pub fn sense(state: Shared<SimState>) -> impl FnMut(&mut SimBus, Duration) + Send + 'static {
+pub fn sense(state: Arc<Mutex<SimState>>) -> impl FnMut(&mut SimBus, Duration) + Send + 'static {
     let mut copy = SimState::default();
     move |bus, _| {
         if let Ok(shared) = state.lock() {
@@ -121,156 +110,96 @@ pub fn sense(state: Shared<SimState>) -> impl FnMut(&mut SimBus, Duration) + Sen
     }
 }
 
-/// Options of [`run_sim_trial`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct TrialOptions {
-    /// Overrides the trial's duration (zero: until its moves are done).
-    pub duration: Option<Duration>,
-    /// Capacity of the event queue.
-    pub queue: usize,
-    /// Overrides `bus.spin_us`, the busy wait before each poll deadline.
-    pub spin: Option<Duration>,
-    /// Overrides `bus.realtime_priority` (0: normal scheduling).
-    pub realtime_priority: Option<u8>,
-}
-
-impl Default for TrialOptions {
-    fn default() -> Self {
-        Self {
-            duration: None,
-            queue: 8192,
-            spin: None,
-            realtime_priority: None,
-        }
-    }
-}
-
-/// What a trial did.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TrialSummary {
-    /// Polls made.
-    pub polls: u64,
-    /// Poll deadlines skipped.
-    pub skipped: u64,
-    /// The latest poll wake-up.
-    pub max_lateness: Duration,
-    /// Health per segment.
-    pub health: Vec<SegmentHealth>,
-    /// Events dropped because the queue was full.
-    pub dropped: u64,
-    /// Stage moves started.
-    pub moves_started: usize,
-    /// Stage moves refused.
-    pub moves_refused: usize,
-    /// The trial's length.
-    pub elapsed: Duration,
-}
-
-/// Runs `trial` on the simulated rig of `config`: the polling thread and the daemon's own
-/// motion thread (`crate::service::motion`, homing the simulated stage first, as antennad does) on
-/// one clock, every event handed to `on_event` on this thread as it arrives. Ends when the
-/// duration has passed (the trial's, or `options.duration`; zero: when its moves are done)
-/// or `stop` is set. The stage, servo and bus of `config` are simulated whatever it says.
-pub fn run_sim_trial(
+/// The polling thread's hook `sense`, with `sim.faults` applied first by the time since the
+/// start: each listed segment has its fault from `from_s` until `until_s`, and none otherwise.
+pub fn sense_with_faults(
+    mut sense: impl FnMut(&mut SimBus, Duration) + Send + 'static,
     config: &Config,
-    trial: &TrialConfig,
-    options: TrialOptions,
-    stop: Arc<AtomicBool>,
-    mut on_event: impl FnMut(&AcquisitionEvent),
-) -> Result<TrialSummary> {
-    let state: Shared<SimState> = Arc::new(Mutex::new(SimState::default()));
-    let mut sim_config = config.clone();
-    sim_config.stage.port = "sim".to_owned();
-    sim_config.servo.port = "sim".to_owned();
-    let rig = DaemonRig::open(&sim_config, Some(Arc::clone(&state)))?;
-    let bus = sim_bus(config)?;
-    let poller = Poller::new(bus, &config.bus.addresses());
-    let (events, receiver) = event_channel(options.queue);
-    let threads_stop = Arc::new(AtomicBool::new(false));
-    let script_ends = Arc::new(ScriptEnds::default());
-    let clock = TrialClock::start();
-    let poll = spawn_poller(
-        poller,
-        clock,
-        PollSettings {
-            period: Duration::from_secs_f64(1.0 / config.bus.poll_hz),
-            counter_check_every: config.bus.counter_check_every,
-            spin: options
-                .spin
-                .unwrap_or(Duration::from_micros(config.bus.spin_us)),
-            realtime_priority: options
-                .realtime_priority
-                .unwrap_or(config.bus.realtime_priority),
-        },
-        sense(state),
-        events.clone(),
-        Arc::clone(&threads_stop),
-    )
-    .context("starting the polling thread")?;
-    let (commands, motion_commands) = channel();
-    commands
-        .send(MotionCommand::RunScript {
-            id: 1,
-            trial: Box::new(trial.clone()),
+) -> impl FnMut(&mut SimBus, Duration) + Send + 'static {
+    let faults: Vec<(usize, SegmentFault, Duration, Duration)> = config
+        .sim
+        .faults
+        .iter()
+        .filter_map(|f| {
+            let index = config
+                .bus
+                .segments
+                .iter()
+                .position(|s| s.address == f.address)?;
+            let kind = match f.kind {
+                SimFaultKind::Nack => SegmentFault::Nack,
+                SimFaultKind::Pec => SegmentFault::CorruptPec,
+                SimFaultKind::Stuck => SegmentFault::StuckCounter,
+                SimFaultKind::Hang => SegmentFault::Hang,
+            };
+            Some((
+                index,
+                kind,
+                Duration::from_secs_f64(f.from_s),
+                Duration::from_secs_f64(f.until_s),
+            ))
         })
-        .map_err(|_| anyhow!("the motion thread's queue is closed"))?;
-    let motion = spawn_motion(
-        rig,
-        clock,
-        (
-            Duration::from_secs_f64(1.0 / config.stage.sample_hz),
-            Duration::from_secs_f64(1.0 / config.servo.sample_hz),
-        ),
-        events.clone(),
-        MotionShared {
-            commands: motion_commands,
-            stop_pending: Arc::new(AtomicBool::new(false)),
-            stop: Arc::clone(&threads_stop),
-            status: Arc::new(RigStatus::default()),
-            script_ends: Arc::clone(&script_ends),
-        },
-    )
-    .context("starting the motion thread")?;
-    let duration = options
-        .duration
-        .unwrap_or(Duration::from_secs_f64(trial.duration_s));
-    loop {
-        let finished = if duration.is_zero() {
-            script_ends.is_done(1) || script_ends.failure(1).is_some()
-        } else {
-            clock.elapsed() >= duration
-        };
-        if finished || stop.load(Ordering::Relaxed) {
-            break;
-        }
-        if let Ok(event) = receiver.recv_timeout(Duration::from_millis(20)) {
-            on_event(&event);
-            while let Ok(event) = receiver.try_recv() {
-                on_event(&event);
+        .collect();
+    let segments = config.bus.segments.len();
+    move |bus, now| {
+        if !faults.is_empty() {
+            for k in 0..segments {
+                let fault = faults
+                    .iter()
+                    .find(|(index, _, from, until)| *index == k && *from <= now && now < *until)
+                    .map_or(SegmentFault::None, |f| f.1);
+                if let Some(segment) = bus.segment_mut(k) {
+                    segment.set_fault(fault);
+                }
             }
         }
+        sense(bus, now);
     }
-    let elapsed = clock.elapsed();
-    threads_stop.store(true, Ordering::Relaxed);
-    let poll: PollReport<SimBus> = poll
-        .join()
-        .map_err(|_| anyhow!("the polling thread panicked"))?;
-    let motion = motion
-        .join()
-        .map_err(|_| anyhow!("the motion thread panicked"))?;
-    while let Ok(event) = receiver.try_recv() {
-        on_event(&event);
+}
+
+/// The one simulated world: the antenna's physics, moved by the stage and the base servo
+/// (simulated or real, whichever the rig has), its state shared with the polling thread's
+/// [`sense`] hook. Solved again only when the stage or the base has moved.
+#[derive(Debug)]
+pub struct SimWorld {
+    physics: SimPhysics,
+    state: Arc<Mutex<SimState>>,
+    /// The antenna's mount angle on the base, radians (`sim.antenna.base_angle_deg`).
+    mount_rad: f64,
+    solved_for: Option<(f64, f64)>,
+}
+
+impl SimWorld {
+    /// The world of `config`'s `[sim]`, publishing its state to `state`.
+    ///
+    /// # Errors
+    /// When the physics does not accept `[sim]` (a configuration that passed
+    /// [`Config::from_toml_str`] always does).
+    pub fn new(config: &Config, state: Arc<Mutex<SimState>>) -> Result<Self> {
+        Ok(Self {
+            physics: sim_physics(config)?,
+            state,
+            mount_rad: config.sim.antenna.base_angle_deg.to_radians(),
+            solved_for: None,
+        })
     }
-    Ok(TrialSummary {
-        polls: poll.polls,
-        skipped: poll.skipped,
-        max_lateness: poll.max_lateness,
-        health: poll.health,
-        dropped: events.dropped(),
-        moves_started: motion.moves.started,
-        moves_refused: motion.moves.refused,
-        elapsed,
-    })
+
+    /// The stage at `stage_m` and the base servo at `base_rad`: the antenna settles there
+    /// (if either moved since the last call) and the segments sense it from now on.
+    ///
+    /// # Errors
+    /// When the contact solver fails.
+    pub fn move_to(&mut self, stage_m: f64, base_rad: f64) -> Result<()> {
+        let key = (stage_m, self.mount_rad + base_rad);
+        if self.solved_for != Some(key) {
+            let solved = self.physics.update(key.0, key.1)?;
+            self.solved_for = Some(key);
+            if let Ok(mut shared) = self.state.lock() {
+                *shared = solved;
+            }
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -282,5 +211,40 @@ mod tests {
         let config = Config::default();
         assert_eq!(antenna_spec(&config), AntennaSpec::default());
         assert_eq!(wall_spec(&config), FlatWallSpec::default());
+    }
+
+    #[test]
+    fn a_configured_fault_holds_its_segment_for_its_window_only() {
+        let mut config = Config::default();
+        let address = config.bus.segments[2].address;
+        config.sim.faults = vec![crate::config::SimFaultConfig {
+            address,
+            kind: SimFaultKind::Nack,
+            from_s: 1.0,
+            until_s: 2.0,
+        }];
+        let mut bus = sim_bus(&config).unwrap();
+        let sensed = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let counter = Arc::clone(&sensed);
+        let mut hook = sense_with_faults(
+            move |_: &mut SimBus, _| {
+                counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            },
+            &config,
+        );
+        let mut faults = |bus: &mut SimBus, now_s: f64| {
+            hook(bus, Duration::from_secs_f64(now_s));
+            (0..config.bus.segments.len())
+                .map(|k| bus.segment_mut(k).map(|s| s.fault()))
+                .collect::<Vec<_>>()
+        };
+        let none = vec![Some(SegmentFault::None); 9];
+        assert_eq!(faults(&mut bus, 0.5), none);
+        let mut nack = none.clone();
+        nack[2] = Some(SegmentFault::Nack);
+        assert_eq!(faults(&mut bus, 1.0), nack);
+        assert_eq!(faults(&mut bus, 1.999), nack);
+        assert_eq!(faults(&mut bus, 2.0), none);
+        assert_eq!(sensed.load(std::sync::atomic::Ordering::Relaxed), 4);
     }
 }

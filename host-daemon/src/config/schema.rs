@@ -1,0 +1,696 @@
+//! The configuration's schema: every table and key, its default, and what the rest of the
+//! daemon reads from it.
+
+use super::geometry::{
+    CalibrationError as PulseCalibrationError, GeometryError, PulseCalibration, StageGeometry,
+};
+use super::token::ControlToken;
+use antenna_data::record::{ChunkCompression, RecorderOptions};
+use antenna_protocol::{Calibration, Direction};
+use serde::{Deserialize, Serialize};
+use sim_core::{CalibrationError, FIRMWARE_DEBOUNCE_SAMPLES, SensorSettings};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::PathBuf;
+
+pub use super::geometry::HomingDirection;
+
+/// The whole configuration.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Config {
+    /// Where trial recordings go (`<data_dir>/<trial>.mcap`).
+    pub data_dir: PathBuf,
+    /// The I2C bus and its segments.
+    pub bus: BusConfig,
+    /// The linear stage.
+    pub stage: StageConfig,
+    /// The base servo.
+    pub servo: ServoConfig,
+    /// The TCP endpoint.
+    pub server: ServerConfig,
+    /// How trials are recorded.
+    pub recording: RecordingConfig,
+    /// The trials, run by name (the first by default).
+    pub trials: Vec<TrialConfig>,
+    /// The simulated rig (used when the bus is `sim`).
+    pub sim: SimConfig,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            data_dir: PathBuf::from("data"),
+            bus: BusConfig::default(),
+            stage: StageConfig::default(),
+            servo: ServoConfig::default(),
+            server: ServerConfig::default(),
+            recording: RecordingConfig::default(),
+            trials: vec![TrialConfig::default()],
+            sim: SimConfig::default(),
+        }
+    }
+}
+
+/// The I2C bus.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BusConfig {
+    /// `sim` for the simulated rig, or a Linux I2C device such as `/dev/i2c-1`.
+    pub device: String,
+    /// Poll rate, hertz (every segment read once per period).
+    pub poll_hz: f64,
+    /// The bus clock, hertz, as the board sets it (the device tree; antennad does not change
+    /// it): a poll rate the bus cannot carry is refused, with the arithmetic
+    /// ([`super::bus_budget`]). Left out: 100 kHz (standard mode) for a real device; the
+    /// simulated bus moves no bits and is treated as unlimited unless this is given (then it
+    /// is checked as a real bus would be, to try a hardware configuration on the simulator).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_hz: Option<u32>,
+    /// Read each segment's sample counter every this many polls (a counter that has not
+    /// moved since the last check marks the segment stale). The counters are read one per
+    /// poll, round-robin, so a cycle is never shorter than one poll more than there are
+    /// segments.
+    pub counter_check_every: u32,
+    /// Busy-wait this many microseconds before each poll deadline instead of sleeping
+    /// (0: sleep only). Cuts wake-up lateness to about a microsecond at the cost of CPU.
+    pub spin_us: u64,
+    /// Run the polling thread under `SCHED_FIFO` at this priority (1..=99) when the system
+    /// permits it (root, `CAP_SYS_NICE` or an `RLIMIT_RTPRIO` allowance); refused, antennad
+    /// says so once and polls on normal scheduling. 0: normal scheduling. Default 50: on a
+    /// busy machine it is what keeps the p99 poll jitter in the tens of microseconds
+    /// (BENCHMARKS.md, "Host daemon").
+    pub realtime_priority: u8,
+    /// The segments, base to tip.
+    pub segments: Vec<SegmentConfig>,
+}
+
+impl Default for BusConfig {
+    fn default() -> Self {
+        Self {
+            device: "sim".to_owned(),
+            poll_hz: 1000.0,
+            speed_hz: None,
+            counter_check_every: 50,
+            spin_us: 0,
+            realtime_priority: 50,
+            // Each magnet is press-fit at its own angle: every segment has its own zero.
+            segments: (0..9u8)
+                .map(|k| SegmentConfig {
+                    address: 0x20 + k,
+                    zero_counts: 1500 + 97 * u16::from(k),
+                    direction: if k % 2 == 0 {
+                        DirectionName::Ccw
+                    } else {
+                        DirectionName::Cw
+                    },
+                })
+                .collect(),
+        }
+    }
+}
+
+impl Config {
+    /// Whether any hardware is configured (the bus, the stage or the servo is not `sim`):
+    /// then no trial starts by itself.
+    pub fn has_hardware(&self) -> bool {
+        !self.bus.is_sim() || self.stage.port != "sim" || self.servo.port != "sim"
+    }
+}
+
+impl BusConfig {
+    /// Whether the bus is the simulated one.
+    pub fn is_sim(&self) -> bool {
+        self.device == "sim"
+    }
+
+    /// The segment addresses, base to tip.
+    pub fn addresses(&self) -> Vec<u8> {
+        self.segments.iter().map(|s| s.address).collect()
+    }
+
+    /// The bus clock the poll rate is checked against: `bus.speed_hz`, or 100 kHz for a real
+    /// device; `None` for the simulated bus without `bus.speed_hz` (unlimited).
+    pub fn checked_speed_hz(&self) -> Option<u32> {
+        match self.speed_hz {
+            Some(speed_hz) => Some(speed_hz),
+            None if self.is_sim() => None,
+            None => Some(super::bus_budget::DEFAULT_HARDWARE_SPEED_HZ),
+        }
+    }
+
+    /// The segment calibrations, base to tip.
+    pub fn calibrations(&self) -> Vec<Calibration> {
+        self.segments
+            .iter()
+            .map(SegmentConfig::calibration)
+            .collect()
+    }
+}
+
+/// Which way the magnet turns for a positive joint angle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DirectionName {
+    /// Counter-clockwise.
+    Ccw,
+    /// Clockwise.
+    Cw,
+}
+
+/// One segment on the bus.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentConfig {
+    /// Its 7-bit address (0x08..=0x77).
+    pub address: u8,
+    /// The count the Hall sensor reads at joint angle zero (0..=4095).
+    pub zero_counts: u16,
+    /// `ccw` or `cw`.
+    pub direction: DirectionName,
+}
+
+impl SegmentConfig {
+    /// The calibration the counts are converted with.
+    pub fn calibration(&self) -> Calibration {
+        let direction = match self.direction {
+            DirectionName::Ccw => Direction::CounterClockwise,
+            DirectionName::Cw => Direction::Clockwise,
+        };
+        Calibration::new(self.zero_counts, direction)
+    }
+}
+
+/// The linear stage (a Velmex VXM, or simulated).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StageConfig {
+    /// `sim`, or the VXM's serial port such as `/dev/ttyUSB0`.
+    pub port: String,
+    /// Serial baud rate (the VXM's default is 9600).
+    pub baud: u32,
+    /// How long to wait for a reply from the VXM, milliseconds.
+    pub reply_timeout_ms: u64,
+    /// Motor steps per millimetre of travel.
+    pub steps_per_mm: f64,
+    /// Lower soft limit, millimetres from home.
+    pub min_mm: f64,
+    /// Upper soft limit, millimetres from home.
+    pub max_mm: f64,
+    /// Fastest move allowed, millimetres per second.
+    pub max_speed_mm_per_s: f64,
+    /// How often the position is sampled, hertz.
+    pub sample_hz: f64,
+    /// Which limit switch the stage homes against (the near end, where `min_mm` is):
+    /// `"negative"` (the VXM's `I1M-0`) or `"positive"` (`I1M0`).
+    pub homing_direction: HomingDirection,
+    /// Homing speed, millimetres per second (at most `max_speed_mm_per_s`).
+    pub homing_speed_mm_per_s: f64,
+    /// How long homing may take before it counts as failed (the stage is killed), seconds.
+    pub homing_timeout_s: f64,
+}
+
+impl Default for StageConfig {
+    fn default() -> Self {
+        Self {
+            port: "sim".to_owned(),
+            baud: 9600,
+            reply_timeout_ms: 2000,
+            steps_per_mm: 80.0,
+            min_mm: 0.0,
+            max_mm: 300.0,
+            max_speed_mm_per_s: 50.0,
+            sample_hz: 50.0,
+            homing_direction: HomingDirection::Negative,
+            homing_speed_mm_per_s: 10.0,
+            homing_timeout_s: 60.0,
+        }
+    }
+}
+
+/// The base servo (a Pololu Maestro channel, or simulated).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ServoConfig {
+    /// `sim`, or the Maestro's command port such as `/dev/ttyACM0`.
+    pub port: String,
+    /// The Maestro channel the servo is on.
+    pub channel: u8,
+    /// Pulse-to-angle calibration, first point: angle, degrees...
+    pub angle_a_deg: f64,
+    /// ...and its pulse width, microseconds.
+    pub pulse_a_us: f64,
+    /// Second point: angle, degrees...
+    pub angle_b_deg: f64,
+    /// ...and its pulse width, microseconds.
+    pub pulse_b_us: f64,
+    /// How often the angle is sampled, hertz.
+    pub sample_hz: f64,
+}
+
+impl Default for ServoConfig {
+    fn default() -> Self {
+        Self {
+            port: "sim".to_owned(),
+            channel: 0,
+            angle_a_deg: -45.0,
+            pulse_a_us: 1000.0,
+            angle_b_deg: 45.0,
+            pulse_b_us: 2000.0,
+            sample_hz: 50.0,
+        }
+    }
+}
+
+/// The TCP endpoint.
+///
+/// The control token comes from at most one of `token` (in the file: at least 16
+/// characters), `token_file` (a file only its owner may read, holding the token on one line)
+/// and `token_env` (the name of an environment variable holding it); with none of them
+/// antennad generates one at start (128 bits from the operating system's random source) and
+/// prints it once. The token itself is never serialized: a recording keeps the configuration
+/// without it.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ServerConfig {
+    /// Address and port to listen on; loopback unless you mean otherwise.
+    pub listen: String,
+    /// The token control commands must carry (`stop_all` needs none); read from
+    /// `token_file` or `token_env` when one of those is set.
+    #[serde(skip_serializing)]
+    pub token: Option<ControlToken>,
+    /// A file holding the token (white space around it ignored); it must not be readable by
+    /// the group or others (`chmod 600`). Relative to the working directory.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub token_file: Option<PathBuf>,
+    /// An environment variable holding the token.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub token_env: Option<String>,
+    /// Connections at most (default 32). When full, a new connection takes the place of the
+    /// oldest one that never proved the token; operators' connections are never dropped.
+    pub max_clients: usize,
+    /// Connections from one address at most (default 16), by the same rule.
+    pub max_clients_per_peer: usize,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        Self {
+            listen: "127.0.0.1:7878".to_owned(),
+            token: None,
+            token_file: None,
+            token_env: None,
+            max_clients: 32,
+            max_clients_per_peer: 16,
+        }
+    }
+}
+
+/// How trials are recorded.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RecordingConfig {
+    /// Chunk compression: `zstd` (default) or `none`.
+    pub compression: CompressionName,
+    /// Sync the trial file to the disk this often, seconds (default 1; 0: only when the
+    /// trial ends). The file is flushed to the OS every 100 ms whatever this says.
+    pub sync_interval_s: f64,
+    /// Free space the data directory's file system must keep, megabytes (10^6 bytes;
+    /// default 100): a trial is refused below it and ends (with the reason recorded) when
+    /// the free space falls below it; polling goes on.
+    pub min_free_mb: f64,
+}
+
+impl Default for RecordingConfig {
+    fn default() -> Self {
+        Self {
+            compression: CompressionName::Zstd,
+            sync_interval_s: 1.0,
+            min_free_mb: 100.0,
+        }
+    }
+}
+
+impl RecordingConfig {
+    /// The recorder's options.
+    pub fn recorder_options(&self) -> RecorderOptions {
+        RecorderOptions {
+            compression: match self.compression {
+                CompressionName::Zstd => ChunkCompression::Zstd,
+                CompressionName::None => ChunkCompression::None,
+            },
+            sync_interval_s: self.sync_interval_s,
+        }
+    }
+
+    /// [`Self::min_free_mb`] in bytes.
+    pub fn min_free_bytes(&self) -> u64 {
+        (self.min_free_mb * 1e6) as u64
+    }
+}
+
+/// A chunk compression's name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CompressionName {
+    /// zstd.
+    Zstd,
+    /// No compression.
+    None,
+}
+
+/// One trial.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrialConfig {
+    /// Its name, also the recording's file name.
+    pub name: String,
+    /// Base (servo) angle for the trial, degrees.
+    pub base_angle_deg: f64,
+    /// Trial length, seconds; the moves that have not finished by then are stopped.
+    pub duration_s: f64,
+    /// Stage moves, one after another.
+    pub moves: Vec<MoveConfig>,
+    /// Free text kept with the recording (wall, hair layout, operator...).
+    pub metadata: BTreeMap<String, String>,
+}
+
+impl Default for TrialConfig {
+    fn default() -> Self {
+        Self {
+            name: "wall-sweep".to_owned(),
+            base_angle_deg: 0.0,
+            duration_s: 12.0,
+            moves: vec![
+                MoveConfig {
+                    distance_mm: 150.0,
+                    speed_mm_per_s: 30.0,
+                    pause_s: 0.5,
+                },
+                MoveConfig {
+                    distance_mm: -150.0,
+                    speed_mm_per_s: 30.0,
+                    pause_s: 0.0,
+                },
+            ],
+            metadata: BTreeMap::from([
+                ("wall".to_owned(), "simulated flat wall".to_owned()),
+                ("hairs".to_owned(), "none".to_owned()),
+            ]),
+        }
+    }
+}
+
+/// One relative stage move.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MoveConfig {
+    /// Distance, millimetres (negative moves back).
+    pub distance_mm: f64,
+    /// Speed, millimetres per second.
+    pub speed_mm_per_s: f64,
+    /// Pause after the move, seconds.
+    #[serde(default)]
+    pub pause_s: f64,
+}
+
+/// The simulated rig.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimConfig {
+    /// The wall.
+    pub wall: WallConfig,
+    /// The simulated antenna.
+    pub antenna: AntennaConfig,
+    /// Faults to inject into simulated segments (none by default), to see and test how the
+    /// daemon copes.
+    pub faults: Vec<SimFaultConfig>,
+    /// The segments' sensors as they are (ideal by default).
+    pub sensors: SimSensorsConfig,
+}
+
+/// `[sim.sensors]`: the simulated segments' sensors as they are (seed 2.3.1; issue #18), with
+/// the keys and meaning of sim-core's [`SensorSettings`] (a scene's `[sensors]`), seeded so
+/// that one seed gives one run. Left out, the sensors are ideal and the simulated rig's words
+/// are exactly those of ideal sensors.
+///
+/// - Each segment's Hall sensor sees its joint angle turned by the joint's gain error and
+///   calibration offset, and each of the 16 ten-bit conversions of a sample gets its own
+///   Gaussian noise of `angle_noise_counts` ten-bit counts; the segment firmware's own
+///   oversampling turns that into `angle_noise_counts` twelve-bit counts
+///   ([`antenna_bus::hall_sensor`], which also says what the firmware's truncation and its ADC
+///   fault bit make of noisy conversions).
+/// - A touch switch closes for a contact whose force is at least `touch_threshold_n`.
+/// - Two settings of [`SensorSettings`] are the rig's own and are not taken here: the touch
+///   debounce is the segment firmware's, over [`FIRMWARE_DEBOUNCE_SAMPLES`] reads
+///   (`touch_debounce_samples` may only repeat it), and the sensors are sampled once per poll,
+///   at `bus.poll_hz` (`sample_rate_hz` is refused, naming `bus.poll_hz`).
+///   [`Config::sensor_settings`] gives all of them as in force.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimSensorsConfig {
+    /// Standard deviation of the Hall angle noise of one sample, twelve-bit counts (`>= 0`).
+    pub angle_noise_counts: f64,
+    /// Calibration offset per segment, twelve-bit counts: a number (the spread each segment's
+    /// offset is drawn from with the seed, `>= 0`) or a list of one per segment, base to tip.
+    pub offset_counts: CalibrationErrorConfig,
+    /// Gain error per segment, a fraction (`0.01`: the angle reads 1 % large): a number (the
+    /// spread of a draw) or a list of one per segment, each above -1.
+    pub gain_error: CalibrationErrorConfig,
+    /// The force that closes a touch switch, newtons (`>= 0`; 0: any contact).
+    pub touch_threshold_n: f64,
+    /// Only [`FIRMWARE_DEBOUNCE_SAMPLES`], the firmware's, if given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub touch_debounce_samples: Option<u32>,
+    /// Refused if given: the sensors are sampled at `bus.poll_hz`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sample_rate_hz: Option<f64>,
+    /// The seed of the noise and of the drawn calibration errors.
+    pub seed: u64,
+}
+
+impl Default for SimSensorsConfig {
+    fn default() -> Self {
+        let ideal = SensorSettings::IDEAL;
+        Self {
+            angle_noise_counts: ideal.angle_noise_counts,
+            offset_counts: CalibrationErrorConfig(ideal.offset_counts),
+            gain_error: CalibrationErrorConfig(ideal.gain_error),
+            touch_threshold_n: ideal.touch_threshold_n,
+            touch_debounce_samples: None,
+            sample_rate_hz: None,
+            seed: ideal.seed,
+        }
+    }
+}
+
+/// `offset_counts` and `gain_error` of `[sim.sensors]`: a number (the spread each segment's
+/// value is drawn from) or a list (one value per segment).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationErrorConfig(pub CalibrationError);
+
+impl Serialize for CalibrationErrorConfig {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match &self.0 {
+            CalibrationError::Spread(sd) => serializer.serialize_f64(*sd),
+            CalibrationError::PerJoint(values) => values.serialize(serializer),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for CalibrationErrorConfig {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::{self, SeqAccess, Visitor};
+        struct CalibrationVisitor;
+        impl<'de> Visitor<'de> for CalibrationVisitor {
+            type Value = CalibrationErrorConfig;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(
+                    "a number (the spread each segment's value is drawn from) or a list of one \
+                     number per segment",
+                )
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
+                Ok(CalibrationErrorConfig(CalibrationError::Spread(v)))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                Ok(CalibrationErrorConfig(CalibrationError::Spread(v as f64)))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                Ok(CalibrationErrorConfig(CalibrationError::Spread(v as f64)))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                let mut values = Vec::new();
+                while let Some(v) = seq.next_element::<f64>()? {
+                    values.push(v);
+                }
+                Ok(CalibrationErrorConfig(CalibrationError::PerJoint(values)))
+            }
+        }
+        deserializer.deserialize_any(CalibrationVisitor)
+    }
+}
+
+/// What an injected fault does to a simulated segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SimFaultKind {
+    /// It stops acknowledging its address (a NACK storm).
+    Nack,
+    /// Its reads come back with a wrong PEC byte.
+    Pec,
+    /// Its main loop stops: it answers with its last word, its sample counter stuck.
+    Stuck,
+    /// The first transfer to it from `from_s` on never returns: the polling thread is stuck
+    /// in it for good (`until_s` cannot end it), as behind an I2C driver without a timeout.
+    Hang,
+}
+
+/// A fault injected into one simulated segment for a while.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimFaultConfig {
+    /// The segment's address (one of `bus.segments`).
+    pub address: u8,
+    /// `nack`, `pec`, `stuck` or `hang`.
+    pub kind: SimFaultKind,
+    /// From this many seconds after the daemon started...
+    pub from_s: f64,
+    /// ...until this many.
+    pub until_s: f64,
+}
+
+/// A flat wall: a line `distance_m` from the stage's track (at the track's origin), tilted
+/// `angle_deg` toward the track as the stage moves forward.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WallConfig {
+    /// Distance from the base track at the track's origin, metres.
+    pub distance_m: f64,
+    /// Angle between the wall and the track, degrees (positive: the wall comes closer as the
+    /// stage moves forward).
+    pub angle_deg: f64,
+    /// Coulomb friction coefficient of the wall against the antenna.
+    pub mu: f64,
+    /// Penalty stiffness of the wall, newtons per metre of penetration: the tip-only
+    /// stand-in's, before the rig used sim-core's contact solver (which keeps the antenna out
+    /// of the wall exactly). Still accepted and sent in `hello`; the physics ignores it.
+    pub stiffness_n_per_m: f64,
+}
+
+impl Default for WallConfig {
+    fn default() -> Self {
+        Self {
+            distance_m: 0.42,
+            angle_deg: 30.0,
+            mu: 0.3,
+            stiffness_n_per_m: 200.0,
+        }
+    }
+}
+
+/// The simulated antenna: one link per segment after the base link.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AntennaConfig {
+    /// Flexible links; must equal the number of segments on the bus.
+    pub links: usize,
+    /// Length of every link (the base link too), metres.
+    pub link_length_m: f64,
+    /// Stiffness profile name (`constant`, `linear`, `slow-exponential`, `fast-exponential`,
+    /// `logarithmic`, `slow-reciprocal`, `fast-reciprocal`, `cockroach`).
+    pub stiffness_profile: String,
+    /// Smallest joint stiffness, N m/rad.
+    pub k_min_n_m_per_rad: f64,
+    /// Largest joint stiffness, N m/rad.
+    pub k_max_n_m_per_rad: f64,
+    /// Mounting angle of the base link from the track, degrees (the servo adds to it).
+    pub base_angle_deg: f64,
+}
+
+impl Default for AntennaConfig {
+    fn default() -> Self {
+        Self {
+            links: 9,
+            link_length_m: 0.04,
+            stiffness_profile: "linear".to_owned(),
+            k_min_n_m_per_rad: 0.01,
+            k_max_n_m_per_rad: 0.05,
+            base_angle_deg: 30.0,
+        }
+    }
+}
+
+impl AntennaConfig {
+    /// The named stiffness profile, or `None` if the name is unknown.
+    pub fn profile(&self) -> Option<sim_core::StiffnessProfile> {
+        sim_core::StiffnessProfile::NAMED
+            .into_iter()
+            .find(|p| p.name() == self.stiffness_profile)
+    }
+}
+
+impl Config {
+    /// The configuration as TOML, without the control token: what a recording keeps. Every
+    /// key is written, defaults included, so the file says exactly what was in force (the
+    /// command line's overrides too); `Config::from_toml_str` reads it back.
+    pub fn to_recorded_toml(&self) -> String {
+        let body = toml::to_string(self).unwrap_or_else(|e| format!("# not serializable: {e}\n"));
+        format!(
+            "# the configuration in force (server.token is never recorded; token_file and \
+             token_env name where it came from)\n{body}"
+        )
+    }
+
+    /// The servo's calibrated range, degrees: from the smaller to the larger of
+    /// `servo.angle_a_deg` and `servo.angle_b_deg`. No commanded angle may leave it.
+    pub fn servo_range_deg(&self) -> (f64, f64) {
+        let (a, b) = (self.servo.angle_a_deg, self.servo.angle_b_deg);
+        (a.min(b), a.max(b))
+    }
+
+    /// The simulated segments' sensors as in force: `[sim.sensors]`, with the segment
+    /// firmware's touch debounce ([`FIRMWARE_DEBOUNCE_SAMPLES`]) and a sample at every poll
+    /// (`sample_rate_hz` = `bus.poll_hz`).
+    pub fn sensor_settings(&self) -> SensorSettings {
+        let sensors = &self.sim.sensors;
+        SensorSettings {
+            angle_noise_counts: sensors.angle_noise_counts,
+            offset_counts: sensors.offset_counts.0.clone(),
+            gain_error: sensors.gain_error.0.clone(),
+            touch_threshold_n: sensors.touch_threshold_n,
+            touch_debounce_samples: FIRMWARE_DEBOUNCE_SAMPLES,
+            sample_rate_hz: Some(self.bus.poll_hz),
+            seed: sensors.seed,
+            // The daemon reports words; where a hair's touch is placed is the host's estimate.
+            hair_tip_points: false,
+        }
+    }
+
+    /// The trial called `name`, or the first one.
+    pub fn trial(&self, name: Option<&str>) -> Option<&TrialConfig> {
+        match name {
+            Some(name) => self.trials.iter().find(|t| t.name == name),
+            None => self.trials.first(),
+        }
+    }
+
+    /// The stage's scale and soft limits.
+    pub fn stage_geometry(&self) -> Result<StageGeometry, GeometryError> {
+        StageGeometry::new(
+            self.stage.steps_per_mm,
+            self.stage.min_mm,
+            self.stage.max_mm,
+        )
+    }
+
+    /// The servo's pulse calibration.
+    pub fn pulse_calibration(&self) -> Result<PulseCalibration, PulseCalibrationError> {
+        PulseCalibration::new(
+            self.servo.angle_a_deg.to_radians(),
+            self.servo.pulse_a_us,
+            self.servo.angle_b_deg.to_radians(),
+            self.servo.pulse_b_us,
+        )
+    }
+}
