@@ -1,5 +1,5 @@
 //! Compiles the segment's C shim (`firmware-segment/c-shim/src/segment.c`) for the host, so
-//! `tests/c_shim_bit_exact.rs` can call it next to the Rust crates.
+//! `tests/cross/c_shim_bit_exact.rs` can call it next to the Rust crates.
 
 use std::path::PathBuf;
 

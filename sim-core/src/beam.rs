@@ -11,7 +11,7 @@
 //!   base angle, so the beam's most loaded stretch `[0, l]` cannot bend: the tip deflection is
 //!   first-order accurate, relative error about `-0.6 / n` (`alpha = 10`) to `-1.4 / n`
 //!   (`alpha = 0.5`) for the cantilever with a perpendicular tip load, and its error expansion
-//!   has every power of `1 / n` (measured, `tests/tests/beam_convergence.rs`).
+//!   has every power of `1 / n` (measured, `sim-core/tests/integration/beam_convergence.rs`).
 //! - [`BeamLayout::Hencky`] (the default): the beam is cut into `n` pieces of `h = L / n` and a
 //!   spring sits at the middle of each, `s_j = (j - 1/2) h`, with `k_j = EI(s_j) / h`; so the
 //!   base link and the last link are `h / 2` long and the others `h`. Each spring lumps the

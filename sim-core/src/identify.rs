@@ -971,7 +971,7 @@ mod tests {
     use proptest::prelude::*;
 
     // Seed Table 6.4 is reproduced through the public API in
-    // tests/tests/identify_table_6_4.rs.
+    // tests/integration/identify_table_6_4.rs.
 
     #[test]
     fn mean_log_decrement_matches_seed_formula() {

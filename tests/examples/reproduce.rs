@@ -139,7 +139,7 @@ fn wall_following(md: &mut String, figures: bool) -> Result<(), Box<dyn std::err
     writeln!(
         md,
         "`examples/wall_following_4_2_1.toml`, once per profile; test \
-         `tests/tests/reproduce_wall_following.rs`. Preview distance: how far ahead of the \
+         `tests/tests/cross/reproduce_wall_following.rs`. Preview distance: how far ahead of the \
          base the wall is touched (model.md 8); r and rho: Pearson and Spearman correlation \
          with the base-to-wall distance over the steps in contact.\n"
     )?;
@@ -254,7 +254,7 @@ fn flipping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::erro
     )?;
     writeln!(
         md,
-        "`examples/flipping_3_3_1.toml`; test `tests/tests/reproduce_flipping.rs`. Flip: the \
+        "`examples/flipping_3_3_1.toml`; test `tests/tests/cross/reproduce_flipping.rs`. Flip: the \
          distal segment beyond 90 deg to the wall.\n\n\
          **With the seed's 18 mm hairs: reproduced at 30 deg when the hair's root gives \
          (a root stiffness of 1e-3 to 2e-3 N m/rad, \"Compliant 18 mm hairs\" below), and at \
@@ -455,7 +455,7 @@ fn compliant_flipping_runs(
         md,
         "\nWith a root stiffness from 1e-3 to 2e-3 N m/rad (a 0.1 mm Nitinol tip protruding \
          6-7 mm) the six experiments at 30 deg come out as the seed's: only rough + distal \
-         flips (`tests/tests/reproduce_flipping.rs` asserts it at 1.5e-3). Softer roots flip \
+         flips (`tests/tests/cross/reproduce_flipping.rs` asserts it at 1.5e-3). Softer roots flip \
          it at some stiffnesses (3e-4, 6e-4 to 8e-4) and not at others (4e-4, 5e-4, 9e-4): \
          the outcome depends on which hair anchors when; below 3e-4 the anchored hairs bend \
          too easily to turn the segment (it rises to 27 deg). From 2.5e-3 N m/rad up it no longer flips: the \
@@ -491,7 +491,7 @@ fn tip_force_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::err
     writeln!(
         md,
         "`examples/tip_forces_3_3_2.toml` (30 mm distal hairs, an abrasive strip from x = \
-         6 cm); test `tests/tests/reproduce_tip_forces.rs`. Forces of the strip on the distal \
+         6 cm); test `tests/tests/cross/reproduce_tip_forces.rs`. Forces of the strip on the distal \
          segment (its tip and its hair), from first load to the flip.\n\n\
          | base angle (deg) | flip at (s) | mean N / mean abs(T) |\n|---|---|---|"
     )?;
@@ -782,7 +782,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
          firmware's three-read debounce and a 100 Hz sample rate; assumed (the seed gives \
          none), 1 count of angle noise, calibration offsets drawn with a spread of 4 counts \
          (0.35 deg) and gains of 1 %, and a switch that closes at 5 mN. \
-         `tests/tests/reproduce_mapping.rs` asserts the claims that hold.\n"
+         `tests/tests/cross/reproduce_mapping.rs` asserts the claims that hold.\n"
     )?;
     writeln!(
         md,

@@ -1,5 +1,5 @@
 //! The seed's experiments run on sim-core (issue "contact, friction, hairs, sweeps"): each
-//! module runs one experiment and returns its numbers; `tests/tests/reproduce_*.rs` assert
+//! module runs one experiment and returns its numbers; `tests/tests/cross/reproduce_*.rs` assert
 //! the seed's claims on them and `cargo run -p antenna-tests --release --example reproduce`
 //! draws the figures in `docs/figures/` and writes `docs/reproduction.md`.
 //!

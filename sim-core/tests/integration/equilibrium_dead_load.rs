@@ -4,7 +4,7 @@
 //! without load; the potential never increases along the iteration.
 #![allow(clippy::unwrap_used)]
 
-mod equilibrium_common;
+use crate::equilibrium_common;
 
 use equilibrium_common::{potential, residual_torques, seed_exponential_chain, torque_scale};
 use nalgebra::{DVector, Vector2};

@@ -4,7 +4,7 @@
 //! multi-start search finds the C, the S and their mirror images, sorted by energy.
 #![allow(clippy::unwrap_used)]
 
-mod equilibrium_common;
+use crate::equilibrium_common;
 
 use equilibrium_common::{
     first_joint, least_squares_pin_force, residual_torques, seed_exponential_chain, torque_scale,

@@ -8,7 +8,7 @@
 //!
 //! The default run takes a few seconds in the test profile. A longer soak with many more
 //! scenes runs when the environment variable `ANTENNA_SOAK=1` is set:
-//! `ANTENNA_SOAK=1 cargo test -p antenna-tests --test stress_equilibrium -- --nocapture`.
+//! `ANTENNA_SOAK=1 cargo test -p sim-core --test integration stress_equilibrium -- --nocapture`.
 //! `STRESS_DEBUG=1` prints the merit trace (residual/step per accepted step, per segment) of
 //! any solve that does not converge. The iteration budget is 10000: the hardest scenes
 //! (a pinned chain of thousands of joints whose stiffness jumps by up to 1e6 between

@@ -12,7 +12,7 @@
 
 use std::f64::consts::FRAC_PI_4;
 
-mod common_kinematics;
+use crate::common_kinematics;
 
 use common_kinematics::{Case, assert_close, assert_close_planar, case, central_jacobian};
 use nalgebra::{DMatrix, DVector, Matrix3xX, Vector2};

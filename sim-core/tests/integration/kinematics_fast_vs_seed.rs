@@ -6,7 +6,7 @@
 //! times the sum of |theta_dot|, angles to the sum of |theta|.
 #![allow(clippy::unwrap_used)]
 
-mod common_kinematics;
+use crate::common_kinematics;
 
 use common_kinematics::{Case, assert_close, assert_close_f, case};
 use nalgebra::{Matrix3xX, Vector2};

@@ -5,7 +5,7 @@
 //! stop torque has the sign of a valid multiplier.
 #![allow(clippy::unwrap_used)]
 
-mod equilibrium_common;
+use crate::equilibrium_common;
 
 use equilibrium_common::{potential, residual_torques, torque_scale};
 use nalgebra::Vector2;

@@ -6,7 +6,7 @@
 //! reaction balances the chain and the servo torque is the virtual work of turning the base.
 #![allow(clippy::unwrap_used)]
 
-mod tip_force_common;
+use crate::tip_force_common;
 
 use nalgebra::{DMatrix, DVector, Vector2};
 use proptest::prelude::*;

@@ -5,7 +5,7 @@
 //! `theta_0` rotates every frame about the base and changes nothing relative to `C_0`.
 #![allow(clippy::unwrap_used)]
 
-mod common_kinematics;
+use crate::common_kinematics;
 
 use common_kinematics::{assert_close, assert_close_f, case};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3};
