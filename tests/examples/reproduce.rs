@@ -15,6 +15,7 @@ use antenna_tests::reproduce::mapping::MappingRun;
 use antenna_tests::reproduce::{self, flipping, mapping, tip_forces, wall_following};
 use flipping::{HairLayout, WallSurface};
 use plotters::prelude::*;
+use rayon::prelude::*;
 use sim_core::{SensorSettings, StiffnessProfile};
 
 type Series = (String, Vec<(f64, f64)>);
@@ -419,13 +420,16 @@ fn compliant_flipping_runs(
     let jobs: Vec<(usize, usize)> = (0..stiffnesses.len())
         .flat_map(|i| (0..COMPLIANT_CASES.len()).map(move |j| (i, j)))
         .collect();
-    let mut results = on_all_cores(&jobs, |&(i, j)| {
-        let (surface, layout, deg) = COMPLIANT_CASES[j];
-        let run = flipping::with_root_stiffness(&base, stiffnesses[i])
-            .and_then(|scene| flipping::run(&scene, surface, layout, deg, hair_m));
-        Some((i, j, run.map_err(|e| e.to_string())))
-    });
-    results.sort_by_key(|&(i, j, _)| (i, j));
+    // In the jobs' order: by stiffness, then case.
+    let results: Vec<_> = jobs
+        .par_iter()
+        .map(|&(i, j)| {
+            let (surface, layout, deg) = COMPLIANT_CASES[j];
+            let run = flipping::with_root_stiffness(&base, stiffnesses[i])
+                .and_then(|scene| flipping::run(&scene, surface, layout, deg, hair_m));
+            (i, j, run.map_err(|e| e.to_string()))
+        })
+        .collect();
     let mut series: Vec<Series> = Vec::new();
     for (i, k) in stiffnesses.iter().enumerate() {
         let mut row = match k {
@@ -546,27 +550,6 @@ fn tip_force_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::err
         )?;
     }
     Ok(())
-}
-
-/// Runs `jobs` on every core, in no particular order.
-fn on_all_cores<J: Sync, R: Send>(jobs: &[J], run: impl Fn(&J) -> Option<R> + Sync) -> Vec<R> {
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let results = std::sync::Mutex::new(Vec::new());
-    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
-    std::thread::scope(|scope| {
-        for _ in 0..threads {
-            scope.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    let Some(job) = jobs.get(i) else { break };
-                    if let Some(r) = run(job) {
-                        results.lock().unwrap().push(r);
-                    }
-                }
-            });
-        }
-    });
-    results.into_inner().unwrap()
 }
 
 /// The wall's colour for a coverage error: green (captured) through yellow to red (at or
@@ -718,20 +701,23 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
                 .flat_map(move |f| (0..set_count).map(move |s| (p.clone(), f, s)))
         })
         .collect();
-    let mut runs: Vec<(usize, MappingRun)> = on_all_cores(&jobs, |(p, f, s)| {
-        let r = match f {
-            Some(f) => mapping::run(&base, p.clone(), *f, &sets[*s].1),
-            None => mapping::run_trapezoid(&trapezoid, p.clone(), &sets[*s].1),
-        }
-        .ok()?;
-        eprintln!(
-            "4.2.2 {} {f:?} {}: coverage {:.2} mm",
-            p.name(),
-            sets[*s].0,
-            r.coverage_error_mm
-        );
-        Some((*s, r))
-    });
+    let mut runs: Vec<(usize, MappingRun)> = jobs
+        .par_iter()
+        .filter_map(|(p, f, s)| {
+            let r = match f {
+                Some(f) => mapping::run(&base, p.clone(), *f, &sets[*s].1),
+                None => mapping::run_trapezoid(&trapezoid, p.clone(), &sets[*s].1),
+            }
+            .ok()?;
+            eprintln!(
+                "4.2.2 {} {f:?} {}: coverage {:.2} mm",
+                p.name(),
+                sets[*s].0,
+                r.coverage_error_mm
+            );
+            Some((*s, r))
+        })
+        .collect();
     runs.sort_by(|a, b| {
         (a.0, a.1.profile.name(), a.1.frequency_per_m.unwrap_or(0.0))
             .partial_cmp(&(b.0, b.1.profile.name(), b.1.frequency_per_m.unwrap_or(0.0)))

@@ -15,6 +15,7 @@ use firmware_segment::{
 };
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::io::{BufRead, BufReader, Write as _};
 use std::path::{Path, PathBuf};
@@ -647,27 +648,28 @@ fn segment_c_on_s51_matches_the_rust_crates() {
     let shards = shard(all_groups(), parallel);
 
     let started = Instant::now();
-    let results: Vec<ShardResult> = std::thread::scope(|scope| {
-        let handles: Vec<_> = shards
-            .into_iter()
+    // One s51 process per shard, all at once: a pool of as many threads as shards.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(shards.len())
+        .build()
+        .unwrap();
+    let results: Vec<ShardResult> = pool.install(|| {
+        shards
+            .into_par_iter()
             .enumerate()
             .map(|(n, shard)| {
                 let path = work.join(format!("vec{n}.bin"));
-                let ihx = &ihx;
-                scope.spawn(move || {
-                    let mut bytes = Vec::new();
-                    for (_, record) in &shard.records {
-                        record.encode(&mut bytes);
-                    }
-                    bytes.push(0x00); // END
-                    std::fs::write(&path, &bytes).unwrap();
-                    let started = Instant::now();
-                    let lines = run_s51(ihx, &path);
-                    (shard.records, lines, started.elapsed())
-                })
+                let mut bytes = Vec::new();
+                for (_, record) in &shard.records {
+                    record.encode(&mut bytes);
+                }
+                bytes.push(0x00); // END
+                std::fs::write(&path, &bytes).unwrap();
+                let started = Instant::now();
+                let lines = run_s51(&ihx, &path);
+                (shard.records, lines, started.elapsed())
             })
-            .collect();
-        handles.into_iter().map(|h| h.join().unwrap()).collect()
+            .collect()
     });
     let elapsed = started.elapsed();
 

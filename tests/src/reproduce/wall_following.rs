@@ -4,7 +4,10 @@
 //! starting bent backwards with the tip on the wall (`examples/wall_following_4_2_1.toml`),
 //! once per profile.
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
 use nalgebra::Vector2;
+use rayon::prelude::*;
 use sim_core::sweep::{Sweep, SweepScene};
 use sim_core::{StiffnessProfile, pearson_correlation, spearman_correlation};
 
@@ -158,26 +161,21 @@ pub fn chain_points(sim: &sim_core::contact::QuasiStatic) -> Vec<Vector2<f64>> {
     out
 }
 
-/// Runs every profile of [`super::TABLE_4_1_PROFILES`] (in parallel threads).
+/// Runs every profile of [`super::TABLE_4_1_PROFILES`] (in parallel, on rayon's pool).
 ///
 /// # Errors
 /// The first run's error.
 pub fn run_all(base: &SweepScene) -> Result<Vec<ProfileRun>, ReproduceError> {
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = super::TABLE_4_1_PROFILES
-            .iter()
-            .map(|p| scope.spawn(move || run_profile(base, p.clone())))
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| {
-                h.join().unwrap_or_else(|_| {
-                    Err(ReproduceError::Scene {
-                        path: "4.2.1".into(),
-                        message: "a run panicked".into(),
-                    })
+    let runs: Vec<Result<ProfileRun, ReproduceError>> = super::TABLE_4_1_PROFILES
+        .par_iter()
+        .map(|p| {
+            catch_unwind(AssertUnwindSafe(|| run_profile(base, p.clone()))).unwrap_or_else(|_| {
+                Err(ReproduceError::Scene {
+                    path: "4.2.1".into(),
+                    message: "a run panicked".into(),
                 })
             })
-            .collect()
-    })
+        })
+        .collect();
+    runs.into_iter().collect()
 }

@@ -4,16 +4,17 @@
 //! nothing can stop it from the outside of sim-core; so each case runs in a child process
 //! (the test binary itself, told which case by [`CHILD_ENV`]) that prints its record
 //! ([`super::wire`]) and is killed when it overruns its [`TimeLimit`]: the sweep is then
-//! [`Outcome::TimedOut`], a failure. Worker threads (one per core) each run one child at a
-//! time.
+//! [`Outcome::TimedOut`], a failure. A rayon pool of worker threads (one per core unless
+//! `ANTENNA_STRESS_THREADS` says otherwise) runs one child at a time on each.
 
 use std::io::Read;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::mpsc;
 use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
 
 use super::StressError;
 use super::case::{Case, Sample};
@@ -236,41 +237,42 @@ pub fn default_threads() -> usize {
 }
 
 /// Runs cases `indices` of `sample` under `seed`, each in a child process within its time
-/// limit; the records in index order.
+/// limit, on a pool of [`RunOptions::threads`] worker threads (rayon's, one case at a time
+/// each); the records in index order.
 pub fn run_cases(
     seed: u64,
     indices: &[u64],
     sample: Sample,
     options: &RunOptions,
 ) -> Vec<SweepRecord> {
-    let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let total = indices.len();
     let started = Instant::now();
-    let (tx, rx) = mpsc::channel();
-    std::thread::scope(|scope| {
-        for _ in 0..options.threads.max(1) {
-            let tx = tx.clone();
-            let (next, done) = (&next, &done);
-            scope.spawn(move || {
-                while let Some(&index) = indices.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let rec = run_in_child(&options.command, &options.limit, seed, index, sample);
-                    let count = done.fetch_add(1, Ordering::Relaxed) + 1;
-                    if options.progress_every > 0 && count.is_multiple_of(options.progress_every) {
-                        eprintln!(
-                            "[stress] {count}/{total} sweeps, {:.0} s",
-                            started.elapsed().as_secs_f64()
-                        );
-                    }
-                    if tx.send(rec).is_err() {
-                        break;
-                    }
+    let run_all = || -> Vec<SweepRecord> {
+        indices
+            .par_iter()
+            .with_max_len(1)
+            .map(|&index| {
+                let rec = run_in_child(&options.command, &options.limit, seed, index, sample);
+                let count = done.fetch_add(1, Ordering::Relaxed) + 1;
+                if options.progress_every > 0 && count.is_multiple_of(options.progress_every) {
+                    eprintln!(
+                        "[stress] {count}/{total} sweeps, {:.0} s",
+                        started.elapsed().as_secs_f64()
+                    );
                 }
-            });
-        }
-    });
-    drop(tx);
-    let mut out: Vec<SweepRecord> = rx.into_iter().collect();
+                rec
+            })
+            .collect()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.threads.max(1))
+        .build();
+    // A pool that cannot start its threads leaves the cases to rayon's global pool.
+    let mut out = match pool {
+        Ok(pool) => pool.install(run_all),
+        Err(_) => run_all(),
+    };
     out.sort_by_key(|r| r.index);
     out
 }

@@ -14,6 +14,7 @@
 #![allow(clippy::unwrap_used)]
 
 use antenna_tests::reproduce::{self, mapping};
+use rayon::prelude::*;
 use sim_core::{SensorSettings, StiffnessProfile};
 
 /// The bound on the mean point error with ideal sensors: half the switch spacing along a
@@ -38,25 +39,16 @@ fn check(run: &mapping::MappingRun) {
     );
 }
 
-/// Every (profile, frequency) run of `sensors`, on both cores.
+/// Every (profile, frequency) run of `sensors`, in the jobs' order, on rayon's pool (every
+/// core).
 fn sinusoids(
     jobs: &[(StiffnessProfile, f64)],
     sensors: &SensorSettings,
 ) -> Vec<mapping::MappingRun> {
     let base = reproduce::load_scene("mapping_4_2_2.toml").unwrap();
-    std::thread::scope(|scope| {
-        let mut runs = Vec::new();
-        for chunk in jobs.chunks(jobs.len().div_ceil(2)) {
-            let base = &base;
-            runs.push(scope.spawn(move || {
-                chunk
-                    .iter()
-                    .map(|(p, f)| mapping::run(base, p.clone(), *f, sensors).unwrap())
-                    .collect::<Vec<_>>()
-            }));
-        }
-        runs.into_iter().flat_map(|h| h.join().unwrap()).collect()
-    })
+    jobs.par_iter()
+        .map(|(p, f)| mapping::run(&base, p.clone(), *f, sensors).unwrap())
+        .collect()
 }
 
 fn coverage(runs: &[mapping::MappingRun], p: &StiffnessProfile, f: f64) -> f64 {
