@@ -156,10 +156,9 @@ pub use jacobian::{
 };
 pub use joint_limits::{d2theta_dq2, dtheta_dq, q_from_theta, theta_from_q};
 pub use mapping::{
-    ANGLE_QUANTUM_RAD, EstimatedContact, MappingAccumulator, MappingError, MappingScore,
-    SENSOR_COUNTS_PER_TURN, SWITCHES_PER_SEGMENT, TouchLayout, estimate_contacts, mapping_score,
-    point_error_mm, quantize_angle_rad, sensed_theta_rad, switch_for_fraction,
-    touch_bits_from_contacts,
+    EstimatedContact, MappingAccumulator, MappingError, MappingScore, SWITCHES_PER_SEGMENT,
+    TouchLayout, estimate_contacts, mapping_score, point_error_mm, quantize_angle_rad,
+    sensed_theta_rad, switch_for_fraction, touch_bits_from_contacts,
 };
 pub use metrics::{
     ChainContact, FlipState, PointOfContact, angle_to_wall_rad, flip_state, pearson_correlation,

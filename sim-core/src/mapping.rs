@@ -3,9 +3,9 @@
 //! the true wall as a mean spatial error in millimetres.
 //!
 //! # What the robot senses (seed 2.3.1)
-//! - **Joint angles**: each segment's Hall sensor gives 12 bits per turn. sim-core does not
-//!   depend on `antenna-protocol`, so the quantization is restated here:
-//!   `theta_q = round(theta / q) q` with `q = 2 pi / 4096` ([`ANGLE_QUANTUM_RAD`], 0.088 deg;
+//! - **Joint angles**: each segment's Hall sensor gives 12 bits per turn
+//!   ([`antenna_protocol::ANGLE_COUNTS_PER_TURN`]):
+//!   `theta_q = round(theta / q) q` with `q = 2 pi / 4096` ([`RAD_PER_COUNT`], 0.088 deg;
 //!   `f64::round`, halves away from zero). The base angle `theta_0` and the base position are
 //!   set by the platform and known exactly: they are not quantized.
 //! - **Touch bits**: "four directional detector switches ... uniformly distributed along its
@@ -20,18 +20,14 @@
 //! left normal, placed by forward kinematics of the sensed angles from the known base pose.
 //! Its error is its distance to the true wall curve (the nearest of the given walls).
 
-use core::f64::consts::TAU;
-
+use antenna_protocol::{RAD_PER_COUNT, TOUCH_MASK};
 use nalgebra::Vector2;
 
 use crate::{Chain, ChainContact, Wall};
 
-/// Angle counts per turn of a segment's Hall sensor (12 bits).
-pub const SENSOR_COUNTS_PER_TURN: u32 = 4096;
-/// One angle count, radians: `2 pi / 4096`.
-pub const ANGLE_QUANTUM_RAD: f64 = TAU / SENSOR_COUNTS_PER_TURN as f64;
-/// Touch switches per segment.
-pub const SWITCHES_PER_SEGMENT: usize = 4;
+/// Touch switches per segment: the bits of the sample word's touch field
+/// ([`antenna_protocol::TOUCH_MASK`]).
+pub const SWITCHES_PER_SEGMENT: usize = TOUCH_MASK.count_ones() as usize;
 
 /// An argument to the mapping functions that does not fit.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
@@ -74,7 +70,7 @@ pub enum MappingError {
 
 /// The angle a segment reports for `theta_rad`: `round(theta / q) q`, `q = 2 pi / 4096`.
 pub fn quantize_angle_rad(theta_rad: f64) -> f64 {
-    (theta_rad / ANGLE_QUANTUM_RAD).round() * ANGLE_QUANTUM_RAD
+    (theta_rad / RAD_PER_COUNT).round() * RAD_PER_COUNT
 }
 
 /// The sensed posture: `theta_0` (the known base angle) copied, `theta_j` (`j >= 1`)

@@ -5,7 +5,7 @@
 //!
 //! # The model
 //! - **Joint angles** (`j >= 1`): the reported angle is
-//!   `round((theta_j (1 + g_j) + (o_j + e) q) / q) q`, `q` = [`ANGLE_QUANTUM_RAD`]: `g_j` the
+//!   `round((theta_j (1 + g_j) + (o_j + e) q) / q) q`, `q` = [`RAD_PER_COUNT`]: `g_j` the
 //!   joint's gain error (a fraction), `o_j` its calibration offset in counts, and `e` a fresh
 //!   Gaussian draw with standard deviation `angle_noise_counts` for every sample. The base
 //!   angle `theta_0` is set by the platform and is copied as it is.
@@ -46,14 +46,13 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use antenna_protocol::RAD_PER_COUNT;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::contact::Contact;
-use crate::mapping::{
-    ANGLE_QUANTUM_RAD, MappingError, SWITCHES_PER_SEGMENT, quantize_angle_rad, switch_for_fraction,
-};
+use crate::mapping::{MappingError, SWITCHES_PER_SEGMENT, quantize_angle_rad, switch_for_fraction};
 
 /// The segment firmware's touch debouncing: a bit changes after three agreeing reads.
 pub const FIRMWARE_DEBOUNCE_SAMPLES: u32 = 3;
@@ -420,7 +419,7 @@ impl Sensors {
             let reading = if g == 0.0 && offset == 0.0 && e == 0.0 {
                 theta
             } else {
-                theta * (1.0 + g) + (offset + e) * ANGLE_QUANTUM_RAD
+                theta * (1.0 + g) + (offset + e) * RAD_PER_COUNT
             };
             *o = quantize_angle_rad(reading);
         }

@@ -4,13 +4,13 @@
 //! touch bits come from contacts as the switches would set them; bad input is rejected.
 #![allow(clippy::unwrap_used)]
 
+use antenna_protocol::RAD_PER_COUNT;
 use nalgebra::Vector2;
 use proptest::prelude::*;
 use sim_core::{
-    ANGLE_QUANTUM_RAD, Chain, ChainContact, EstimatedContact, Frame, Line, MappingAccumulator,
-    MappingError, SolidSide, TouchLayout, Wall, estimate_contacts, frame_poses, mapping_score,
-    point_error_mm, quantize_angle_rad, sensed_theta_rad, switch_for_fraction,
-    touch_bits_from_contacts,
+    Chain, ChainContact, EstimatedContact, Frame, Line, MappingAccumulator, MappingError,
+    SolidSide, TouchLayout, Wall, estimate_contacts, frame_poses, mapping_score, point_error_mm,
+    quantize_angle_rad, sensed_theta_rad, switch_for_fraction, touch_bits_from_contacts,
 };
 
 fn v(x: f64, y: f64) -> Vector2<f64> {
@@ -92,7 +92,7 @@ fn exact_posture_on_a_line_wall_maps_with_only_quantization_error() {
         let bound_m: f64 = (1..=q.link)
             .map(|j| {
                 let joint = base + poses.position_m(Frame::new(j as isize - 1)).unwrap();
-                0.5 * ANGLE_QUANTUM_RAD * (e.point_m - joint).norm()
+                0.5 * RAD_PER_COUNT * (e.point_m - joint).norm()
             })
             .sum();
         let error_mm = point_error_mm(&wall, &q.point_m).unwrap();
@@ -186,11 +186,11 @@ fn touch_bits_follow_the_switch_quarters() {
 
 #[test]
 fn quantization_is_twelve_bits_per_turn() {
-    assert!((ANGLE_QUANTUM_RAD * 4096.0 - std::f64::consts::TAU).abs() < 1e-15);
+    assert!((RAD_PER_COUNT * 4096.0 - std::f64::consts::TAU).abs() < 1e-15);
     assert_eq!(quantize_angle_rad(0.0), 0.0);
-    assert!((quantize_angle_rad(0.6 * ANGLE_QUANTUM_RAD) - ANGLE_QUANTUM_RAD).abs() < 1e-18);
-    assert!((quantize_angle_rad(-0.4 * ANGLE_QUANTUM_RAD)).abs() < 1e-18);
-    assert!((quantize_angle_rad(-1.5 * ANGLE_QUANTUM_RAD) + 2.0 * ANGLE_QUANTUM_RAD).abs() < 1e-18);
+    assert!((quantize_angle_rad(0.6 * RAD_PER_COUNT) - RAD_PER_COUNT).abs() < 1e-18);
+    assert!((quantize_angle_rad(-0.4 * RAD_PER_COUNT)).abs() < 1e-18);
+    assert!((quantize_angle_rad(-1.5 * RAD_PER_COUNT) + 2.0 * RAD_PER_COUNT).abs() < 1e-18);
 }
 
 #[test]
@@ -265,7 +265,7 @@ proptest! {
             let bound_m: f64 = (1..=e.link)
                 .map(|j| {
                     let joint = base + poses.position_m(Frame::new(j as isize - 1)).unwrap();
-                    0.5 * ANGLE_QUANTUM_RAD * (e.point_m - joint).norm()
+                    0.5 * RAD_PER_COUNT * (e.point_m - joint).norm()
                 })
                 .sum();
             prop_assert!((q.point_m - e.point_m).norm() <= bound_m * 1.001 + 1e-15);
@@ -303,7 +303,7 @@ proptest! {
             .unwrap();
         let base = v(0.01, -0.02);
         let mut theta = vec![30f64.to_radians()];
-        theta.extend(counts.iter().map(|&c| f64::from(c) * ANGLE_QUANTUM_RAD));
+        theta.extend(counts.iter().map(|&c| f64::from(c) * RAD_PER_COUNT));
         let pivot_switch = switch_for_fraction(1.0 - pivot_fraction);
         let mut bits = vec![0u8; 9];
         bits[link] = 0b1111;

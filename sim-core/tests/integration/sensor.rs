@@ -6,12 +6,13 @@
 //! `sensed_theta_rad` and `touch_bits_from_contacts` give (property-tested).
 #![allow(clippy::unwrap_used)]
 
+use antenna_protocol::RAD_PER_COUNT;
 use nalgebra::Vector2;
 use proptest::prelude::*;
 use sim_core::contact::{Contact, Feature, FrictionLaw, Slip};
 use sim_core::{
-    ANGLE_QUANTUM_RAD, CalibrationError, ChainContact, FIRMWARE_DEBOUNCE_SAMPLES, SensorError,
-    SensorField, SensorSettings, Sensors, sensed_theta_rad, touch_bits_from_contacts,
+    CalibrationError, ChainContact, FIRMWARE_DEBOUNCE_SAMPLES, SensorError, SensorField,
+    SensorSettings, Sensors, sensed_theta_rad, touch_bits_from_contacts,
 };
 
 /// A contact on `link` at fraction `s`, pressed with `normal_force_n` (no shear).
@@ -40,7 +41,7 @@ fn settings(f: impl FnOnce(&mut SensorSettings)) -> SensorSettings {
 
 /// The reported angle of `theta_rad` in counts.
 fn counts(theta_rad: f64) -> i64 {
-    (theta_rad / ANGLE_QUANTUM_RAD).round() as i64
+    (theta_rad / RAD_PER_COUNT).round() as i64
 }
 
 #[test]
@@ -124,9 +125,7 @@ fn the_angle_noise_has_the_standard_deviation_set() {
     )
     .unwrap();
     // Angles on whole counts, so that the rounding of the reading adds no bias.
-    let theta: Vec<f64> = (0..=n)
-        .map(|j| j as f64 * 40.0 * ANGLE_QUANTUM_RAD)
-        .collect();
+    let theta: Vec<f64> = (0..=n).map(|j| j as f64 * 40.0 * RAD_PER_COUNT).collect();
     let mut out = vec![0.0; n + 1];
     let mut errors = Vec::new();
     for _ in 0..20_000 {
@@ -155,9 +154,9 @@ fn per_joint_calibration_is_applied_as_given() {
     assert_eq!(sensors.gain_error(), &[0.0, 0.0, 0.0, 0.5]);
     let theta = [
         0.7,
-        100.0 * ANGLE_QUANTUM_RAD,
-        -50.0 * ANGLE_QUANTUM_RAD,
-        40.0 * ANGLE_QUANTUM_RAD,
+        100.0 * RAD_PER_COUNT,
+        -50.0 * RAD_PER_COUNT,
+        40.0 * RAD_PER_COUNT,
     ];
     let mut out = [0.0; 4];
     sensors.sense_angles_rad(&theta, &mut out).unwrap();
