@@ -132,7 +132,7 @@ where
 /// rows are compared at `tol * linear_scale`, the angular rows at `tol * angular_scale`.
 /// Position rows scale with the chain's length and angle rows with the size of the frame
 /// angles; one scale for both is wrong in units (regression seed in
-/// `kinematics_finite_differences.proptest-regressions`).
+/// `tests/proptest-regressions/kinematics_finite_differences.txt`).
 pub fn assert_close_planar<R1, C1, S1, R2, C2, S2>(
     what: &str,
     a: &Matrix<f64, R1, C1, S1>,
