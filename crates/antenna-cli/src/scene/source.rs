@@ -74,18 +74,20 @@ impl Source<'_> {
         )
     }
 
-    /// Turns a TOML/serde error into a located scene error naming the key.
+    /// Turns a TOML/serde error into a located scene error naming the key (where the text
+    /// is TOML, its tables and keys are found with toml_edit's spans).
     pub(crate) fn toml_error(&self, e: &toml::de::Error) -> SceneError {
         let span = e.span();
         let offset = span.as_ref().map_or(0, |s| s.start);
         let message = e.message().trim().to_string();
+        let layout = Layout::of(self.text, offset);
         if let Some(rest) = message.strip_prefix("unknown field `") {
             let names = backticked(rest);
             let key = rest.split('`').next().unwrap_or_default().to_string();
             let allowed: Vec<String> = names.into_iter().collect();
             let table = table_with_keys(&allowed).map_or_else(
-                || table_at(self.text, offset),
-                |t| label_array_table(t, self.text, offset),
+                || layout.table_at(self.text, offset),
+                |t| layout.array_table(t, offset),
             );
             return self.error(
                 span,
@@ -104,13 +106,16 @@ impl Source<'_> {
                 .map(|(t, _)| *t)
                 .collect();
             let table = match owners.as_slice() {
-                [only] => label_array_table(only, self.text, offset),
-                _ => table_at(self.text, offset),
+                [only] => layout.array_table(only, offset),
+                _ => layout.table_at(self.text, offset),
             };
             return self.error(span, SceneErrorKind::MissingKey { key, table });
         }
-        let message = match key_at(self.text, offset) {
-            Some(key) => format!("`{key}` in {}: {message}", table_at(self.text, offset)),
+        let message = match layout.key_at(offset) {
+            Some(key) => format!(
+                "`{key}` in {}: {message}",
+                layout.table_at(self.text, offset)
+            ),
             None => message,
         };
         self.error(span, SceneErrorKind::Syntax { message })
@@ -125,32 +130,6 @@ pub(crate) fn wall_table(index: usize) -> String {
 /// The label of zone `zone` (0-based) of wall `wall` in errors.
 pub(crate) fn zone_table(wall: usize, zone: usize) -> String {
     format!("[[walls.zones]] (wall {wall}, zone {zone})")
-}
-
-/// `table` with its index added when it is an array of tables (`[[walls]]`,
-/// `[[walls.zones]]`), counted from the headers before byte `offset`.
-fn label_array_table(table: &str, text: &str, offset: usize) -> String {
-    let offset = offset.min(text.len());
-    let headers = text[..offset]
-        .lines()
-        .map(str::trim)
-        .filter(|l| l.starts_with("[["));
-    let mut wall: Option<usize> = None;
-    let mut zone: Option<usize> = None;
-    for header in headers {
-        let name: String = header.chars().filter(|c| !c.is_whitespace()).collect();
-        if name.starts_with("[[walls]]") {
-            wall = Some(wall.map_or(0, |w| w + 1));
-            zone = None;
-        } else if name.starts_with("[[walls.zones]]") {
-            zone = Some(zone.map_or(0, |z| z + 1));
-        }
-    }
-    match (table, wall, zone) {
-        ("[[walls]]", Some(w), _) => wall_table(w),
-        ("[[walls.zones]]", Some(w), Some(z)) => zone_table(w, z),
-        _ => table.to_string(),
-    }
 }
 
 /// The names between backticks in `text` after its first backticked name.
@@ -175,43 +154,133 @@ fn table_with_keys(keys: &[String]) -> Option<&'static str> {
     }
 }
 
-/// The table header in force at byte `offset` (`[name]`, or `[[name]]` with its index), or
-/// `the top level`.
-fn table_at(text: &str, offset: usize) -> String {
-    let offset = offset.min(text.len());
-    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
-    text[..line_start]
-        .lines()
-        .rev()
-        .map(str::trim)
-        .find(|l| l.starts_with('['))
-        .and_then(|l| {
-            let array = l.starts_with("[[");
-            let inner = l.trim_start_matches('[');
-            inner.find(']').map(|end| {
-                let name = inner[..end].trim();
-                if array {
-                    label_array_table(&format!("[[{name}]]"), text, offset)
-                } else {
-                    format!("[{name}]")
-                }
-            })
-        })
-        .unwrap_or_else(|| "the top level".to_string())
+/// Where the tables and values of a TOML text are, from toml_edit's spans: each table
+/// header's offset with its label in errors, and each value's span with its key.
+#[derive(Default)]
+struct Layout {
+    /// Table headers, in file order.
+    headers: Vec<Header>,
+    /// The values of `key = value` lines (a dotted key joined with `.`), at any depth of
+    /// tables but not inside a value (an inline table is one value).
+    values: Vec<(Range<usize>, String)>,
 }
 
-/// The key of the `key = value` line holding byte `offset`, when `offset` is in the value.
-fn key_at(text: &str, offset: usize) -> Option<String> {
-    let offset = offset.min(text.len());
-    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
-    let before = &text[line_start..offset];
-    let (key, _) = before.split_once('=')?;
-    let key = key.trim().trim_matches('"');
-    let plain = !key.is_empty()
-        && key
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
-    plain.then(|| key.to_string())
+/// A `[name]` or `[[name]]` header.
+struct Header {
+    /// Its byte offset.
+    start: usize,
+    /// The table's dotted name.
+    name: String,
+    /// How errors name it: `[name]`, `[[walls]] (wall 1)`, ...
+    label: String,
+}
+
+impl Layout {
+    /// The layout of `text`; for a syntax error at byte `offset`, the tables of the lines
+    /// before it and the key written before it on its line (`key = ` then the bad value).
+    fn of(text: &str, offset: usize) -> Layout {
+        let mut layout = Layout::default();
+        if let Ok(document) = toml_edit::Document::parse(text) {
+            layout.walk(document.as_table(), "", None);
+        } else {
+            let offset = offset.min(text.len());
+            let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+            if let Ok(document) = toml_edit::Document::parse(&text[..line_start]) {
+                layout.walk(document.as_table(), "", None);
+            }
+            let key = text[line_start..offset]
+                .split_once('=')
+                .and_then(|(key, _)| toml_edit::Key::parse(key.trim()).ok());
+            if let Some(key) = key {
+                let key: Vec<&str> = key.iter().map(toml_edit::Key::get).collect();
+                layout.values.push((offset..offset + 1, key.join(".")));
+            }
+        }
+        layout.headers.sort_by_key(|h| h.start);
+        layout
+    }
+
+    /// Adds `table`'s values and its sub-tables (`path` its name, `wall` the index of the
+    /// `[[walls]]` table it is in).
+    fn walk(&mut self, table: &toml_edit::Table, path: &str, wall: Option<usize>) {
+        for (keys, value) in table.get_values() {
+            if let Some(span) = value.span() {
+                let key: Vec<&str> = keys.iter().map(|k| k.get()).collect();
+                self.values.push((span, key.join(".")));
+            }
+        }
+        for (key, item) in table.iter() {
+            let name = if path.is_empty() {
+                key.to_string()
+            } else {
+                format!("{path}.{key}")
+            };
+            match item {
+                toml_edit::Item::Table(t) if !t.is_dotted() => {
+                    if let (false, Some(span)) = (t.is_implicit(), t.span()) {
+                        let label = format!("[{name}]");
+                        self.header(span.start, &name, label);
+                    }
+                    self.walk(t, &name, wall);
+                }
+                toml_edit::Item::ArrayOfTables(array) => {
+                    for (index, t) in array.iter().enumerate() {
+                        let (label, wall) = match (name.as_str(), wall) {
+                            ("walls", _) => (wall_table(index), Some(index)),
+                            ("walls.zones", Some(w)) => (zone_table(w, index), wall),
+                            _ => (format!("[[{name}]]"), wall),
+                        };
+                        if let Some(span) = t.span() {
+                            self.header(span.start, &name, label);
+                        }
+                        self.walk(t, &name, wall);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    fn header(&mut self, start: usize, name: &str, label: String) {
+        self.headers.push(Header {
+            start,
+            name: name.to_string(),
+            label,
+        });
+    }
+
+    /// The table header in force at byte `offset` of `text` (written on a line before it),
+    /// or `the top level`.
+    fn table_at(&self, text: &str, offset: usize) -> String {
+        let offset = offset.min(text.len());
+        let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+        self.headers
+            .iter()
+            .rfind(|h| h.start < line_start)
+            .map_or_else(|| "the top level".to_string(), |h| h.label.clone())
+    }
+
+    /// `table` with its index added when it is an array of tables (`[[walls]]`,
+    /// `[[walls.zones]]`): the last such header before byte `offset`.
+    fn array_table(&self, table: &str, offset: usize) -> String {
+        let before = || self.headers.iter().filter(|h| h.start < offset);
+        let found = match table {
+            "[[walls]]" => before().rfind(|h| h.name == "walls"),
+            "[[walls.zones]]" => before()
+                .rfind(|h| h.name == "walls" || h.name == "walls.zones")
+                .filter(|h| h.name == "walls.zones"),
+            _ => None,
+        };
+        found.map_or_else(|| table.to_string(), |h| h.label.clone())
+    }
+
+    /// The key whose value holds byte `offset`.
+    fn key_at(&self, offset: usize) -> Option<String> {
+        self.values
+            .iter()
+            .find(|(span, _)| span.contains(&offset))
+            .map(|(_, key)| key.clone())
+    }
 }
 
 /// `"a", "b", "c"`.
@@ -394,4 +463,42 @@ pub(crate) fn not_for(
         key,
         format!("not a key of {what} (it takes {takes})"),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TEXT: &str = "a = 1\n[sweep]\nstep_s = [\n  0.1,\n  \"x\",\n]\n[[walls]]\nmu = 1\n\
+                        [[walls]]\n[[walls.zones]]\nfrom_m = { b = 2 }\n[[walls.zones]]\n";
+
+    #[test]
+    fn tables_and_keys_are_found_by_their_spans() {
+        let layout = Layout::of(TEXT, 0);
+        let at = |needle: &str| TEXT.find(needle).unwrap_or_default();
+        assert_eq!(layout.table_at(TEXT, at("1\n")), "the top level");
+        assert_eq!(layout.key_at(at("1\n")).as_deref(), Some("a"));
+        assert_eq!(layout.table_at(TEXT, at("\"x\"")), "[sweep]");
+        assert_eq!(layout.key_at(at("\"x\"")).as_deref(), Some("step_s"));
+        assert_eq!(layout.table_at(TEXT, at("mu")), "[[walls]] (wall 0)");
+        assert_eq!(layout.key_at(at("mu")), None);
+        let b = at("b = 2");
+        assert_eq!(layout.table_at(TEXT, b), "[[walls.zones]] (wall 1, zone 0)");
+        assert_eq!(layout.key_at(b).as_deref(), Some("from_m"));
+        assert_eq!(layout.array_table("[[walls]]", b), "[[walls]] (wall 1)");
+        assert_eq!(
+            layout.array_table("[[walls.zones]]", TEXT.len()),
+            "[[walls.zones]] (wall 1, zone 1)"
+        );
+        assert_eq!(
+            layout.array_table("[[walls.zones]]", at("mu")),
+            "[[walls.zones]]"
+        );
+        // Not TOML: the tables before the bad line, the key written on it.
+        let broken = "[sweep]\nstep_s = 1\n[base]\n\"x\".y = 1 1\n";
+        let at = broken.rfind('1').unwrap_or_default();
+        let layout = Layout::of(broken, at);
+        assert_eq!(layout.key_at(at).as_deref(), Some("x.y"));
+        assert_eq!(layout.table_at(broken, at), "[base]");
+    }
 }
