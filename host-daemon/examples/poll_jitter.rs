@@ -141,16 +141,7 @@ fn main() -> Result<()> {
             // The daemon itself on the simulated rig, no recording, no TCP server.
             let summary = Daemon::start(
                 run_config,
-                DaemonOptions {
-                    first_trial: Some(None),
-                    first_trial_duration: Some(Duration::from_secs_f64(seconds)),
-                    exit_after_trial: true,
-                    record: false,
-                    serve: false,
-                    queue: 8192,
-                    on_event: Some(on_event),
-                    ..DaemonOptions::default()
-                },
+                DaemonOptions::tapped_trial(Duration::from_secs_f64(seconds), on_event),
             )?
             .wait()?;
             let (stamps, refused) = std::mem::take(

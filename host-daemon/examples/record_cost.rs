@@ -149,16 +149,7 @@ fn run(
     // The daemon itself on the simulated rig, its own recording off: this one records.
     let summary = Daemon::start(
         config.clone(),
-        DaemonOptions {
-            first_trial: Some(None),
-            first_trial_duration: Some(Duration::from_secs_f64(seconds)),
-            exit_after_trial: true,
-            record: false,
-            serve: false,
-            queue: 8192,
-            on_event: Some(on_event),
-            ..DaemonOptions::default()
-        },
+        DaemonOptions::tapped_trial(Duration::from_secs_f64(seconds), on_event),
     )?
     .wait()?;
     let elapsed = wall.elapsed().as_secs_f64();

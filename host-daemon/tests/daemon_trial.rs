@@ -14,16 +14,7 @@ fn run(config: &Config) -> (DaemonSummary, Vec<AcquisitionEvent>) {
         let events = Arc::clone(&events);
         EventTap::new(move |e| events.lock().unwrap().push(e.clone()))
     };
-    let options = DaemonOptions {
-        first_trial: Some(None),
-        first_trial_duration: Some(Duration::ZERO), // until the moves are done
-        exit_after_trial: true,
-        record: false,
-        serve: false,
-        queue: 8192,
-        on_event: Some(tap),
-        ..DaemonOptions::default()
-    };
+    let options = DaemonOptions::tapped_trial(Duration::ZERO, tap); // until the moves are done
     let summary = Daemon::start(config.clone(), options)
         .unwrap()
         .wait()

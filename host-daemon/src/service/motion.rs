@@ -6,6 +6,7 @@
 //! cycle) or stays vanished for [`STAGE_LOST_AFTER`] with moves left.
 
 use crate::config::TrialConfig;
+use crate::hardware::device::DeviceError;
 use crate::service::acquisition::{AcquisitionEvent, EventSender};
 use crate::service::clock::{Schedule, TrialClock};
 use crate::service::rig::{DaemonRig, RigError};
@@ -243,7 +244,10 @@ fn motion_loop(
         if stage_next {
             match rig.step_homing(now) {
                 Ok(Some(text)) => m.notes.send(now, text),
-                Ok(None) | Err(RigError::Unavailable { .. } | RigError::NotHomed(_)) => {}
+                Ok(None)
+                | Err(RigError::Device(
+                    DeviceError::Unavailable { .. } | DeviceError::NotHomed(_),
+                )) => {}
                 Err(e) => m.notes.send(now, format!("homing the stage: {e}")),
             }
             match rig.stage_mm(now) {
@@ -251,11 +255,11 @@ fn motion_loop(
                     t_ns: nanos(now),
                     position_mm,
                 }),
-                Err(
-                    RigError::Unavailable { .. }
-                    | RigError::NotHomed(_)
-                    | RigError::HomingFailed(_),
-                ) => {}
+                Err(RigError::Device(
+                    DeviceError::Unavailable { .. }
+                    | DeviceError::NotHomed(_)
+                    | DeviceError::HomingFailed(_),
+                )) => {}
                 Err(e) => m
                     .notes
                     .send(now, format!("stage position unavailable: {e}")),
@@ -266,7 +270,7 @@ fn motion_loop(
                     t_ns: nanos(now),
                     angle_rad,
                 }),
-                Err(RigError::Unavailable { .. }) => {}
+                Err(RigError::Device(DeviceError::Unavailable { .. })) => {}
                 Err(e) => m.notes.send(now, format!("base angle unavailable: {e}")),
             }
         }

@@ -6,7 +6,7 @@
 //! The stage is always driven through [`crate::hardware::stage::LimitedStage`], so the soft
 //! limits hold whatever a trial or a client asks. A serial device that vanishes (unplugged,
 //! USB reset) makes its part unavailable: the calls fail at once with
-//! [`RigError::Unavailable`], the port is reopened at most every [`REOPEN_INTERVAL`], and when
+//! [`DeviceError::Unavailable`], the port is reopened at most every [`REOPEN_INTERVAL`], and when
 //! it opens again the controller is put back on line (the VXM keeps its position register
 //! across a lost USB link) and the part is available again
 //! ([`crate::hardware::vxm_device`], [`crate::hardware::maestro_device`]).
@@ -14,7 +14,7 @@
 //! The stage is homed against its limit switch before its first move
 //! ([`crate::hardware::homing::HomingStage`]), on the simulated rig too, and again after the
 //! controller shows signs of a power cycle (the VXM echoing a command, see
-//! [`crate::hardware::vxm`]); until then every move is refused with [`RigError::NotHomed`] and
+//! [`crate::hardware::vxm`]); until then every move is refused with [`DeviceError::NotHomed`] and
 //! no stage position is sampled.
 
 use crate::config::{Config, HomingDirection};
@@ -32,44 +32,15 @@ use std::time::{Duration, Instant};
 
 pub use crate::hardware::serial_link::REOPEN_INTERVAL;
 
-/// What went wrong with the rig.
+/// What went wrong with the rig: a device's error, or the simulated physics'.
 #[derive(Debug, thiserror::Error)]
 pub enum RigError {
-    /// The device's serial port is gone; it is being reopened.
-    #[error("the {part} is unavailable ({path}: {reason})")]
-    Unavailable {
-        /// `"stage"` or `"servo"`.
-        part: &'static str,
-        /// The configured port.
-        path: String,
-        /// Why.
-        reason: String,
-    },
-    /// The stage is not homed yet (homing starts or is under way); nothing moved.
-    #[error("the stage is not homed yet ({0})")]
-    NotHomed(String),
-    /// Homing failed; nothing moves until it is tried again (when a trial starts).
-    #[error("the stage is not homed: homing failed ({0})")]
-    HomingFailed(String),
-    /// A move beyond the soft limits, a speed or angle out of range, a device error.
-    #[error("{0}")]
-    Refused(String),
+    /// The stage or the servo (unavailable, not homed, homing failed, refused).
+    #[error(transparent)]
+    Device(#[from] DeviceError),
     /// The simulated physics failed.
     #[error("simulation: {0:#}")]
     Simulation(anyhow::Error),
-}
-
-impl From<DeviceError> for RigError {
-    fn from(e: DeviceError) -> Self {
-        match e {
-            DeviceError::Unavailable { part, path, reason } => {
-                Self::Unavailable { part, path, reason }
-            }
-            DeviceError::NotHomed(why) => Self::NotHomed(why),
-            DeviceError::HomingFailed(why) => Self::HomingFailed(why),
-            DeviceError::Refused(why) => Self::Refused(why),
-        }
-    }
 }
 
 /// The stage, the servo and the simulated antenna, as the daemon's motion thread drives them.
@@ -273,8 +244,8 @@ impl DaemonRig {
         Ok(self.stage.is_moving()?)
     }
 
-    /// The stage position, millimetres from home; [`RigError::NotHomed`] (or
-    /// [`RigError::HomingFailed`]) before it is homed, as a position from an unknown origin
+    /// The stage position, millimetres from home; [`DeviceError::NotHomed`] (or
+    /// [`DeviceError::HomingFailed`]) before it is homed, as a position from an unknown origin
     /// means nothing.
     pub fn stage_mm(&mut self, now: Duration) -> Result<f64, RigError> {
         if self.stage.advance(now).is_none() {
@@ -295,10 +266,11 @@ impl DaemonRig {
         let angle_deg = angle_rad.to_degrees();
         // A hair of slack for the round trip through radians.
         if !(min_deg - 1e-9..=max_deg + 1e-9).contains(&angle_deg) {
-            return Err(RigError::Refused(format!(
+            return Err(DeviceError::Refused(format!(
                 "{angle_deg} deg is outside the servo's calibrated range {min_deg}..={max_deg} \
                  deg (servo.angle_a_deg, servo.angle_b_deg)"
-            )));
+            ))
+            .into());
         }
         self.advance(now)?;
         Ok(self.servo.set_angle_rad(angle_rad)?)

@@ -3,6 +3,7 @@
 //! vanished; and how a script's end is told to whoever waits for it ([`ScriptEnds`]).
 
 use crate::config::TrialConfig;
+use crate::hardware::device::DeviceError;
 use crate::service::motion::Notes;
 use crate::service::rig::{DaemonRig, RigError};
 use std::sync::Mutex;
@@ -66,7 +67,7 @@ impl Script {
                     let pause = self.trial.moves.get(j).map_or(0.0, |m| m.pause_s);
                     Step::Pausing(now + Duration::from_secs_f64(pause))
                 }
-                Err(RigError::Unavailable { .. }) => Step::Moving(j),
+                Err(RigError::Device(DeviceError::Unavailable { .. })) => Step::Moving(j),
                 Err(e) => {
                     notes.send(now, format!("stage failed: {e}"));
                     Step::Moving(j)
@@ -93,8 +94,10 @@ impl Script {
                             Step::Moving(j)
                         }
                         // Wait for the stage to come back or be homed.
-                        Err(RigError::Unavailable { .. } | RigError::NotHomed(_)) => Step::Idle,
-                        Err(RigError::HomingFailed(why)) => {
+                        Err(RigError::Device(
+                            DeviceError::Unavailable { .. } | DeviceError::NotHomed(_),
+                        )) => Step::Idle,
+                        Err(RigError::Device(DeviceError::HomingFailed(why))) => {
                             return Err(format!("the stage could not be homed: {why}"));
                         }
                         Err(e) => {

@@ -158,6 +158,25 @@ impl Default for DaemonOptions {
     }
 }
 
+impl DaemonOptions {
+    /// One run of the configuration's first trial, watched through `on_event` alone: no
+    /// recording, no TCP server, exiting when the trial ends (`duration` of zero: when its
+    /// stage moves are done). What the tests and the benchmarks (`examples/`) run the daemon
+    /// with.
+    pub fn tapped_trial(duration: Duration, on_event: EventTap) -> Self {
+        Self {
+            first_trial: Some(None),
+            first_trial_duration: Some(duration),
+            exit_after_trial: true,
+            record: false,
+            serve: false,
+            queue: 8192,
+            on_event: Some(on_event),
+            ..Self::default()
+        }
+    }
+}
+
 /// The trial antennad starts by itself ([`DaemonOptions::first_trial`]): none if `idle`;
 /// the one called `named` if given (after homing, with hardware); otherwise the
 /// configuration's first trial on the simulated rig only. With any hardware configured
