@@ -106,6 +106,11 @@ fn fast_paths(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("tip_jacobian", n), &n, |b, _| {
             b.iter(|| tip_jacobian_into(&chain, black_box(&theta), &mut jac).unwrap())
         });
+        // The tip force that explains the joint angles (tests/integration/tip_force.rs
+        // `long_chain` checks its answer at n = 4096; its O(n) cost is measured here).
+        g.bench_with_input(BenchmarkId::new("tip_force", n), &n, |b, _| {
+            b.iter(|| sim_core::tip_force_least_squares(&chain, black_box(&theta)).unwrap())
+        });
     }
     g.finish();
 

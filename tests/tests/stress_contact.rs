@@ -172,14 +172,22 @@ fn replay(spec: &str) {
 /// This test's name: children run it with [`CHILD_ENV`] set.
 const MAIN_TEST: &str = "contact_sweeps_finish_with_every_step_certified";
 
-/// Per-sweep time limits, `base + per link-step * N * steps` up to a most: in the test
+/// Per-sweep time limits, `base + per link-step * N * steps` up to a most. The limit only
+/// catches a sweep that hangs (stuck in its placement or in one step for minutes); how much
+/// work a sweep may do is bounded by the solver's own counters (Newton iterations, halvings),
+/// which the outcomes and the golden trajectories check. So the CI sample's limits are ten
+/// times the soak's, and hold on a loaded 2-core machine: the slowest finished sweep of the
+/// CI sample takes 2.4 s alone in the test profile (N = 72 on a sinusoid; most take
+/// milliseconds) and some 10 s with the machine's cores shared three ways. The soak, a
+/// benchmark run on a quiet machine (`BENCHMARKS.md`), keeps the tight limits: in the test
 /// profile (opt-level 1, debug assertions) 4 s + 1 ms * N * steps up to 15 s, in a release
-/// build 3 s + 0.3 ms * N * steps up to 20 s. A sweep the solver finishes takes far less
-/// (the slowest finished sweep of the CI sample: 2.4 s, N = 72 on a sinusoid, in the test
-/// profile; most take milliseconds); sweeps stuck in their placement or in one step for
-/// minutes reach them.
-fn time_limit(optimized: bool) -> TimeLimit {
-    if optimized {
+/// build 3 s + 0.3 ms * N * steps up to 20 s.
+fn time_limit(optimized: bool, sample: Sample) -> TimeLimit {
+    let scale = match sample {
+        Sample::Ci => 10.0,
+        Sample::Soak => 1.0,
+    };
+    let tight = if optimized {
         TimeLimit {
             base_s: 3.0,
             per_link_step_s: 3e-4,
@@ -191,6 +199,11 @@ fn time_limit(optimized: bool) -> TimeLimit {
             per_link_step_s: 1e-3,
             max_s: 15.0,
         }
+    };
+    TimeLimit {
+        base_s: tight.base_s * scale,
+        per_link_step_s: tight.per_link_step_s * scale,
+        max_s: tight.max_s * scale,
     }
 }
 
@@ -219,7 +232,7 @@ fn contact_sweeps_finish_with_every_step_certified() {
         threads: default_threads(),
         progress_every: if soak { 100 } else { 0 },
         command: ChildCommand::current_test(MAIN_TEST).unwrap(),
-        limit: time_limit(optimized),
+        limit: time_limit(optimized, sample),
     };
     let started = Instant::now();
     // The CI sample leaves out its known failures (issue #13 is open on them; the soak and

@@ -346,13 +346,13 @@ fn long_chain() {
         Vector2::new(0.3, -0.4),
         &[],
     );
-    let start = std::time::Instant::now();
+    // Its cost, O(n), is measured by the kinematics benchmark (`tip_force`, BENCHMARKS.md's
+    // "Kinematics", time(4096) / time(512) <= 10), not bounded here: a loaded machine would
+    // fail a bound on the time.
     let fit = tip_force_least_squares(&e.chain, &e.theta).unwrap();
-    let elapsed = start.elapsed();
     assert!(
         (fit.force_n - e.force_n).norm() < 1e-9 * e.force_n.norm(),
         "{:?}",
         fit.force_n
     );
-    assert!(elapsed.as_secs_f64() < 0.5, "{elapsed:?}");
 }

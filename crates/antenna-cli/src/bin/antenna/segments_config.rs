@@ -1,7 +1,7 @@
 //! The part of antennad's configuration that `antenna segments` reads: `[bus] device` and the
 //! `[[bus.segments]]` (address, zero_counts, direction). The command reads them here rather
 //! than through `host-daemon`, which the CLI does not depend on
-//! (`tests/tests/crate_boundaries.rs`); every other key is antennad's, checked when it starts.
+//! (`tests/tests/cross/crate_boundaries.rs`); every other key is antennad's, checked when it starts.
 //! A file without `[[bus.segments]]` has the built-in rig's nine, as antennad gives it
 //! (`host-daemon/config/sim.toml`, compiled in).
 
