@@ -78,7 +78,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("positions", "all-frame positions"),
         ("velocities", "all-frame velocities"),
         ("tip_jacobian", "tip Jacobian"),
-        ("tip_force", "tip force from the joint angles (least squares)"),
+        (
+            "tip_force",
+            "tip force from the joint angles (least squares)",
+        ),
         ("all_jacobians", "all Jacobians"),
     ];
     let seed = [
