@@ -686,7 +686,7 @@ impl MonitorApp {
         let history = data.history;
         let latest = history.latest_t_s();
         let span = history.first_t_s().zip(latest);
-        self.advance_playback(ui.ctx(), latest);
+        let ended_playing = self.advance_playback(ui.ctx(), latest);
         let cursor_index = self.view.cursor_s(latest).and_then(|c| history.index_at(c));
         let measured = match (data.sweep, data.rig, cursor_index) {
             (Some(sweep), _, _) => self
@@ -745,6 +745,10 @@ impl MonitorApp {
                 TimelineAction::Zoom(f) => self.view.zoom(f, max_window_s),
                 TimelineAction::SetHistory(s) => deferred.history_s = Some(s),
                 TimelineAction::Scrub(t) => self.view.scrub(t, latest),
+                // Playback reached the end in this very frame, so the button under the
+                // click was drawn as "Stop playing" in the frame the user saw: the click
+                // means stop (it stays stopped at the end), not play again from the start.
+                TimelineAction::Play if ended_playing => {}
                 TimelineAction::Play => {
                     // From the start again if the cursor is at the end.
                     if let (Some((first, last)), Some(c)) = (span, self.view.cursor_s(latest))
@@ -920,10 +924,10 @@ impl MonitorApp {
     }
 
     /// Moves the cursor of a playing recording on by the time since the last frame times
-    /// the speed; stops at the end.
-    fn advance_playback(&mut self, ctx: &egui::Context, latest: Option<f64>) {
+    /// the speed; stops at the end. Returns whether it stopped at the end in this call.
+    fn advance_playback(&mut self, ctx: &egui::Context, latest: Option<f64>) -> bool {
         let (Some(since), Some(last)) = (self.playing, latest) else {
-            return;
+            return false;
         };
         let now = Instant::now();
         let t = self.view.cursor_s(latest).unwrap_or(last)
@@ -931,6 +935,7 @@ impl MonitorApp {
         self.view.scrub(t.min(last), latest);
         self.playing = (t < last).then_some(now);
         ctx.request_repaint_after(Duration::from_millis(16));
+        self.playing.is_none()
     }
 
     fn export(

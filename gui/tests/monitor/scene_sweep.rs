@@ -183,7 +183,13 @@ fn run_a_scene_file_sweep_play_and_scrub_it() {
         played >= least - 1e-9 && played <= most + 1e-9,
         "played {played} s in {least} to {most} s"
     );
-    harness.get_by_label("Stop playing").click();
+    // Stop: the cursor stays where it stopped. On a loaded machine the frames can be far
+    // enough apart that playing reached the end, and stopped there by itself, already.
+    if harness.query_by_label("Stop playing").is_some() {
+        harness.get_by_label("Stop playing").click();
+    } else {
+        assert!((played - 0.5).abs() < 1e-9, "not playing at {played} s");
+    }
     harness.step();
     let stopped = cursor_s(&harness);
     std::thread::sleep(Duration::from_millis(100));
