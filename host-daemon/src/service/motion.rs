@@ -139,10 +139,18 @@ struct Motion<'a> {
 }
 
 impl Motion<'_> {
-    /// Ends the running script, if any, because `why` (its trial ends with that reason).
+    /// Ends the running script, if any, because `why` (its trial ends with that reason), and
+    /// stops the stage.
     fn fail_script(&mut self, rig: &mut DaemonRig, now: Duration, why: String) {
-        if let Some(script) = self.script.take() {
+        if self.script.is_some() {
             let _ = rig.stop(now);
+            self.end_script(now, why);
+        }
+    }
+
+    /// Ends the running script, if any, because `why`, leaving the stage alone.
+    fn end_script(&mut self, now: Duration, why: String) {
+        if let Some(script) = self.script.take() {
             self.notes.send(now, format!("trial script ended: {why}"));
             self.script_ends.set_failed(script.id, why);
         }
@@ -153,7 +161,12 @@ impl Motion<'_> {
         if let Some(why) = rig.take_home_lost() {
             self.notes
                 .send(now, format!("stage home lost, homing again: {why}"));
-            self.fail_script(rig, now, format!("the stage lost its home ({why})"));
+            // The script ends without a stop: the power cycle that lost the home stopped the
+            // motor already, and the homing again may be under way by now (the loss is taken
+            // here after the rig call that saw it, and a `step_homing` may have come between:
+            // the script's own query can be the one that sees the echo). A stop would fail
+            // that homing ("stopped"), and nothing would home the stage before the next trial.
+            self.end_script(now, format!("the stage lost its home ({why})"));
         }
         if rig.stage_available() {
             self.stage_gone_since = None;
@@ -444,5 +457,95 @@ fn on_motion_command(
         MotionCommand::StopAll { reply } => {
             let _ = reply.send(stop_all(rig, now, m));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use crate::hardware::homing::HomingState;
+    use crate::service::acquisition::event_channel;
+    use crate::sim::emulator::VxmEmulator;
+    use serialport::{SerialPort, TTYPort};
+    use std::time::Instant;
+
+    /// Only a hang takes this long, however loaded the machine.
+    const PATIENCE: Duration = Duration::from_secs(60);
+
+    fn step_until(rig: &mut DaemonRig, what: &str) {
+        let deadline = Instant::now() + PATIENCE;
+        loop {
+            if let Ok(Some(text)) = rig.step_homing(Duration::ZERO)
+                && text.contains(what)
+            {
+                return;
+            }
+            assert!(Instant::now() < deadline, "no {what:?}");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    #[test]
+    fn a_home_lost_mid_trial_ends_its_script_but_not_the_homing_that_follows() {
+        let (master, slave) = TTYPort::pair().unwrap();
+        let path = slave.name().unwrap();
+        drop(slave);
+        let vxm = VxmEmulator::spawn(master);
+        let mut config = Config::default();
+        config.stage.port = path;
+        config.stage.reply_timeout_ms = 2000;
+        config.stage.steps_per_mm = 80.0;
+        config.stage.max_mm = 60.0;
+        config.stage.homing_speed_mm_per_s = 40.0;
+        config.servo.port = "sim".to_owned();
+        let mut rig = DaemonRig::open(&config, None).unwrap();
+        step_until(&mut rig, "homing the stage");
+        step_until(&mut rig, "stage homed");
+
+        let (events, _received) = event_channel(1024);
+        let script_ends = ScriptEnds::default();
+        let mut m = Motion {
+            notes: Notes {
+                events: &events,
+                last: None,
+            },
+            script: Some(Script::new(1, Box::new(config.trials[0].clone()))),
+            script_ends: &script_ends,
+            moves: MoveCounts::default(),
+            stage_ok: true,
+            servo_ok: true,
+            stage_gone_since: None,
+        };
+        rig.start_move_mm(50.0, 5.0, Duration::ZERO).unwrap();
+        let deadline = Instant::now() + PATIENCE;
+        while !vxm.is_busy() {
+            assert!(Instant::now() < deadline, "the move never started");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        vxm.power_cycle();
+        // The script's own query sees the echo, and the loop's next homing step comes before
+        // the loss is taken: the order that used to leave the stage unhomed for good.
+        let moving = rig.stage_moving(Duration::ZERO);
+        assert!(
+            matches!(moving, Err(RigError::Device(DeviceError::NotHomed(_)))),
+            "{moving:?}"
+        );
+        assert!(
+            rig.step_homing(Duration::ZERO)
+                .unwrap()
+                .is_some_and(|text| text.contains("homing the stage"))
+        );
+        m.check_stage(&mut rig, Duration::ZERO);
+        assert!(m.script.is_none());
+        assert!(
+            script_ends
+                .failure(1)
+                .is_some_and(|why| why.contains("lost its home")),
+        );
+        assert_eq!(rig.homing_state(), HomingState::Homing);
+        step_until(&mut rig, "stage homed");
+        assert_eq!(vxm.negative_limit_steps(), 0);
+        assert_eq!(vxm.position_steps(), 0);
     }
 }
