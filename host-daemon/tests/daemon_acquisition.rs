@@ -119,8 +119,11 @@ fn faults_are_marked_per_segment_while_the_others_keep_polling_on_deadlines() {
         assert!(p.seq >= expected_seq);
         expected_seq = p.seq + 1;
     }
-    let gaps: u64 = polls.windows(2).map(|w| w[1].seq - w[0].seq - 1).sum();
-    assert_eq!(gaps, report.skipped);
+    // Every deadline up to the last poll was either polled or counted as skipped, the first
+    // ones too: a loaded machine can skip deadline 0 (seen once in a flake hunt under load:
+    // 7 gaps between polls, 8 skipped).
+    let last_seq = polls.last().map_or(0, |p| p.seq + 1);
+    assert_eq!(last_seq - polls.len() as u64, report.skipped);
 
     // Each delivered word is the angle the segment was given at that poll (the hook's poll
     // counter counts the polls made, so poll index i saw angle(k, i)).
