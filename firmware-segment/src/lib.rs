@@ -1,4 +1,4 @@
-//! The antenna segment's firmware logic (seed 2.3.1): a Hall-effect angle sensor on a 10-bit
+//! The antenna segment's firmware logic (thesis 2.3.1): a Hall-effect angle sensor on a 10-bit
 //! ADC, four touch switches, and an I2C target on the shared bus.
 //!
 //! `no_std`, no allocation, generic over small hardware traits. The behaviour is specified in

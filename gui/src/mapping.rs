@@ -1,4 +1,4 @@
-//! The wall map of a simulated sweep (seed 4.2.2, Figures 4.15 and 4.16): the contact points
+//! The wall map of a simulated sweep (thesis 4.2.2, Figures 4.15 and 4.16): the contact points
 //! the robot estimates from what it senses, and the wall section it passed shaded by how well
 //! those points cover it.
 //!

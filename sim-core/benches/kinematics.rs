@@ -1,6 +1,6 @@
 //! Kinematics benchmarks: the O(n) fast paths next to a "floor" measured in the same run
 //! (n + 1 `sin_cos` calls plus the prefix sums of angles and positions: what any forward
-//! kinematics must at least do), and the seed's matrix forms at the same n.
+//! kinematics must at least do), and the thesis's matrix forms at the same n.
 //!
 //! Run through `scripts/bench-kinematics`, which also rewrites the table in BENCHMARKS.md.
 //! Results land in `target/criterion/kinematics/<function>/<n>/new/estimates.json`.
@@ -19,7 +19,7 @@ use sim_core::{
     frame_velocities_into, tip_jacobian_into,
 };
 
-/// The sizes measured: the seed's robot (n = 8 gives 9 links), the cockroach's ~150 annuli,
+/// The sizes measured: the thesis's robot (n = 8 gives 9 links), the cockroach's ~150 annuli,
 /// and long chains for the O(n) ratio time(4096) / time(512).
 pub const SIZES: [usize; 5] = [9, 150, 512, 1000, 4096];
 

@@ -8,7 +8,7 @@
 //!    deflection against the elastica (the Bisshopp-Drucker closed form) and time per solve,
 //!    for chains of n = 8..4096 flexible joints in both layouts of `sim_core::beam` and for
 //!    Richardson extrapolation over 2, 3 and 4 Hencky chains.
-//! 2. The seed's robot with its tip pinned (9 links of 40 mm: 8 flexible joints; fast-exponential
+//! 2. The thesis's robot with its tip pinned (9 links of 40 mm: 8 flexible joints; fast-exponential
 //!    stiffness 0.004..0.082 N m/rad, base angle 30 deg): time per solve from a straight
 //!    start and warm-started from the previous solution while the pin moves in 0.5 mm steps.
 //!
@@ -222,7 +222,7 @@ fn measure_cantilever() -> BoxResult<(Vec<Point>, Vec<ElasticaRun>)> {
     Ok((points, elastica))
 }
 
-/// The seed's robot as scene-format.md counts it: 9 links of 40 mm (the base link and 8
+/// The thesis's robot as docs/scene-format.md counts it: 9 links of 40 mm (the base link and 8
 /// flexible joints), fast-exponential stiffness, base at 30 deg.
 fn seed_chain() -> BoxResult<Chain> {
     let lengths = vec![0.04; 9];
@@ -390,7 +390,7 @@ fn section(
     )?;
     writeln!(
         s,
-        "**Cantilever.** L = {LENGTH_M} m, EI = {EI_N_M2} N m^2, clamped along x, dead tip load perpendicular to the clamp, `alpha = F L^2 / EI`. Error: `|y_tip / y_elastica - 1|` of the tip deflection, the elastica from the Bisshopp-Drucker closed form (`perpendicular_load_closed_form`; the shooting solver agrees to 1e-10). Chains (`sim_core::beam`) are solved by `solve_equilibrium`, every n-link chain to KKT tolerance 1e-13 / n (`RichardsonOptions::tolerance_times_links`: the tip sums n joint errors), plain chains from a straight start; `n` is the number of flexible joints (of the finest chain for Richardson, which solves n/2^(m-1), ..., n/2, n, each finer chain warm-started from the coarser answer). Equal links: model.md 5 read literally, `n + 1` links of `L/(n+1)`, the base link rigid. Hencky: springs at the midpoints of `n` pieces of `L/n`, half-length end links.\n"
+        "**Cantilever.** L = {LENGTH_M} m, EI = {EI_N_M2} N m^2, clamped along x, dead tip load perpendicular to the clamp, `alpha = F L^2 / EI`. Error: `|y_tip / y_elastica - 1|` of the tip deflection, the elastica from the Bisshopp-Drucker closed form (`perpendicular_load_closed_form`; the shooting solver agrees to 1e-10). Chains (`sim_core::beam`) are solved by `solve_equilibrium`, every n-link chain to KKT tolerance 1e-13 / n (`RichardsonOptions::tolerance_times_links`: the tip sums n joint errors), plain chains from a straight start; `n` is the number of flexible joints (of the finest chain for Richardson, which solves n/2^(m-1), ..., n/2, n, each finer chain warm-started from the coarser answer). Equal links: docs/model.md 5 read literally, `n + 1` links of `L/(n+1)`, the base link rigid. Hencky: springs at the midpoints of `n` pieces of `L/n`, half-length end links.\n"
     )?;
     writeln!(
         s,
@@ -523,7 +523,7 @@ fn section(
     } = pinned;
     writeln!(
         s,
-        "\n**Pinned tip, 9 links.** The seed's robot: 9 links of 40 mm (a base link at 30 deg and 8 flexible joints, as scene-format.md counts `links`), fast-exponential stiffness {SEED_K_MIN_N_M_PER_RAD}..{SEED_K_MAX_N_M_PER_RAD} N m/rad (`profile.rs`), joint limits +-90 deg, no load; the tip pinned at ({}, {}) m and moved in {steps} steps of 0.5 mm to ({:.3}, {}) m. The sweep starts from a C at the first pin and then from each previous answer; the cold starts solve every pin point afresh. Default solver options (KKT tolerance 1e-10). Time: median over the pin points of each point's median time per solve.\n",
+        "\n**Pinned tip, 9 links.** The thesis's robot: 9 links of 40 mm (a base link at 30 deg and 8 flexible joints, as docs/scene-format.md counts `links`), fast-exponential stiffness {SEED_K_MIN_N_M_PER_RAD}..{SEED_K_MAX_N_M_PER_RAD} N m/rad (`profile.rs`), joint limits +-90 deg, no load; the tip pinned at ({}, {}) m and moved in {steps} steps of 0.5 mm to ({:.3}, {}) m. The sweep starts from a C at the first pin and then from each previous answer; the cold starts solve every pin point afresh. Default solver options (KKT tolerance 1e-10). Time: median over the pin points of each point's median time per solve.\n",
         first[0], first[1], last[0], last[1]
     )?;
     writeln!(
@@ -621,7 +621,7 @@ fn plot(points: &[Point], path: &Path) -> BoxResult<()> {
         "Each point: one configuration, n = 8 ... 4096 flexible joints",
         "(the finest chain of a Richardson run); more links = further right.",
         "Red lines: the goal, error 1e-6 in under 1 ms.",
-        "Equal links: model.md 5 literally (rigid base link), O(1/n).",
+        "Equal links: docs/model.md 5 literally (rigid base link), O(1/n).",
         "Hencky: springs at piece midpoints, half-length end links, O(1/n^2).",
         "Richardson over m Hencky chains n/2^(m-1) .. n: O(1/n^(2m)).",
         "Errors below 1e-16 are drawn at 1e-16.",

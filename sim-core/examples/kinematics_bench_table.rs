@@ -112,7 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     writeln!(s)?;
 
-    // The seed's matrix forms and what the fast paths save.
+    // The thesis's matrix forms and what the fast paths save.
     write!(s, "| n |")?;
     for (_, name) in &seed {
         write!(s, " {name} (x fast path) |")?;
@@ -167,7 +167,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s,
         "\n\"All Jacobians\" is O(n^2) by the size of its answer (3(n+2)(n+1) doubles, 400 MB at n = 4096): \
          above 64 its ratio measures memory bandwidth once the output no longer fits in cache. \
-         The seed's all-Jacobians product (O(n^3), about 1.4e11 flops at n = 4096) is skipped above n = 1000."
+         The thesis's all-Jacobians product (O(n^3), about 1.4e11 flops at n = 4096) is skipped above n = 1000."
     )?;
     writeln!(s, "{END}")?;
 

@@ -3,13 +3,13 @@
 //! `<!-- sweep-accuracy:end -->`, appended when missing) and the plot
 //! `docs/figures/sweep_time_vs_error.svg`.
 //!
-//! Three walls, each swept by the seed's robot (9 links of 40 mm: 8 flexible joints, base angle
+//! Three walls, each swept by the thesis's robot (9 links of 40 mm: 8 flexible joints, base angle
 //! 30 deg, joint limits +-90 deg, fast-exponential stiffness 0.004..0.082 N m/rad) at
 //! 16.7 mm/s from the tip placed on the wall above the base (a C, let go and settled):
 //!
 //! - the 4.2.1 line (through (0, 0.2) m, closing in at 8 deg, mu = 0.3), 50 s;
 //! - the trapezoid of `examples/wall_polyline.toml` (mu = 0.3), 50 s, over the whole bump;
-//! - the seed 4.2.2 sinusoid (baseline y = 0.17 m, amplitude 10 mm, 14.2 cycles/m, mu = 0.3),
+//! - the thesis 4.2.2 sinusoid (baseline y = 0.17 m, amplitude 10 mm, 14.2 cycles/m, mu = 0.3),
 //!   [`SINE_DURATION_S`] (its steps cost a hundred times the line's).
 //!
 //! Each sweep is run with the time step (the base moves 16.7 mm/s x the step per step) from
@@ -19,7 +19,7 @@
 //! the reference's base positions that the run also visits (every step of the reference is a
 //! whole number of the run's steps): the joint angles, the contact points (the symmetric
 //! Hausdorff distance between the two sets of touching points, where both touch), whether the
-//! same features touch, and the seed's sweep metrics: the mean preview distance over the
+//! same features touch, and the thesis's sweep metrics: the mean preview distance over the
 //! steps with a contact, and the Pearson correlation of the point of bend with the base's
 //! distance to the wall (as `antenna sweep` summarizes them, the placed posture included).
 //!
@@ -577,7 +577,7 @@ stops falling from about 0.1 s on the line and \
 falling: 0.02 s on the line, about 0.2 s on the trapezoid and 0.5 s on the sinusoid.\n\n\
 **Recommended defaults.** Keep `Motion::step_s` = 0.01 s: it is on the flat part of every \
 error curve, below the line's knee (0.02 s) that one default must respect, at about twice \
-that knee's time; and it is the seed's 100 Hz recording rate, which the step also sets \
+that knee's time; and it is the thesis's 100 Hz recording rate, which the step also sets \
 (every step is an output sample, and the summary metrics are averages over them). A study \
 that needs only the summary metrics may take 0.02 s (half to two thirds of the time, the same joint \
 angles to 5e-10 rad on the line and the sinusoid and to 1.1e-4 rad at the trapezoid's \

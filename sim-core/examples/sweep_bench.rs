@@ -1,14 +1,14 @@
 //! The cost of a quasi-static sweep (issue 5): writes the "Sweeps" section of BENCHMARKS.md
 //! (between `<!-- sweep:begin -->` and `<!-- sweep:end -->`, appended when missing).
 //!
-//! 1. The seed's 4.2.1 sweep (9 links of 40 mm: 8 flexible joints, base angle 30 deg, joint
+//! 1. The thesis's 4.2.1 sweep (9 links of 40 mm: 8 flexible joints, base angle 30 deg, joint
 //!    limits +-90 deg, 0.004..0.082 N m/rad; a smooth wall at 8 deg, mu = 0.3; 16.7 mm/s for
 //!    50 s at 100 Hz: 5000 steps; the tip placed on the wall above the base), for the
 //!    fast-exponential and the constant profile: the whole sweep, per step, per contact.
 //! 2. What a scene pays for: the same antenna with no wall, with a wall it never reaches, with
 //!    hairs and no wall, with hairs and a wall it never reaches; and the 4.2.1 sweep
 //!    frictionless (mu = 0) and with distal hairs.
-//! 3. Curved and cornered walls (seed 4.2.2): the same motion along a sinusoid (1 cm, 14.2 1/m,
+//! 3. Curved and cornered walls (thesis 4.2.2): the same motion along a sinusoid (1 cm, 14.2 1/m,
 //!    baseline 0.17 m) and along the trapezoid of `examples/wall_polyline.toml`, where crests
 //!    and corners press on links between their joints.
 //!
@@ -45,7 +45,7 @@ const END: &str = "<!-- sweep:end -->";
 /// Runs per scenario (the median is reported).
 const REPEATS: usize = 5;
 
-/// The seed's robot with `profile`, hairs on every flexible link if `hairs`.
+/// The thesis's robot with `profile`, hairs on every flexible link if `hairs`.
 fn antenna(profile: StiffnessProfile, hairs: bool) -> BoxResult<Chain> {
     let n = 8;
     let lengths = vec![0.04; n + 1];
@@ -356,7 +356,7 @@ fn main() -> BoxResult<()> {
     writeln!(
         md,
         "Regenerate with `scripts/bench-sweep` (`cargo run -p sim-core --release --example \
-         sweep_bench`). The seed's 4.2.1 sweep: 9 links of 40 mm (8 flexible joints), base \
+         sweep_bench`). The thesis's 4.2.1 sweep: 9 links of 40 mm (8 flexible joints), base \
          angle 30 deg, joint limits +-90 deg, stiffness 0.004..0.082 N m/rad, a smooth wall \
          at 8 deg with mu = 0.3, 16.7 mm/s for 50 s at 100 Hz (5000 steps), the tip placed \
          on the wall above the base (not timed). Median of {REPEATS} runs, one thread, \

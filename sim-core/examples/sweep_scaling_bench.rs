@@ -3,9 +3,9 @@
 //! BENCHMARKS.md (between `<!-- sweep-scaling:begin -->` and `<!-- sweep-scaling:end -->`,
 //! appended when missing).
 //!
-//! The seed's antenna, 0.36 m long, cut into N = 9, 18, 36, 72, 150 equal links (N - 1
+//! The thesis's antenna, 0.36 m long, cut into N = 9, 18, 36, 72, 150 equal links (N - 1
 //! flexible joints), base angle 30 deg, joint limits +-90 deg; the fast-exponential profile
-//! over the joints' normalized positions, scaled so that every N is the same beam: the seed's
+//! over the joints' normalized positions, scaled so that every N is the same beam: the thesis's
 //! 0.004..0.082 N m/rad for 40 mm links, times 40 mm over the link length (the bending
 //! stiffness `k l` of every stretch of the antenna stays that of the 9-link robot, and the
 //! compliance summed along it too). The 4.2.1 wall (through (0, 0.2) m, closing in at 8 deg,
@@ -18,7 +18,7 @@
 //! over the sweep; its share is that sum over the sweep's time. The N are interleaved round
 //! by round ([`ROUNDS`] rounds, the order turned each round); ratios to N = 9 are taken within
 //! each round and the median over the rounds reported. Then the Newton iterations per step
-//! on the seed's walls (the 4.2.1 line, the 4.2.2 trapezoid and its sinusoid of 14.2
+//! on the thesis's walls (the 4.2.1 line, the 4.2.2 trapezoid and its sinusoid of 14.2
 //! cycles/m) at N = 4 to 150 against the issue's goal (median <= 8, p99 <= 40), one
 //! deterministic sweep each, with the walls' friction (mu = 0.3) and without. Run by
 //! `scripts/bench-sweep` (release build); `-- --rounds N` sets the rounds.
@@ -100,10 +100,10 @@ fn scene_on(links: usize, scaled_jump: bool, wall: Wall, duration_s: f64) -> Box
     })
 }
 
-/// Links of the Newton table on the seed's walls without friction: the stress set's.
+/// Links of the Newton table on the thesis's walls without friction: the stress set's.
 const NEWTON_LINKS: [usize; 6] = [4, 9, 18, 36, 72, 150];
 
-/// Links of the Newton table on the seed's walls with friction: the issue's range, N = 4
+/// Links of the Newton table on the thesis's walls with friction: the issue's range, N = 4
 /// to 150, the stress set's and those between (the cost of a crest's contact crossing a
 /// joint does not grow smoothly with N: under 30, 40 and 45 links it missed the goal where
 /// 18, 36 and 72 met it).
@@ -111,8 +111,8 @@ const NEWTON_LINKS_DENSE: [usize; 20] = [
     4, 9, 12, 18, 24, 30, 36, 40, 45, 50, 60, 72, 80, 90, 100, 110, 120, 130, 140, 150,
 ];
 
-/// The seed's walls for the Newton table with friction `mu`: the 4.2.1 line for
-/// [`DURATION_S`], the 4.2.2 trapezoid crossed in full (50 s) and the sinusoid of the seed's
+/// The thesis's walls for the Newton table with friction `mu`: the 4.2.1 line for
+/// [`DURATION_S`], the 4.2.2 trapezoid crossed in full (50 s) and the sinusoid of the thesis's
 /// highest spatial frequency, 14.2 cycles/m, 10 mm amplitude (a crest radius of 12.6 mm) for
 /// 20 s (nearly five crests).
 fn seed_walls(mu: f64) -> BoxResult<Vec<(&'static str, Wall, f64)>> {
@@ -285,19 +285,19 @@ fn row(md: &mut String, runs: &[Vec<Run>], i: usize, links: usize) -> BoxResult<
 const GOAL_MEDIAN: usize = 8;
 const GOAL_P99: usize = 40;
 
-/// The Newton iterations per step on the seed's walls with friction `mu` at every N of the
+/// The Newton iterations per step on the thesis's walls with friction `mu` at every N of the
 /// issue's range (deterministic: one sweep each).
 fn newton_table(md: &mut String, mu: f64) -> BoxResult<()> {
     let walls = seed_walls(mu)?;
     if mu > 0.0 {
         writeln!(
             md,
-            "\n**Newton iterations on the seed's walls** (issue #13's goal: median <= \
+            "\n**Newton iterations on the thesis's walls** (issue #13's goal: median <= \
              {GOAL_MEDIAN} and p99 <= {GOAL_P99} per step at every N from 4 to 150: here the \
              stress set's N and those between). The same \
              antenna and settings as the first table (the jump threshold scaled), mu = {mu} on \
              every wall: the 4.2.1 line for {DURATION_S} s, the 4.2.2 trapezoid crossed in full \
-             (50 s) and the sinusoid of the seed's highest spatial frequency (4.2.2: 14.2 \
+             (50 s) and the sinusoid of the thesis's highest spatial frequency (4.2.2: 14.2 \
              cycles/m), 10 mm amplitude, a crest radius of 12.6 mm, for 20 s. Per cell: median \
              / p99 / max Newton iterations per step, steps over {GOAL_P99} and snaps, or where \
              the sweep failed. The iteration counts are deterministic (one sweep each).\n"
@@ -305,7 +305,7 @@ fn newton_table(md: &mut String, mu: f64) -> BoxResult<()> {
     } else {
         writeln!(
             md,
-            "\n**The same walls without friction** (mu = 0; the seed's walls have friction, a \
+            "\n**The same walls without friction** (mu = 0; the thesis's walls have friction, a \
              user's may not), at the stress set's N. Cells as above.\n"
         )?;
     }
@@ -426,7 +426,7 @@ fn main() -> BoxResult<()> {
         md,
         "{BEGIN}\n## Sweeps: links and certification (sim-core)\n\nRegenerate with \
          `scripts/bench-sweep` (`cargo run -p sim-core --release --example \
-         sweep_scaling_bench`; measured {}). The seed's antenna, 0.36 m, cut into N equal links (N - 1 \
+         sweep_scaling_bench`; measured {}). The thesis's antenna, 0.36 m, cut into N equal links (N - 1 \
          flexible joints), base angle 30 deg, joint limits +-90 deg, the fast-exponential \
          profile over the joints' normalized positions scaled to stay the same beam (the \
          seed's 0.004..0.082 N m/rad for 40 mm links times 40 mm / (0.36 m / N)); the 4.2.1 \

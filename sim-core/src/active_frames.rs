@@ -1,4 +1,4 @@
-//! The seed's bookkeeping (2.2.1, 2.2.3): the active frames vector `alpha_sb`, the active
+//! The thesis's bookkeeping (2.2.1, 2.2.3): the active frames vector `alpha_sb`, the active
 //! frames matrix `A_sb` and the all-frames matrix `A`. Entries are `-1, 0, 1` stored as
 //! `f64` so they multiply `theta` directly.
 //!
@@ -12,7 +12,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::{Frame, KinematicsError};
 
-/// `alpha_sb` (seed 2.2.1.1): entry `i` is `1` if `s < i <= b`, `-1` if `b < i <= s`, else
+/// `alpha_sb` (thesis 2.2.1.1): entry `i` is `1` if `s < i <= b`, `-1` if `b < i <= s`, else
 /// `0`. `alpha_sb^T theta` is the angle of `C_b` in `C_s`.
 ///
 /// # Errors
@@ -36,7 +36,7 @@ pub(crate) fn alpha_entry(i: usize, s: Frame, b: Frame) -> f64 {
     }
 }
 
-/// `A_sb` built from `alpha` by the seed's formula 2.2.1.2:
+/// `A_sb` built from `alpha` by the thesis's formula 2.2.1.2:
 /// `A = (alpha alpha^T)^lower + 1/2 (alpha |alpha|^T - alpha alpha^T)`, where `^lower` keeps
 /// the lower triangle with the diagonal. Works for any `alpha` with entries in `{-1, 0, 1}`
 /// (the seed also applies it to `alpha_sG + alpha_sn`, 2.2.3.2).
@@ -49,7 +49,7 @@ pub fn active_frames_matrix_from_vector(alpha: &DVector<f64>) -> DMatrix<f64> {
     })
 }
 
-/// `A_sb` (seed 2.2.1.2), `(n+1) x (n+1)`. Row `i` of `A_sb theta` is `phi_i - phi_s` for the
+/// `A_sb` (thesis 2.2.1.2), `(n+1) x (n+1)`. Row `i` of `A_sb theta` is `phi_i - phi_s` for the
 /// links `i` between `s` and `b`, zero elsewhere.
 ///
 /// # Errors
@@ -59,7 +59,7 @@ pub fn active_frames_matrix(n: usize, s: Frame, b: Frame) -> Result<DMatrix<f64>
     Ok(active_frames_matrix_from_vector(&alpha))
 }
 
-/// The all-frames matrix `A = [alpha_sG | alpha_s0 | ... | alpha_sn]` (seed 2.2.3.1),
+/// The all-frames matrix `A = [alpha_sG | alpha_s0 | ... | alpha_sn]` (thesis 2.2.3.1),
 /// `(n+1) x (n+2)`; column `b + 1` is `alpha_sb` and column `s + 1` is zero.
 /// `A^T theta` is `Theta_s` (2.2.3.4).
 ///
@@ -72,7 +72,7 @@ pub fn all_frames_matrix(n: usize, s: Frame) -> Result<DMatrix<f64>, KinematicsE
     }))
 }
 
-/// `A` synthesised from the two extreme vectors (seed 2.2.3.2):
+/// `A` synthesised from the two extreme vectors (thesis 2.2.3.2):
 /// `A = [alpha_sG | A_sG^T + A_sn^T]`.
 ///
 /// # Errors
@@ -92,7 +92,7 @@ pub fn all_frames_matrix_from_extremes(
     Ok(a)
 }
 
-/// `A_(sG+sn)`, the active frames matrix of `alpha_sG + alpha_sn` (seed 2.2.3.2-3): row `i`
+/// `A_(sG+sn)`, the active frames matrix of `alpha_sG + alpha_sn` (thesis 2.2.3.2-3): row `i`
 /// of `A_(sG+sn) theta` is `phi_i - phi_s` for every link `i`.
 ///
 /// # Errors

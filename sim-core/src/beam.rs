@@ -1,12 +1,12 @@
 //! Chains as beams: a chain of rigid links with joint springs that approximates a clamped
-//! inextensible Euler-Bernoulli beam (model.md 5), and Richardson extrapolation over the number
+//! inextensible Euler-Bernoulli beam (docs/model.md 5), and Richardson extrapolation over the number
 //! of links, which turns chain answers into beam-accurate ones fastest.
 //!
 //! A [`Beam`] has length `L`, bending stiffness `EI(s)` along the arc length `s` and a clamp
 //! angle; its reference answer is the elastica ([`crate::elastica`]). A chain with `n`
 //! flexible joints stands for it in one of two layouts ([`BeamLayout`]):
 //!
-//! - [`BeamLayout::EqualLinks`], model.md 5 read literally: `n + 1` links of `l = L / (n + 1)`,
+//! - [`BeamLayout::EqualLinks`], docs/model.md 5 read literally: `n + 1` links of `l = L / (n + 1)`,
 //!   joint `j` at `x_j = j l`, `k_j = EI(x_j) / l`. Link 0 is the rigid base link clamped at the
 //!   base angle, so the beam's most loaded stretch `[0, l]` cannot bend: the tip deflection is
 //!   first-order accurate, relative error about `-0.6 / n` (`alpha = 10`) to `-1.4 / n`
@@ -243,7 +243,7 @@ impl Beam {
         Ok(lengths)
     }
 
-    /// Joint stiffnesses `k_1..k_n`, N m/rad: `EI(s_j)` over the spacing (model.md 5).
+    /// Joint stiffnesses `k_1..k_n`, N m/rad: `EI(s_j)` over the spacing (docs/model.md 5).
     ///
     /// # Errors
     /// [`BeamError::InvalidLinks`] or an invalid beam (an `EI` that is not finite and positive

@@ -1,4 +1,4 @@
-//! Castigliano's deflection (seed 3.2.2.12-15, model.md 4): the joint deflections a small
+//! Castigliano's deflection (thesis 3.2.2.12-15, docs/model.md 4): the joint deflections a small
 //! tip load causes, `delta theta = K^-1 J_Gn^T (F, M)`.
 //!
 //! With the spring energy written in the joint torques, `U = 1/2 sum tau_j^2 / k_j`

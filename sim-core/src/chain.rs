@@ -1,10 +1,10 @@
 //! The validated chain description: link lengths, base angle, joint limits, stiffness, rest
-//! angles and hairs (seed 2.2, model.md 1, 3, 4, 7).
+//! angles and hairs (thesis 2.2, docs/model.md 1, 3, 4, 7).
 
 use crate::hair::Hair;
 use crate::{ChainError, ChainField, Frame, KinematicsError};
 
-/// The limits of one joint, `cw_rad <= theta_j <= ccw_rad` (seed 2.2.4), measured relative to
+/// The limits of one joint, `cw_rad <= theta_j <= ccw_rad` (thesis 2.2.4), measured relative to
 /// the proximal neighbouring frame `C_{j-1}`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointLimit {
@@ -20,7 +20,7 @@ impl JointLimit {
         JointLimit { cw_rad, ccw_rad }
     }
 
-    /// Both limits at `angle_rad`: a rigid joint, as the base joint is (seed 2.2.4).
+    /// Both limits at `angle_rad`: a rigid joint, as the base joint is (thesis 2.2.4).
     pub const fn fixed(angle_rad: f64) -> JointLimit {
         JointLimit {
             cw_rad: angle_rad,
@@ -44,11 +44,11 @@ impl JointLimit {
     }
 }
 
-/// A planar serial chain of `n + 1` rigid links with joint springs (model.md 1).
+/// A planar serial chain of `n + 1` rigid links with joint springs (docs/model.md 1).
 ///
 /// Link 0 is the base link, links `1..=n` the flagellum. Per-joint quantities are indexed
 /// `0..=n` like `theta`; joint 0 is the base joint, fixed at the base angle: its limits are
-/// both the base angle and its stiffness is 0 (seed 2.2.4). Build one with [`Chain::builder`].
+/// both the base angle and its stiffness is 0 (thesis 2.2.4). Build one with [`Chain::builder`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Chain {
     link_lengths_m: Vec<f64>,
@@ -62,7 +62,7 @@ pub struct Chain {
 impl Chain {
     /// A builder for a chain with `n` flagellar links (so `n + 1` links with the base).
     ///
-    /// Defaults (the seed's robot, 2.3): every link 0.04 m, base angle 0, joint limits
+    /// Defaults (the thesis's robot, 2.3): every link 0.04 m, base angle 0, joint limits
     /// `[-pi/2, pi/2]`, stiffness 0, rest angles 0, no hairs.
     pub fn builder(n: usize) -> ChainBuilder {
         ChainBuilder::new(n)
@@ -226,7 +226,7 @@ impl ChainBuilder {
         }
     }
 
-    /// Every link, the base link included, `length_m` long (the seed's uniform `l`).
+    /// Every link, the base link included, `length_m` long (the thesis's uniform `l`).
     pub fn link_length_m(mut self, length_m: f64) -> Self {
         self.link_lengths_m = uniform(length_m, self.n + 1);
         self
@@ -270,14 +270,14 @@ impl ChainBuilder {
     }
 
     /// One rest angle (radians) per flagellar joint `1..=n` (`n` entries); a pre-bent
-    /// antenna has non-zero rest angles (model.md 4). A rest angle may lie outside the
-    /// joint's limits (a preloaded spring, seed 2.2.4).
+    /// antenna has non-zero rest angles (docs/model.md 4). A rest angle may lie outside the
+    /// joint's limits (a preloaded spring, thesis 2.2.4).
     pub fn rest_angles_rad(mut self, rest_rad: impl Into<Vec<f64>>) -> Self {
         self.rest_angles_rad = rest_rad.into();
         self
     }
 
-    /// A hair on link `link` (`0..=n`; model.md puts hairs on flagellar links `1..=n`).
+    /// A hair on link `link` (`0..=n`; docs/model.md puts hairs on flagellar links `1..=n`).
     pub fn hair(mut self, link: usize, hair: Hair) -> Self {
         self.hairs.push((link, hair));
         self

@@ -1,11 +1,11 @@
-//! How much of the wall a mapping run captured (seed 4.2.2, Figure 4.16): the wall section the
+//! How much of the wall a mapping run captured (thesis 4.2.2, Figure 4.16): the wall section the
 //! antenna passed, sampled evenly along its arclength, each sample scored by its distance to
 //! the nearest estimated contact point.
 //!
 //! The point error of [`crate::mapping`] asks "is each estimated point on the wall?"; a map
 //! can pass it and still miss the wall's shape: troughs the antenna bridges are never
 //! touched. The coverage asks the converse, "is each wall point near an estimated point?",
-//! which is what the seed's "mean spatial error from the ground truth" grows with.
+//! which is what the thesis's "mean spatial error from the ground truth" grows with.
 //!
 //! - **Section**: per wall, the part whose projection on the motion direction lies between
 //!   two bounds (a sweep takes the first and last contact with that wall, [`Section`]).

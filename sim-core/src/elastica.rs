@@ -1,5 +1,5 @@
 //! Reference solver for the planar inextensible Euler-Bernoulli cantilever (the elastica)
-//! under a dead tip force (model.md section 5).
+//! under a dead tip force (docs/model.md section 5).
 //!
 //! The beam has length `L`, bending stiffness `EI(s)` (N m^2) along the arc length `s`, is
 //! clamped at the origin at angle `theta0` and carries a dead force `F = (Fx, Fy)` at its free

@@ -1,4 +1,4 @@
-//! Potential energy (seed 2.2.4.7-8, model.md 4): the joint springs
+//! Potential energy (thesis 2.2.4.7-8, docs/model.md 4): the joint springs
 //! `U(theta) = 1/2 sum_{j>=1} k_j (theta_j - rest_j)^2` plus an optional dead load `F` at the
 //! tip, `-F . p_Gn(theta)`; with gradient and Hessian in `theta` and in the limit coordinates
 //! `q` (`theta = g(q)`, [`crate::joint_limits`]).
@@ -14,7 +14,7 @@ use crate::joint_limits::theta_from_q;
 use crate::positions::tip_pose;
 use crate::{Chain, KinematicsError};
 
-/// Joint torques from the springs, `tau_j = -k_j (theta_j - rest_j)` (seed 3.2.2.1), N m.
+/// Joint torques from the springs, `tau_j = -k_j (theta_j - rest_j)` (thesis 3.2.2.1), N m.
 ///
 /// # Errors
 /// [`KinematicsError::WrongLength`] if `theta` does not have `n + 1` entries.

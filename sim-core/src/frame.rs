@@ -1,4 +1,4 @@
-//! Frame indices: the seed's `-1..=n` numbering as a small type.
+//! Frame indices: the thesis's `-1..=n` numbering as a small type.
 
 use crate::KinematicsError;
 
@@ -15,7 +15,7 @@ impl Frame {
     /// The ground frame `C_G = C_{-1}`.
     pub const GROUND: Frame = Frame(-1);
 
-    /// The frame with the seed's index `index` (`-1` for ground).
+    /// The frame with the thesis's index `index` (`-1` for ground).
     pub const fn new(index: isize) -> Frame {
         Frame(index)
     }
@@ -29,7 +29,7 @@ impl Frame {
         }
     }
 
-    /// The seed's index of this frame (`-1` for ground).
+    /// The thesis's index of this frame (`-1` for ground).
     pub const fn index(self) -> isize {
         self.0
     }

@@ -1,4 +1,4 @@
-//! Anisotropic hairs (seed 3.2.1, model.md 7): a massless rigid rod on a torsion spring,
+//! Anisotropic hairs (thesis 3.2.1, docs/model.md 7): a massless rigid rod on a torsion spring,
 //! pivoting on a side boss of its link. This file holds the hair's parameters and its
 //! kinematics: tip position, orientation, velocity and Jacobian.
 //!
@@ -13,9 +13,9 @@
 //!   to [`Hair::max_angle_rad`] (the rod folded back within [`HAIR_BEND_MARGIN_RAD`] of its
 //!   link); see [`Hair::fold_limit`].
 //! - rod direction `delta = sigma beta` (pointing distally) or `pi - sigma beta` (pointing
-//!   proximally, the seed's control experiment); tip `p' + l_h (cos delta, sin delta)`.
+//!   proximally, the thesis's control experiment); tip `p' + l_h (cos delta, sin delta)`.
 //!
-//! The seed's own parametrisation (3.2.1.1: `R' = -I`, `p' = (-l/2, 0)`, hair angle
+//! The thesis's own parametrisation (3.2.1.1: `R' = -I`, `p' = (-l/2, 0)`, hair angle
 //! `theta'` in a base frame turned by pi) is the left, distal, centred hair with
 //! `beta = theta' + pi`; [`crate::matrix_forms::seed_hair_tip`] computes it as printed.
 
@@ -43,13 +43,13 @@ pub enum HairSide {
 /// Which way an open hair points along its link.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum HairDirection {
-    /// Towards the tip of the antenna (the seed's hairs).
+    /// Towards the tip of the antenna (the thesis's hairs).
     Distal,
-    /// Towards the base (the seed's control experiment, 3.3.1).
+    /// Towards the base (the thesis's control experiment, 3.3.1).
     Proximal,
 }
 
-/// The parameters of one hair (model.md 7). All lengths in metres, angles in radians.
+/// The parameters of one hair (docs/model.md 7). All lengths in metres, angles in radians.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hair {
     /// Rod length `l_h` (> 0; 0.018 m on the robot).
@@ -81,7 +81,7 @@ pub struct Hair {
 }
 
 impl Hair {
-    /// The seed's hair on a link of length `link_length_m`: 18 mm, open at 45 degrees,
+    /// The thesis's hair on a link of length `link_length_m`: 18 mm, open at 45 degrees,
     /// pointing distally, pivot on the axis at the link's midpoint, on the left side. The
     /// seed gives no spring constants (a 0.1 mm Nitinol wire swings the hair open, 3.3.1.1);
     /// this takes a light spring: preload `1e-4` N m (5.6 mN at the tip of an open hair) and
@@ -307,7 +307,7 @@ fn pose_from_link(hair: &Hair, link: usize, link_pose: &Pose2, beta: f64) -> Hai
 
 /// The pose of the hair on link `link` relative to `s` in `O(|link - s|)`, no allocation.
 /// `hair_angles_rad` has one entry per link `0..=n` (entries of links without a hair are
-/// ignored), like the seed's `theta'`.
+/// ignored), like the thesis's `theta'`.
 ///
 /// # Errors
 /// [`KinematicsError::WrongLength`] for `theta` or `hair_angles_rad` not of length `n + 1`,
@@ -372,7 +372,7 @@ fn hairs_from_poses(chain: &Chain, poses: &FramePoses, hair_angles_rad: &[f64]) 
 
 /// The velocities of every hair relative to `s`, ordered by link, in `O(n)`: tip velocity
 /// `p_dot_sb + omega_sb R90 R_sb p'_b + R_sb (dp'_b/dbeta) beta_dot` and rod angular velocity
-/// `omega_sb + d delta/d beta beta_dot`. With `hair_rates = 0` this is the seed's 3.2.1.3.
+/// `omega_sb + d delta/d beta beta_dot`. With `hair_rates = 0` this is the thesis's 3.2.1.3.
 ///
 /// # Errors
 /// [`KinematicsError::WrongLength`] for any vector not of length `n + 1`,

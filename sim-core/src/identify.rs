@@ -1,4 +1,4 @@
-//! Joint stiffness from a free-oscillation recording (model.md section 9; seed 6.2).
+//! Joint stiffness from a free-oscillation recording (docs/model.md section 9; thesis 6.2).
 //!
 //! A joint with inertia `J` about its axis, released from a deflection, rings down as an
 //! underdamped oscillator `theta(t) = c + A exp(-zeta w_n t) cos(w_d t - psi)`. From the
@@ -22,7 +22,7 @@
 //!    `f_d = w / 2 pi` from the fit is the default
 //!    ([`FrequencySource`]);
 //! 2. the damping ratio from the logarithmic decrement averaged over all pairs of peaks
-//!    (seed 6.2.0.13-15; the seed's average is over every pair `i < j`, not only consecutive
+//!    (thesis 6.2.0.13-15; the thesis's average is over every pair `i < j`, not only consecutive
 //!    ones). Peaks are located one per period at the times the fit predicts and their heights
 //!    are measured from the samples within half a period either side of each (a local least-squares
 //!    fit of the damped-cosine shape, so that coarse sampling does not bias them); peaks below
@@ -33,7 +33,7 @@
 //! 3. `w_n = w_d / sqrt(1 - zeta^2)`, `k_eq = J w_n^2`, `k_wire = k_eq - k_cable`.
 //!
 //! [`wire_constant`] then gives `C` in `k_wire = C r^4` as the mean of `k_i / r_i^4`
-//! (seed 6.2.0.33).
+//! (thesis 6.2.0.33).
 //!
 //! The record should start at or after release (the seed trimmed each trial to start at its
 //! global extremum); a constant offset (the rest angle) is estimated and removed.
@@ -46,7 +46,7 @@ use varpro::problem::SeparableProblemBuilder;
 use varpro::solvers::levmar::LevMarSolver;
 
 pub use crate::nitinol::CABLE_STIFFNESS_N_M_PER_RAD;
-/// Inertia of one robot segment about its joint (seed Table 6.1), kg m^2.
+/// Inertia of one robot segment about its joint (thesis Table 6.1), kg m^2.
 pub const SEGMENT_INERTIA_KG_M2: f64 = 3.25e-6;
 /// Fewest samples accepted.
 pub const MIN_SAMPLES: usize = 16;
@@ -148,14 +148,14 @@ pub enum FrequencySource {
     /// Least-squares fit of a damped sinusoid, seeded by the spectrum peak (default).
     #[default]
     DampedSineFit,
-    /// The windowed spectrum peak alone (the seed's method; biased for strong damping).
+    /// The windowed spectrum peak alone (the thesis's method; biased for strong damping).
     SpectrumPeak,
 }
 
 /// Which damping-ratio estimate feeds `w_n`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum DampingSource {
-    /// Logarithmic decrement averaged over all peak pairs, seed 6.2.0.13-15 (default).
+    /// Logarithmic decrement averaged over all peak pairs, thesis 6.2.0.13-15 (default).
     #[default]
     LogDecrement,
     /// The decay rate of the least-squares fit.
@@ -203,9 +203,9 @@ pub struct Identification {
     pub peak_heights_rad: Vec<f64>,
     /// Peak times, s from the first sample.
     pub peak_times_s: Vec<f64>,
-    /// Mean logarithmic decrement over all peak pairs (seed 6.2.0.15); NaN with < 2 peaks.
+    /// Mean logarithmic decrement over all peak pairs (thesis 6.2.0.15); NaN with < 2 peaks.
     pub log_decrement: f64,
-    /// Damping ratio from the logarithmic decrement (seed 6.2.0.14); NaN with < 2 peaks.
+    /// Damping ratio from the logarithmic decrement (thesis 6.2.0.14); NaN with < 2 peaks.
     pub damping_ratio_log_decrement: f64,
     /// Damping ratio of the least-squares fit.
     pub damping_ratio_fit: f64,
@@ -324,7 +324,7 @@ pub fn identify_stiffness(
     })
 }
 
-/// Mean logarithmic decrement over all peak pairs `i < j` (seed 6.2.0.15):
+/// Mean logarithmic decrement over all peak pairs `i < j` (thesis 6.2.0.15):
 /// `sum_{i<j} ln(p_i / p_j) / (j - i)` divided by the number of pairs `n(n-1)/2`.
 ///
 /// # Errors
@@ -352,14 +352,14 @@ pub fn mean_log_decrement(peaks: &[f64]) -> Result<f64, IdentifyError> {
     Ok(sum / (n * (n - 1) / 2) as f64)
 }
 
-/// Damping ratio from a logarithmic decrement (seed 6.2.0.14):
+/// Damping ratio from a logarithmic decrement (thesis 6.2.0.14):
 /// `zeta = (D / 2 pi) / sqrt(1 + (D / 2 pi)^2)`.
 pub fn damping_ratio_from_log_decrement(log_decrement: f64) -> f64 {
     let q = log_decrement / (2.0 * PI);
     q / (1.0 + q * q).sqrt()
 }
 
-/// Undamped natural frequency `f_d / sqrt(1 - zeta^2)` (seed 6.2.0.11), Hz.
+/// Undamped natural frequency `f_d / sqrt(1 - zeta^2)` (thesis 6.2.0.11), Hz.
 ///
 /// # Errors
 /// [`IdentifyError::InvalidArgument`] for a non-finite or non-positive `f_d`,
@@ -375,7 +375,7 @@ pub fn natural_frequency_hz(
     Ok(damped_frequency_hz / (1.0 - damping_ratio * damping_ratio).sqrt())
 }
 
-/// Rotational stiffness `J (2 pi f_n)^2` (seed 6.2.0.10), N m/rad.
+/// Rotational stiffness `J (2 pi f_n)^2` (thesis 6.2.0.10), N m/rad.
 ///
 /// # Errors
 /// [`IdentifyError::InvalidArgument`] for a non-finite or non-positive argument.
@@ -390,7 +390,7 @@ pub fn equivalent_stiffness_n_m_per_rad(
 }
 
 /// `C` in `k_wire = C r^4` as the mean of `k_i / r_i^4` over rows
-/// `(radius_m, wire_stiffness_n_m_per_rad)` (seed 6.2.0.33), N m/rad per m^4.
+/// `(radius_m, wire_stiffness_n_m_per_rad)` (thesis 6.2.0.33), N m/rad per m^4.
 ///
 /// # Errors
 /// [`IdentifyError::NoRows`] for no rows, [`IdentifyError::InvalidRow`] for a non-finite or
@@ -1070,7 +1070,7 @@ mod tests {
         )
         .unwrap();
         assert!((fit_only.natural_frequency_hz - 6.5).abs() < 1e-8 * 6.5);
-        // The seed's spectrum peak alone is close but biased for strong damping.
+        // The thesis's spectrum peak alone is close but biased for strong damping.
         let spectrum = identify_stiffness(
             &x,
             1000.0,

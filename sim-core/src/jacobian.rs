@@ -1,4 +1,4 @@
-//! Jacobians (seed 2.2.2, model.md 2) for any frame pair `(s, b)` in `O(n)`, and the stacked
+//! Jacobians (thesis 2.2.2, docs/model.md 2) for any frame pair `(s, b)` in `O(n)`, and the stacked
 //! Jacobians of every frame in `O(n^2)` (the size of the answer).
 //!
 //! Column `j` of the hybrid Jacobian `J_sb` (3 x (n+1)) is
@@ -14,12 +14,12 @@ use crate::{Chain, Frame, FramePoses, KinematicsError};
 /// Which Jacobian of the pair `(s, b)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum JacobianKind {
-    /// `J_sb` (seed 2.2.2.1): maps `theta_dot` to the hybrid velocity `(p_dot_sb, omega_sb)`,
+    /// `J_sb` (thesis 2.2.2.1): maps `theta_dot` to the hybrid velocity `(p_dot_sb, omega_sb)`,
     /// written in `C_s`.
     Hybrid,
-    /// `J_b = blockdiag(R_sb^T, 1) J_sb` (seed 2.2.2.2): the same velocity written in `C_b`.
+    /// `J_b = blockdiag(R_sb^T, 1) J_sb` (thesis 2.2.2.2): the same velocity written in `C_b`.
     Body,
-    /// `J_sigma = [I, -R90 p_sb; 0, 1] J_sb` (seed 2.2.2.3): the spatial velocity
+    /// `J_sigma = [I, -R90 p_sb; 0, 1] J_sb` (thesis 2.2.2.3): the spatial velocity
     /// `(p_dot_sb - omega R90 p_sb, omega)`, the velocity of the point of `b`'s body that is
     /// momentarily at the origin of `C_s`.
     Spatial,
@@ -39,7 +39,7 @@ fn check_shape(out: &Matrix3xX<f64>, n: usize) -> Result<(), KinematicsError> {
     }
 }
 
-/// The hybrid Jacobian `J_sb` (seed 2.2.2.1) in `O(n)`.
+/// The hybrid Jacobian `J_sb` (thesis 2.2.2.1) in `O(n)`.
 ///
 /// # Errors
 /// [`KinematicsError::WrongLength`] if `theta` does not have `n + 1` entries,
@@ -53,7 +53,7 @@ pub fn hybrid_jacobian(
     jacobian(chain, theta, s, b, JacobianKind::Hybrid)
 }
 
-/// The body Jacobian `J_b` (seed 2.2.2.2) in `O(n)`.
+/// The body Jacobian `J_b` (thesis 2.2.2.2) in `O(n)`.
 ///
 /// # Errors
 /// As [`hybrid_jacobian`].
@@ -66,7 +66,7 @@ pub fn body_jacobian(
     jacobian(chain, theta, s, b, JacobianKind::Body)
 }
 
-/// The spatial Jacobian `J_sigma` (seed 2.2.2.3) in `O(n)`.
+/// The spatial Jacobian `J_sigma` (thesis 2.2.2.3) in `O(n)`.
 ///
 /// # Errors
 /// As [`hybrid_jacobian`].
@@ -233,7 +233,7 @@ pub(crate) fn hybrid_into_unchecked(
 }
 
 /// The hybrid Jacobians of every frame relative to `s`, stacked `3(n+2) x (n+1)`: rows
-/// `3(b+1)..3(b+1)+3` are `J_sb` for `b = -1..=n` (the seed's `P_dot_s` / `Theta_dot_s`
+/// `3(b+1)..3(b+1)+3` are `J_sb` for `b = -1..=n` (the thesis's `P_dot_s` / `Theta_dot_s`
 /// Jacobian, 2.2.3.6-7, regrouped per frame). `O(n^2)`, the size of the answer; use
 /// [`hybrid_jacobian`] or [`crate::frame_velocities`] when less is needed.
 ///

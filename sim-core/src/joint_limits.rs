@@ -1,4 +1,4 @@
-//! The joint-limit map `theta = g(q)` (seed 2.2.4, model.md 3):
+//! The joint-limit map `theta = g(q)` (thesis 2.2.4, docs/model.md 3):
 //! `g_j(q_j) = (ccw_j + cw_j)/2 + (ccw_j - cw_j)/2 sin q_j`, which turns the bound-constrained
 //! problem in `theta` into an unconstrained one in `q`.
 //!
@@ -6,7 +6,7 @@
 //! diagonal third-order tensor; both are returned as vectors of the diagonal:
 //! `dtheta_j/dq_j = +(ccw_j - cw_j)/2 cos q_j` and `d2theta_j/dq_j^2 = -(ccw_j - cw_j)/2 sin q_j`.
 //! (The seed prints the first with a minus sign, 2.2.4.5, and the second with `cos q`,
-//! 2.2.4.6; model.md 3 records the erratum and the tests check these against finite
+//! 2.2.4.6; docs/model.md 3 records the erratum and the tests check these against finite
 //! differences.)
 
 use nalgebra::DVector;
@@ -30,7 +30,7 @@ impl JointLimit {
     }
 
     /// `g^-1(theta) = asin((2 theta - ccw - cw) / (ccw - cw))` in `[-pi/2, pi/2]`; `0` for a
-    /// fixed joint (`cw = ccw`, the seed's pseudo-inverse). `None` if `theta` is outside the
+    /// fixed joint (`cw = ccw`, the thesis's pseudo-inverse). `None` if `theta` is outside the
     /// limits by more than a few rounding errors (within that, it is clamped).
     pub fn q_from_theta(&self, theta_rad: f64) -> Option<f64> {
         let tol = 8.0 * f64::EPSILON * self.cw_rad.abs().max(self.ccw_rad.abs()).max(1.0);
@@ -49,7 +49,7 @@ fn check(chain: &Chain, argument: &'static str, v: &[f64]) -> Result<(), Kinemat
     chain.check_len(argument, v.len())
 }
 
-/// `theta = g(q)` for the whole chain (seed 2.2.4.2). Joint 0 maps to the base angle for
+/// `theta = g(q)` for the whole chain (thesis 2.2.4.2). Joint 0 maps to the base angle for
 /// every `q_0`.
 ///
 /// # Errors
@@ -66,8 +66,8 @@ pub fn theta_from_q(chain: &Chain, q: &[f64]) -> Result<DVector<f64>, Kinematics
     ))
 }
 
-/// `q = g^-1(theta)` (seed 2.2.4.1), in `[-pi/2, pi/2]`, with `q_j = 0` where the limits are
-/// equal (the seed's pseudo-inverse).
+/// `q = g^-1(theta)` (thesis 2.2.4.1), in `[-pi/2, pi/2]`, with `q_j = 0` where the limits are
+/// equal (the thesis's pseudo-inverse).
 ///
 /// # Errors
 /// [`KinematicsError::WrongLength`] if `theta` does not have `n + 1` entries,
@@ -87,7 +87,7 @@ pub fn q_from_theta(chain: &Chain, theta: &[f64]) -> Result<DVector<f64>, Kinema
     Ok(q)
 }
 
-/// The diagonal of the Jacobian `J_g = dtheta/dq` (seed 2.2.4.5, sign corrected):
+/// The diagonal of the Jacobian `J_g = dtheta/dq` (thesis 2.2.4.5, sign corrected):
 /// `(ccw_j - cw_j)/2 cos q_j`.
 ///
 /// # Errors
@@ -104,7 +104,7 @@ pub fn dtheta_dq(chain: &Chain, q: &[f64]) -> Result<DVector<f64>, KinematicsErr
     ))
 }
 
-/// The diagonal of the second derivative `d2theta_j/dq_j^2` (seed 2.2.4.6, corrected):
+/// The diagonal of the second derivative `d2theta_j/dq_j^2` (thesis 2.2.4.6, corrected):
 /// `-(ccw_j - cw_j)/2 sin q_j`.
 ///
 /// # Errors

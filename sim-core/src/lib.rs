@@ -1,5 +1,5 @@
 //! Kinematics of a planar antenna: a serial chain of rigid links with joint springs, after
-//! the seed thesis (2.2, 3.2.1, appendix 6.1) and the contract `shared/spec/model.md`
+//! the thesis (2.2, 3.2.1, appendix 6.1) and the contract `docs/model.md`
 //! (sections 1-4 and 7), which wins where the two differ.
 //!
 //! # Conventions
@@ -14,9 +14,9 @@
 //!   the link: `p_i = sum_{k <= i} l_k (cos phi_k, sin phi_k)`. `C_n` is the tip. Joint `j`
 //!   sits at the origin of `C_{j-1}` (joint 0 at the base).
 //! - **Pairs `(s, b)`.** Any frame can be the spatial frame `s`; results about a body frame
-//!   `b` are relative to `C_s` and written in `C_s` (the seed's `p_sb`, `theta_sb`,
+//!   `b` are relative to `C_s` and written in `C_s` (the thesis's `p_sb`, `theta_sb`,
 //!   `J_sb`). Per-frame lists hold frames `-1..=n` in order: entry `b + 1` is frame `b`.
-//! - **Velocities** are hybrid (the seed's `V_h`): `(p_dot_sb, omega_sb)` in `C_s`; body and
+//! - **Velocities** are hybrid (the thesis's `V_h`): `(p_dot_sb, omega_sb)` in `C_s`; body and
 //!   spatial Jacobians are in [`JacobianKind`].
 //! - **Units** are SI and named: `_m`, `_rad`, `_nm` (newton-metres), `_n` (newtons),
 //!   `_per_s`.
@@ -32,18 +32,18 @@
 //! - [`energy`]: spring energy and tip load with gradient and Hessian, in `theta` and `q`.
 //! - [`tip_force`](mod@tip_force): the tip force at a posture (least squares `J^T F = -tau`,
 //!   and the free-body system with stop torques, base reaction and servo torque), and
-//!   [`castigliano`]: the deflection `K^-1 J^T (F, M)` of a small tip load (seed 3.2.2).
-//! - [`active_frames`] and [`matrix_forms`]: the seed's bookkeeping (`alpha_sb`, `A_sb`, `A`)
+//!   [`castigliano`]: the deflection `K^-1 J^T (F, M)` of a small tip load (thesis 3.2.2).
+//! - [`active_frames`] and [`matrix_forms`]: the thesis's bookkeeping (`alpha_sb`, `A_sb`, `A`)
 //!   and matrix formulas, `O(n^2)` or worse: the reference the fast paths are tested against.
-//! - [`profile`]: joint stiffness profiles normalized to `[k_min, k_max]` (model.md 5).
+//! - [`profile`]: joint stiffness profiles normalized to `[k_min, k_max]` (docs/model.md 5).
 //! - [`nitinol`]: the wire law `k = C r^4 + k_cable` and the nearest available wire per joint.
-//! - [`identify`]: joint stiffness from a free-oscillation recording (model.md 9, seed 6.2).
+//! - [`identify`]: joint stiffness from a free-oscillation recording (docs/model.md 9, thesis 6.2).
 //! - [`elastica`]: the reference solver for the clamped inextensible beam under a tip load.
 //! - [`wall`]: walls (line, polyline, sinusoid) with a solid side and surface zones; signed
-//!   distance and the deepest point of a link against a wall (model.md 6).
+//!   distance and the deepest point of a link against a wall (docs/model.md 6).
 //! - [`metrics`]: point of bend, point of contact, preview distance, flip detection and
-//!   correlations (model.md 8); [`mapping`]: wall contact points estimated from 12-bit joint
-//!   angles and touch bits, and their error against the true wall (seed 4.2.2).
+//!   correlations (docs/model.md 8); [`mapping`]: wall contact points estimated from 12-bit joint
+//!   angles and touch bits, and their error against the true wall (thesis 4.2.2).
 //! - [`beam`]: chains that stand for a beam (the first-order equal-links and the second-order
 //!   Hencky layouts) and Richardson extrapolation over the number of links.
 //!

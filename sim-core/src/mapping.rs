@@ -1,8 +1,8 @@
-//! Wall mapping from what the robot senses (seed 4.2.2, model.md 8): contact points estimated
+//! Wall mapping from what the robot senses (thesis 4.2.2, docs/model.md 8): contact points estimated
 //! from the joint angles as the segments report them and the touch switches, scored against
 //! the true wall as a mean spatial error in millimetres.
 //!
-//! # What the robot senses (seed 2.3.1)
+//! # What the robot senses (thesis 2.3.1)
 //! - **Joint angles**: each segment's Hall sensor gives 12 bits per turn
 //!   ([`antenna_protocol::ANGLE_COUNTS_PER_TURN`]):
 //!   `theta_q = round(theta / q) q` with `q = 2 pi / 4096` ([`RAD_PER_COUNT`], 0.088 deg;

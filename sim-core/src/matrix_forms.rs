@@ -1,4 +1,4 @@
-//! The seed's matrix forms, written as printed (with the seed's uniform `l` generalised to
+//! The thesis's matrix forms, written as printed (with the thesis's uniform `l` generalised to
 //! `diag(l_0, ..., l_n)`, which commutes through every formula because it is diagonal):
 //! positions 2.2.1.6 and 2.2.3.3-4, velocities 2.2.1.14 and 2.2.3.6-7, Jacobians 2.2.2.1-3,
 //! hair tips 3.2.1.1 and 3.2.1.3.
@@ -41,7 +41,7 @@ fn check(
     Ok(DVector::from_column_slice(theta))
 }
 
-/// The seed's `H_sb` (2.2.1.6, Lemma 2.2.1), 3x3: `[R_sb, C(A_sb theta) diag(l) alpha_sb;
+/// The thesis's `H_sb` (2.2.1.6, Lemma 2.2.1), 3x3: `[R_sb, C(A_sb theta) diag(l) alpha_sb;
 /// 0 0, alpha_sb^T theta]`. As printed, the bottom-right entry is the angle `theta_sb`, so
 /// `H_sb (p_b^a, 1) = (p_sb^a, theta_sb)`; it is not an SE(2) matrix.
 ///
@@ -80,7 +80,7 @@ pub fn seed_pose(
     })
 }
 
-/// All frame positions and angles (seed 2.2.3.3-4):
+/// All frame positions and angles (thesis 2.2.3.3-4):
 /// `[p_sG ... p_sn] = C(A_(sG+sn) theta) diag(l) A`, `Theta_s = A^T theta`.
 ///
 /// # Errors
@@ -102,7 +102,7 @@ pub fn seed_frame_poses(
     })
 }
 
-/// The velocity of frame `b` relative to `s`, written in `s` (seed 2.2.1.14, 2.2.1.9):
+/// The velocity of frame `b` relative to `s`, written in `s` (thesis 2.2.1.14, 2.2.1.9):
 /// `p_dot_sb = W(A_sb theta) diag(l) |A_sb| theta_dot`, `omega_sb = alpha_sb^T theta_dot`.
 ///
 /// # Errors
@@ -127,7 +127,7 @@ pub fn seed_velocity(
     })
 }
 
-/// The Khatri-Rao product `A^T (.) (W(A_(sG+sn) theta) diag(l))` of seed 2.2.3.6,
+/// The Khatri-Rao product `A^T (.) (W(A_(sG+sn) theta) diag(l))` of thesis 2.2.3.6,
 /// `2(n+2) x (n+1)`: column `i` is `A^T[:, i] (x) l_i W[:, i]`.
 fn seed_khatri_rao(
     chain: &Chain,
@@ -144,7 +144,7 @@ fn seed_khatri_rao(
     }))
 }
 
-/// All frame velocities (seed 2.2.3.6-7):
+/// All frame velocities (thesis 2.2.3.6-7):
 /// `P_dot_s = [A^T (.) W(A_(sG+sn) theta) diag(l)] A_(sG+sn) theta_dot` (evaluated right to
 /// left, `O(n^2)`), `Theta_dot_s = A^T theta_dot`.
 ///
@@ -170,7 +170,7 @@ pub fn seed_frame_velocities(
     })
 }
 
-/// The hybrid Jacobian (seed 2.2.2.1): `J_sb = [W(A_sb theta) diag(l) |A_sb|; alpha_sb^T]`.
+/// The hybrid Jacobian (thesis 2.2.2.1): `J_sb = [W(A_sb theta) diag(l) |A_sb|; alpha_sb^T]`.
 ///
 /// # Errors
 /// As [`seed_transform`].
@@ -187,7 +187,7 @@ pub fn seed_hybrid_jacobian(
     Ok(stack(&top, &active_frames_vector(n, s, b)?))
 }
 
-/// The body Jacobian (seed 2.2.2.2): `J_b = [W(A_bs theta) diag(l) |A_sb|; alpha_sb^T]`.
+/// The body Jacobian (thesis 2.2.2.2): `J_b = [W(A_bs theta) diag(l) |A_sb|; alpha_sb^T]`.
 ///
 /// # Errors
 /// As [`seed_transform`].
@@ -205,7 +205,7 @@ pub fn seed_body_jacobian(
     Ok(stack(&top, &active_frames_vector(n, s, b)?))
 }
 
-/// The spatial Jacobian (seed 2.2.2.3): `J_sigma = [-W(A_sb theta) diag(l) |A_bs|;
+/// The spatial Jacobian (thesis 2.2.2.3): `J_sigma = [-W(A_sb theta) diag(l) |A_bs|;
 /// alpha_sb^T]`.
 ///
 /// # Errors
@@ -225,7 +225,7 @@ pub fn seed_spatial_jacobian(
 }
 
 /// The hybrid Jacobians of every frame relative to `s`, stacked `3(n+2) x (n+1)` (rows
-/// `3(b+1)..3(b+1)+3` are `J_sb`): translational rows from the matrix of seed 2.2.3.6,
+/// `3(b+1)..3(b+1)+3` are `J_sb`): translational rows from the matrix of thesis 2.2.3.6,
 /// `[A^T (.) W diag(l)] A_(sG+sn)`, angular rows from `A^T` (2.2.3.7). `O(n^3)`.
 ///
 /// # Errors
@@ -256,9 +256,9 @@ fn stack(top: &DMatrix<f64>, alpha: &DVector<f64>) -> Matrix3xX<f64> {
     )
 }
 
-/// The seed's hair tip in the segment frame (3.2.1.1): `p'_b = R' (cos t, sin t) l' + p'`
+/// The thesis's hair tip in the segment frame (3.2.1.1): `p'_b = R' (cos t, sin t) l' + p'`
 /// with `R' = -I` and `p' = (-l_b / 2, 0)`, i.e. `-(l_b/2 + l' cos t, l' sin t)`, where `t` is
-/// the seed's hair angle `theta'_b` (measured in the hair base frame, which is turned by pi).
+/// the thesis's hair angle `theta'_b` (measured in the hair base frame, which is turned by pi).
 pub fn seed_hair_tip_in_segment(
     link_length_m: f64,
     hair_length_m: f64,
@@ -270,7 +270,7 @@ pub fn seed_hair_tip_in_segment(
     r_prime * Vector2::new(cs, sn) * hair_length_m + p_prime
 }
 
-/// The seed's hair tip of link `link` in frame `s` (3.2.1.1): `p'_sb = R_sb p'_b + p_sb`,
+/// The thesis's hair tip of link `link` in frame `s` (3.2.1.1): `p'_sb = R_sb p'_b + p_sb`,
 /// with `b = link` and `R_sb`, `p_sb` from [`seed_transform`].
 ///
 /// # Errors
@@ -302,7 +302,7 @@ fn link_length(chain: &Chain, link: usize) -> Result<f64, KinematicsError> {
         })
 }
 
-/// The seed's hair tip velocity (3.2.1.3): `(p_dot'_sb, omega'_sb) = H_dot_sb (p'_b, 1)` with
+/// The thesis's hair tip velocity (3.2.1.3): `(p_dot'_sb, omega'_sb) = H_dot_sb (p'_b, 1)` with
 /// `H_dot_sb = [omega^ R_sb, p_dot_sb; 0, omega_sb]`, `omega = alpha_sb^T theta_dot`. The seed
 /// treats the hair as fixed on its segment here (no `theta_dot'` term).
 ///

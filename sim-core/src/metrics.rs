@@ -1,8 +1,8 @@
-//! Wall-following metrics of a posture (model.md 8, seed 4.2.1 and 3.3.1): point of bend,
-//! point of contact, preview distance, flip detection, and the correlations the seed's
+//! Wall-following metrics of a posture (docs/model.md 8, thesis 4.2.1 and 3.3.1): point of bend,
+//! point of contact, preview distance, flip detection, and the correlations the thesis's
 //! Table 4.1 reports.
 //!
-//! # Numbering (model.md 8)
+//! # Numbering (docs/model.md 8)
 //! Joint `j` (`1..=n`) sits at `p_(j-1)`, the distal end of link `j - 1`; the base pivot is
 //! point 0 and the tip is point `n + 1`. A point on link `i` at fraction `s` of its length
 //! (`0` its proximal end, `1` its distal end) has the **chain coordinate** `i + s` in these
@@ -34,7 +34,7 @@ impl ChainContact {
     }
 }
 
-/// The point of bend (seed 4.2.1): the joint `j >= 1` with the greatest `|theta_j|`, ties to
+/// The point of bend (thesis 4.2.1): the joint `j >= 1` with the greatest `|theta_j|`, ties to
 /// the more proximal joint. `theta_rad` has `n + 1` entries (`theta_0` is the base angle and is
 /// not a candidate); non-finite entries are skipped. `None` if no joint qualifies.
 pub fn point_of_bend(theta_rad: &[f64]) -> Option<usize> {
@@ -51,7 +51,7 @@ pub fn point_of_bend(theta_rad: &[f64]) -> Option<usize> {
     best.map(|(j, _)| j)
 }
 
-/// The most proximal contact (seed 4.2.1: "the joint of most proximal contact").
+/// The most proximal contact (thesis 4.2.1: "the joint of most proximal contact").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointOfContact {
     /// The link of that contact.
@@ -84,7 +84,7 @@ pub fn point_of_contact(contacts: &[ChainContact]) -> Option<PointOfContact> {
     })
 }
 
-/// The preview distance (model.md 8): how far ahead of the base pivot, along the direction
+/// The preview distance (docs/model.md 8): how far ahead of the base pivot, along the direction
 /// of motion (`motion_angle_rad` from the ground x-axis), the antenna touches the wall:
 /// `max over contacts of (point_m - base_m) . (cos a, sin a)`, metres. Negative when every
 /// contact is behind the base. `None` without contacts (non-finite points are skipped).
@@ -109,7 +109,7 @@ pub fn preview_distance_m(
 /// makes `tangent . (cos a, sin a) >= 0` for the direction of motion `a` (a tangent exactly
 /// perpendicular to the motion is kept as given). An antenna projecting forward along the
 /// wall has its distal segment below `pi / 2`; flipped back (its tip trailing) above `pi / 2`
-/// (model.md 7: "a flip is when the distal-most segment's angle to the wall exceeds 90 deg").
+/// (docs/model.md 7: "a flip is when the distal-most segment's angle to the wall exceeds 90 deg").
 /// `None` if either vector has zero or non-finite length.
 pub fn angle_to_wall_rad(
     segment_direction: &Vector2<f64>,
@@ -142,7 +142,7 @@ pub struct FlipState {
     pub contact: SegmentContact,
 }
 
-/// Flip detection (model.md 7-8): the distal-most segment runs from `distal_start_m` (its
+/// Flip detection (docs/model.md 7-8): the distal-most segment runs from `distal_start_m` (its
 /// proximal joint) to `tip_m`; its angle to `wall` is measured against the wall tangent at
 /// the segment's contact (or nearest) point, oriented along the motion. `None` for a
 /// zero-length segment.
@@ -165,7 +165,7 @@ pub fn flip_state(
     })
 }
 
-/// Pearson's correlation coefficient of paired samples. `None` (undefined, model.md 8) when
+/// Pearson's correlation coefficient of paired samples. `None` (undefined, docs/model.md 8) when
 /// the lengths differ, there are fewer than two pairs, a value is not finite, or either
 /// series is constant (a point of bend that never moves has no correlation).
 pub fn pearson_correlation(x: &[f64], y: &[f64]) -> Option<f64> {
@@ -188,7 +188,7 @@ pub fn pearson_correlation(x: &[f64], y: &[f64]) -> Option<f64> {
     Some((sxy / (sxx.sqrt() * syy.sqrt())).clamp(-1.0, 1.0))
 }
 
-/// Spearman's rank correlation (the seed's Table 4.1, in parentheses): Pearson's on the
+/// Spearman's rank correlation (the thesis's Table 4.1, in parentheses): Pearson's on the
 /// ranks, tied values sharing their mean rank. `None` as for [`pearson_correlation`].
 pub fn spearman_correlation(x: &[f64], y: &[f64]) -> Option<f64> {
     if x.len() != y.len() || x.iter().chain(y).any(|v| !v.is_finite()) {

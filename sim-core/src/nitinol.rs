@@ -1,5 +1,5 @@
 //! Nitinol joint springs: wire radius to joint stiffness, and a wire choice per joint
-//! (model.md section 5; seed 2.3.2, 6.2).
+//! (docs/model.md section 5; thesis 2.3.2, 6.2).
 //!
 //! A joint's stiffness is a Nitinol wire of radius `r` (m) in parallel with the flat-flex
 //! cable:
@@ -8,19 +8,19 @@
 //! k = C r^4 + k_cable,   C = 2.0614e12 N m/rad per m^4,   k_cable = 0.0016 N m/rad
 //! ```
 //!
-//! (seed 6.2.0.33-34 and Table 6.3; seed 2.3.2.1 prints the rounded `2.06e12 r^4 + 1.56e-3`.)
+//! (thesis 6.2.0.33-34 and Table 6.3; thesis 2.3.2.1 prints the rounded `2.06e12 r^4 + 1.56e-3`.)
 //! Available diameters are 0.010 to 0.022 inch and 0.024 to 0.030 inch in steps of 0.001 inch,
 //! kept as integer thousandths of an inch so that no float stepping is involved.
 //!
 //! [`WireModel::design`] maps each target stiffness to the available wire whose realized
 //! stiffness is nearest (absolute difference in N m/rad; a tie goes to the softer wire).
 //! A target outside the achievable range is not an error: it gets the softest or stiffest
-//! wire and a [`RangeFlag`] saying so. Note that the seed's `k_max = 0.082 N m/rad`
-//! (seed 4.2.1.1) lies above the stiffest listed wire (0.030 inch, 0.0450 N m/rad).
+//! wire and a [`RangeFlag`] saying so. Note that the thesis's `k_max = 0.082 N m/rad`
+//! (thesis 4.2.1.1) lies above the stiffest listed wire (0.030 inch, 0.0450 N m/rad).
 
-/// `C` in `k = C r^4 + k_cable` (seed 6.2.0.33), N m/rad per m^4.
+/// `C` in `k = C r^4 + k_cable` (thesis 6.2.0.33), N m/rad per m^4.
 pub const WIRE_CONSTANT_N_M_PER_RAD_PER_M4: f64 = 2.0614e12;
-/// Flat-flex cable stiffness in parallel with every wire (seed Table 6.3), N m/rad.
+/// Flat-flex cable stiffness in parallel with every wire (thesis Table 6.3), N m/rad.
 pub const CABLE_STIFFNESS_N_M_PER_RAD: f64 = 0.0016;
 /// Metres per inch (exact).
 pub const M_PER_INCH: f64 = 0.0254;
@@ -93,7 +93,7 @@ impl WireDiameter {
     }
 }
 
-/// The available wires of model.md section 5, softest first.
+/// The available wires of docs/model.md section 5, softest first.
 pub fn available_wires() -> Vec<WireDiameter> {
     AVAILABLE_DIAMETERS_THOUSANDTHS_IN
         .iter()
@@ -171,7 +171,7 @@ pub struct WireModel {
 }
 
 impl Default for WireModel {
-    /// The seed's law and wire list.
+    /// The thesis's law and wire list.
     fn default() -> Self {
         Self {
             wire_constant_n_m_per_rad_per_m4: WIRE_CONSTANT_N_M_PER_RAD_PER_M4,
@@ -308,12 +308,12 @@ impl WireModel {
     }
 }
 
-/// The seed's law for one wire: `2.0614e12 r^4 + 0.0016` N m/rad.
+/// The thesis's law for one wire: `2.0614e12 r^4 + 0.0016` N m/rad.
 pub fn wire_stiffness_n_m_per_rad(wire: WireDiameter) -> f64 {
     WIRE_CONSTANT_N_M_PER_RAD_PER_M4 * wire.radius_m().powi(4) + CABLE_STIFFNESS_N_M_PER_RAD
 }
 
-/// [`WireModel::design`] with the seed's law and wire list.
+/// [`WireModel::design`] with the thesis's law and wire list.
 ///
 /// # Errors
 /// [`NitinolError::InvalidTarget`] naming the first NaN, infinite, zero or negative target.
@@ -442,7 +442,7 @@ mod tests {
             .unwrap();
         assert!((r - w.radius_m()).abs() < 1e-15);
         assert_eq!(model.ideal_radius_m(0.0015).unwrap(), None);
-        // The seed's k_max needs a 0.035 inch wire, above the list.
+        // The thesis's k_max needs a 0.035 inch wire, above the list.
         let r_max = model.ideal_radius_m(0.082).unwrap().unwrap();
         assert!((2.0 * r_max / M_PER_INCH - 0.035).abs() < 5e-4);
     }

@@ -1,4 +1,4 @@
-//! Forward kinematics (seed 2.2.1.1, 2.2.3.1, 6.1.1): the pose of one frame or of every
+//! Forward kinematics (thesis 2.2.1.1, 2.2.3.1, 6.1.1): the pose of one frame or of every
 //! frame relative to any spatial frame `s`, by prefix sums of the joint angles.
 //!
 //! Relative to `s`, the angle of link `i` is `psi_i = phi_i - phi_s` (a running sum of
@@ -11,7 +11,7 @@ use nalgebra::{DVector, Matrix2xX, Vector2};
 use crate::{Chain, Frame, KinematicsError};
 
 /// The position and orientation of a frame `C_b` relative to a spatial frame `C_s`,
-/// written in `C_s` (the third column of the seed's `H_sb`).
+/// written in `C_s` (the third column of the thesis's `H_sb`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose2 {
     /// `p_sb`, the origin of `C_b` in `C_s` coordinates, in metres.
@@ -33,7 +33,7 @@ impl Pose2 {
     }
 }
 
-/// The poses of every frame `-1..=n` relative to one spatial frame `s` (the seed's `P_s` and
+/// The poses of every frame `-1..=n` relative to one spatial frame `s` (the thesis's `P_s` and
 /// `Theta_s`, 2.2.3): column/entry `b + 1` belongs to frame `b`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FramePoses {
@@ -85,7 +85,7 @@ impl FramePoses {
     }
 }
 
-/// The pose of frame `b` relative to frame `s` (seed 2.2.1.6), in `O(|b - s|)` without
+/// The pose of frame `b` relative to frame `s` (thesis 2.2.1.6), in `O(|b - s|)` without
 /// allocating.
 ///
 /// # Errors
@@ -140,7 +140,7 @@ pub(crate) fn frame_pose_unchecked(lengths: &[f64], theta: &[f64], s: Frame, b: 
     }
 }
 
-/// The poses of every frame relative to `s` (seed 2.2.3.3-4) in `O(n)`.
+/// The poses of every frame relative to `s` (thesis 2.2.3.3-4) in `O(n)`.
 ///
 /// # Errors
 /// As [`frame_pose`].

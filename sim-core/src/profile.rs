@@ -1,4 +1,4 @@
-//! Joint stiffness profiles along the antenna (model.md section 5; seed 3.3.2, 4.2.1).
+//! Joint stiffness profiles along the antenna (docs/model.md section 5; thesis 3.3.2, 4.2.1).
 //!
 //! A chain of `N = n + 1` links (link 0 is the base link) has `n` joints. Joint `j`
 //! (`j = 1..=n`) sits at the normalized position
@@ -35,9 +35,9 @@
 use std::fmt;
 use std::str::FromStr;
 
-/// The seed robot's softest joint stiffness (seed 4.2.1.1), N m/rad.
+/// The thesis's robot's softest joint stiffness (thesis 4.2.1.1), N m/rad.
 pub const SEED_K_MIN_N_M_PER_RAD: f64 = 0.004;
-/// The seed robot's stiffest joint stiffness (seed 4.2.1.1), N m/rad.
+/// The thesis's robot's stiffest joint stiffness (thesis 4.2.1.1), N m/rad.
 pub const SEED_K_MAX_N_M_PER_RAD: f64 = 0.082;
 
 /// Errors from building a stiffness profile.
@@ -110,7 +110,7 @@ pub enum ProfileError {
     },
 }
 
-/// A joint stiffness profile (model.md section 5).
+/// A joint stiffness profile (docs/model.md section 5).
 #[derive(Debug, Clone, PartialEq)]
 pub enum StiffnessProfile {
     /// `k_j = k_min` at every joint.
@@ -127,7 +127,7 @@ pub enum StiffnessProfile {
     SlowReciprocal,
     /// `f(x) = 1/(x - 1.1)`.
     FastReciprocal,
-    /// `f(x) = exp(-4.8x)`: the cockroach radius taper `0.95 exp(-0.012 x%)` of seed 4.1.4.3
+    /// `f(x) = exp(-4.8x)`: the cockroach radius taper `0.95 exp(-0.012 x%)` of thesis 4.1.4.3
     /// raised to the fourth power (`EI ~ r^4`).
     Cockroach,
     /// Joint stiffnesses given directly, N m/rad, one per joint (joint `j` at index `j - 1`);
@@ -136,7 +136,7 @@ pub enum StiffnessProfile {
 }
 
 impl StiffnessProfile {
-    /// The eight named (non-custom) profiles, in the order of the model.md table.
+    /// The eight named (non-custom) profiles, in the order of the docs/model.md table.
     pub const NAMED: [StiffnessProfile; 8] = [
         StiffnessProfile::Constant,
         StiffnessProfile::Linear,
@@ -148,7 +148,7 @@ impl StiffnessProfile {
         StiffnessProfile::Cockroach,
     ];
 
-    /// The kebab-case name exactly as in the model.md table (`"custom"` for a custom list).
+    /// The kebab-case name exactly as in the docs/model.md table (`"custom"` for a custom list).
     pub fn name(&self) -> &'static str {
         match self {
             Self::Constant => "constant",
@@ -347,7 +347,7 @@ mod tests {
     const K_MIN: f64 = SEED_K_MIN_N_M_PER_RAD;
     const K_MAX: f64 = SEED_K_MAX_N_M_PER_RAD;
 
-    /// The seed robot: a base link and nine 40 mm segments.
+    /// The thesis's robot: a base link and nine 40 mm segments.
     fn seed_links() -> Vec<f64> {
         vec![0.04; 10]
     }
@@ -532,7 +532,7 @@ mod tests {
     }
 
     proptest! {
-        /// model.md section 5: exponentials (and cockroach) and logarithmic below linear,
+        /// docs/model.md section 5: exponentials (and cockroach) and logarithmic below linear,
         /// reciprocals above it, at every interior joint, for any link lengths.
         #[test]
         fn qualitative_order_against_linear(

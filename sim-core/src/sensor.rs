@@ -1,4 +1,4 @@
-//! Sensors as they are (seed 2.3.1, 4.2.2): what departs from the ideal reading of the joint
+//! Sensors as they are (thesis 2.3.1, 4.2.2): what departs from the ideal reading of the joint
 //! angles and the touch switches. [`SensorSettings`] describes it (a scene's `[sensors]`
 //! table, the daemon's simulated rig); [`Sensors`] applies it sample by sample, seeded, so
 //! that one seed gives one run.

@@ -1,21 +1,21 @@
 //! The force at the tip that holds a chain in static equilibrium at a given posture (seed
-//! 3.2.2, model.md 4): the least-squares solution of `J_Gn^T F = -tau` (seed 3.2.2.11), and
-//! the free-body system (seed 3.2.2.9) with an unknown stop torque at every joint resting on
+//! 3.2.2, docs/model.md 4): the least-squares solution of `J_Gn^T F = -tau` (thesis 3.2.2.11), and
+//! the free-body system (thesis 3.2.2.9) with an unknown stop torque at every joint resting on
 //! a limit, with the base reaction and the servo torque.
 //!
 //! # Sign conventions
 //! - `F` ([`TipForce::force_n`]) is the force the **environment exerts on the tip**, ground
-//!   frame, newtons: the wall reaction, the seed's `F_E`. The force the antenna exerts on the
-//!   environment, the seed's `F_(n,E)`, is `-F` ([`TipForce::force_on_environment_n`]).
+//!   frame, newtons: the wall reaction, the thesis's `F_E`. The force the antenna exerts on the
+//!   environment, the thesis's `F_(n,E)`, is `-F` ([`TipForce::force_on_environment_n`]).
 //! - `tau_j = -k_j (theta_j - rest_j)` is the torque of spring `j` on link `j`
-//!   ([`crate::joint_torques_nm`], seed 3.2.2.1). A stop torque `s_j` is the torque a joint's
+//!   ([`crate::joint_torques_nm`], thesis 3.2.2.1). A stop torque `s_j` is the torque a joint's
 //!   stop exerts on link `j`: `>= 0` from a clockwise stop, `<= 0` from a counter-clockwise
 //!   one, as in the equilibrium solver.
 //! - Equilibrium of the links distal to joint `j` (moments about joint `j`, at `p_(j-1)`):
 //!   `tau_j + s_j + (p_n - p_(j-1)) x F = 0`, that is
 //!   `k_j (theta_j - rest_j) = (J_Gn^T F)_j + s_j` with `(J_Gn^T F)_j = F . R90 (p_n - p_(j-1))`,
 //!   the translational rows of the hybrid tip Jacobian ([`crate::tip_jacobian`]). This is
-//!   the stationarity of `U - F . p_n` (what the solver minimizes), and the seed's
+//!   the stationarity of `U - F . p_n` (what the solver minimizes), and the thesis's
 //!   `tau = J_Gn^T F_(n,E)` (3.2.2.10) with `F_(n,E) = -F`.
 //! - The base joint (`j = 0`) is held by the servo, which is always an unknown: it never
 //!   enters the fit. The base mount (servo plus base spring) exerts on link 0 the force
@@ -26,7 +26,7 @@
 //!
 //! # Which to use
 //! Both fit `F` to the flexible joints' equations in least squares (a pin is free to rotate,
-//! so there is no tip moment; [`tip_wrench_least_squares`] adds one, as the seed's 3.2.2.11
+//! so there is no tip moment; [`tip_wrench_least_squares`] adds one, as the thesis's 3.2.2.11
 //! literally does). [`tip_force_least_squares`] uses every flexible joint; it is wrong when a
 //! joint rests on a limit, because the stop's torque is then read as if the tip force had
 //! caused it. [`tip_force_free_body`] gives each joint on a limit its own unknown stop torque,
@@ -34,16 +34,16 @@
 //! With no joint on a limit the two are the same computation and agree exactly.
 //!
 //! # How the free-body system is solved
-//! The seed's system 3.2.2.9 has, per link, two force and one moment equation, and unknowns
+//! The thesis's system 3.2.2.9 has, per link, two force and one moment equation, and unknowns
 //! the intersegmental forces, `F`, the servo torque (and here the stop torques). Nothing acts
 //! between base and tip, so the force equations give every intersegmental force exactly:
 //! link `i - 1` pushes link `i` with `-F`, and the ground pushes link 0 with `R = -F`. Summing
 //! the moment equations of links `j..=n` (a triangular, invertible recombination) turns them
 //! into the joint equations above; joint 0's equation gives the servo torque, each joint on a
 //! limit's gives its stop torque, and the free joints' equations (overdetermined beyond two
-//! free joints, the seed's 3.2.2.7-8 count) give `F` in least squares. When the torques are consistent (a true
+//! free joints, the thesis's 3.2.2.7-8 count) give `F` in least squares. When the torques are consistent (a true
 //! equilibrium) this is the exact solution of 3.2.2.9; when not, the residuals are measured as
-//! moments about the joints (newton-metres) rather than mixing the seed's force and moment
+//! moments about the joints (newton-metres) rather than mixing the thesis's force and moment
 //! equations in one norm. Everything is `O(n)` (a Jacobi SVD of an `n x 2` matrix).
 //!
 //! A straight chain cannot tell an axial force: every joint's lever arm is parallel to it.
@@ -110,13 +110,13 @@ pub struct TipForce {
 }
 
 impl TipForce {
-    /// `-F`: the force the antenna exerts on the environment, the seed's `F_(n,E)`.
+    /// `-F`: the force the antenna exerts on the environment, the thesis's `F_(n,E)`.
     pub fn force_on_environment_n(&self) -> Vector2<f64> {
         -self.force_n
     }
 }
 
-/// The free-body answer (seed 3.2.2.9 with stop torques): tip force, stop torques, base
+/// The free-body answer (thesis 3.2.2.9 with stop torques): tip force, stop torques, base
 /// reaction and servo torque.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FreeBodyForces {
@@ -143,7 +143,7 @@ pub struct FreeBodyForces {
 }
 
 /// The tip force that best explains the spring torques at `theta`: least squares over the
-/// flexible joints `1..=n` of `k_j (theta_j - rest_j) = (J_Gn^T F)_j` (seed 3.2.2.11 with the
+/// flexible joints `1..=n` of `k_j (theta_j - rest_j) = (J_Gn^T F)_j` (thesis 3.2.2.11 with the
 /// translational rows; the tip is a pin). `O(n)`.
 ///
 /// Right at a true equilibrium with no joint on a limit; with joints on a limit use
@@ -188,7 +188,7 @@ pub fn tip_force_least_squares(chain: &Chain, theta: &[f64]) -> Result<TipForce,
     Ok(fit(chain, theta, &arms, &free, false))
 }
 
-/// [`tip_force_least_squares`] with an unknown tip moment as well: the seed's 3.2.2.11
+/// [`tip_force_least_squares`] with an unknown tip moment as well: the thesis's 3.2.2.11
 /// literally, `(F, M) = (J_Gn^T)^+ (K (theta - rest))` with all three rows of the hybrid
 /// Jacobian. For a tip that cannot rotate freely (clamped, or gripped by the environment);
 /// needs three free joints to be determined.
@@ -218,7 +218,7 @@ pub fn tip_wrench_least_squares(chain: &Chain, theta: &[f64]) -> Result<TipForce
     Ok(fit(chain, theta, &arms, &free, true))
 }
 
-/// The free-body system of seed 3.2.2.9 with an unknown stop torque at every joint resting on
+/// The free-body system of thesis 3.2.2.9 with an unknown stop torque at every joint resting on
 /// a limit: the tip force fitted to the free joints, the stop torques, the base reaction and
 /// the servo torque. `on_limit` has `n + 1` entries (entry 0, the base, must be `false`);
 /// [`joints_on_limit`] builds it from the angles, or map the solver's limit sides. With no

@@ -1,4 +1,4 @@
-//! Differential kinematics (seed 2.2.1.2, 2.2.3.2, 6.1.2): the hybrid velocity of one frame
+//! Differential kinematics (thesis 2.2.1.2, 2.2.3.2, 6.1.2): the hybrid velocity of one frame
 //! or of every frame relative to `s`, by prefix sums, without forming a Jacobian.
 //!
 //! Relative to `s`, `psi_dot_i = phi_dot_i - phi_dot_s` is a running sum of `theta_dot` away
@@ -48,7 +48,7 @@ impl FrameVelocities {
     }
 }
 
-/// The hybrid velocity of frame `b` relative to `s` (seed 2.2.1.14, 2.2.1.9) in
+/// The hybrid velocity of frame `b` relative to `s` (thesis 2.2.1.14, 2.2.1.9) in
 /// `O(|b - s|)` without allocating.
 ///
 /// # Errors
@@ -103,7 +103,7 @@ pub fn frame_velocity(
     })
 }
 
-/// The hybrid velocities of every frame relative to `s` (seed 2.2.3.6-7) in `O(n)`.
+/// The hybrid velocities of every frame relative to `s` (thesis 2.2.3.6-7) in `O(n)`.
 ///
 /// # Errors
 /// As [`frame_velocity`].

@@ -1,4 +1,4 @@
-//! Runs the seed's experiments on sim-core, draws their figures in `docs/figures/` and writes
+//! Runs the thesis's experiments on sim-core, draws their figures in `docs/figures/` and writes
 //! `docs/reproduction.md` (`scripts/reproduce`; about a minute on 2 cores, most of it the
 //! 4.2.2 sweeps).
 //!
@@ -141,7 +141,7 @@ fn wall_following(md: &mut String, figures: bool) -> Result<(), Box<dyn std::err
         md,
         "`examples/wall_following_4_2_1.toml`, once per profile; test \
          `tests/tests/cross/reproduce_wall_following.rs`. Preview distance: how far ahead of the \
-         base the wall is touched (model.md 8); r and rho: Pearson and Spearman correlation \
+         base the wall is touched (docs/model.md 8); r and rho: Pearson and Spearman correlation \
          with the base-to-wall distance over the steps in contact.\n"
     )?;
     writeln!(
@@ -169,10 +169,10 @@ fn wall_following(md: &mut String, figures: bool) -> Result<(), Box<dyn std::err
         md,
         "\nReproduced: every decreasing profile previews further than the constant one; the \
          exponential and logarithmic ones beat linear, and linear beats both reciprocals \
-         (the seed's order of Table 4.1); the point of bend follows the wall distance better \
+         (the thesis's order of Table 4.1); the point of bend follows the wall distance better \
          for every decreasing profile than for the constant one. Our preview distances are \
-         shorter than the seed's (the constant profile trails its contact behind the base: \
-         negative preview), the order is the seed's.\n\n\
+         shorter than the thesis's (the constant profile trails its contact behind the base: \
+         negative preview), the order is the thesis's.\n\n\
          ![4.2.1](figures/reproduce_4_2_1.svg)\n"
     )?;
     if figures {
@@ -257,15 +257,15 @@ fn flipping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::erro
         md,
         "`examples/flipping_3_3_1.toml`; test `tests/tests/cross/reproduce_flipping.rs`. Flip: the \
          distal segment beyond 90 deg to the wall.\n\n\
-         **With the seed's 18 mm hairs: reproduced at 30 deg when the hair's root gives \
+         **With the thesis's 18 mm hairs: reproduced at 30 deg when the hair's root gives \
          (a root stiffness of 1e-3 to 2e-3 N m/rad, \"Compliant 18 mm hairs\" below), and at \
          60 and 70 deg; not at 10 and 20 deg; not with a rigid hair.** With its {:.0} mm \
-         rigid hairs, model.md 7's anchored hair stops the distal segment where the segment's end meets the wall: \
+         rigid hairs, docs/model.md 7's anchored hair stops the distal segment where the segment's end meets the wall: \
          the lock angle is {:.1} deg, short of a flip: at 10, 20 and 30 deg the distal \
          segment rises to it and stays (at 60 deg it flips late, at 70 deg not at all). \
-         The seed's antenna flipped, so its hair (or its segment's end) must give way past \
+         The thesis's antenna flipped, so its hair (or its segment's end) must give way past \
          that angle in a way the rigid hair does not: a compliant hair root does (the next \
-         table). With 30 mm hairs the lock lies beyond 90 deg and the seed's claims hold, as \
+         table). With 30 mm hairs the lock lies beyond 90 deg and the thesis's claims hold, as \
          the table shows.\n",
         seed_hair.length_m * 1e3,
         flipping::lock_angle_deg(&seed_hair)
@@ -322,7 +322,7 @@ fn flipping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::erro
             &docs().join("figures/reproduce_3_3_1.svg"),
             &[
                 Panel {
-                    title: "3.3.1 with the seed's hairs: the distal segment locks short of 90 deg",
+                    title: "3.3.1 with the thesis's hairs: the distal segment locks short of 90 deg",
                     x_label: "t (s)",
                     y_label: "distal segment to wall (deg)",
                     series: seed,
@@ -371,7 +371,7 @@ const COMPLIANT_CASES: [FlipCase; 10] = [
     (WallSurface::Smooth, HairLayout::Proximal, 30.0),
 ];
 
-/// 3.3.1 with the seed's 18 mm hairs given a compliant root: every case of
+/// 3.3.1 with the thesis's 18 mm hairs given a compliant root: every case of
 /// [`COMPLIANT_CASES`] for every root stiffness of [`ROOT_STIFFNESSES_NM_PER_RAD`] (and the
 /// rigid hair), run on two threads.
 fn compliant_flipping_runs(
@@ -384,7 +384,7 @@ fn compliant_flipping_runs(
     writeln!(
         md,
         "### Compliant {:.0} mm hairs\n\n\
-         The seed's hair is swung open by a 0.1 mm Nitinol wire \"which simultaneously acted \
+         The thesis's hair is swung open by a 0.1 mm Nitinol wire \"which simultaneously acted \
          as the hair tip that anchored the segment\" (3.3.1.1), and its model gives the hair \
          a base bending stiffness (Fig. 3.5): the anchored tip is not rigid. A root \
          stiffness `k_r` (scene key `root_stiffness_n_m_per_rad` in `[antenna.hairs]`; \
@@ -458,14 +458,14 @@ fn compliant_flipping_runs(
     writeln!(
         md,
         "\nWith a root stiffness from 1e-3 to 2e-3 N m/rad (a 0.1 mm Nitinol tip protruding \
-         6-7 mm) the six experiments at 30 deg come out as the seed's: only rough + distal \
+         6-7 mm) the six experiments at 30 deg come out as the thesis's: only rough + distal \
          flips (`tests/tests/cross/reproduce_flipping.rs` asserts it at 1.5e-3). Softer roots flip \
          it at some stiffnesses (3e-4, 6e-4 to 8e-4) and not at others (4e-4, 5e-4, 9e-4): \
          the outcome depends on which hair anchors when; below 3e-4 the anchored hairs bend \
          too easily to turn the segment (it rises to 27 deg). From 2.5e-3 N m/rad up it no longer flips: the \
          segment rises towards the rigid lock (60.3 deg), reached within 1 deg from 0.03. \
          The controls (3 distal-most removed, proximal hairs, smooth wall) never flip, at \
-         any root stiffness. Not reproduced: the seed's flips at 10 and 20 deg (no root \
+         any root stiffness. Not reproduced: the thesis's flips at 10 and 20 deg (no root \
          stiffness flips them; the distal segment rises to at most 57 deg), and at 60 deg \
          the outcome changes with the root: a soft one (up to 2e-3) flips at about 16 s, \
          2.5e-3 to 0.1 do not, the rigid hair flips late (15.7 s); at 70 deg roots up to \
@@ -751,7 +751,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
     writeln!(
         md,
         "`examples/mapping_trapezoid_4_2_2.toml` (the trapezoid of `wall_polyline.toml` at \
-         24 mm/s, the seed's speed) and `examples/mapping_4_2_2.toml` (amplitude 1 cm) at each \
+         24 mm/s, the thesis's speed) and `examples/mapping_4_2_2.toml` (amplitude 1 cm) at each \
          frequency, the fast-exponential against the constant profile. The contact points are \
          estimated from what the sensors read (`[sensors]`: `sim_core::Sensors`, then \
          `sim_core::estimate_contacts`) and scored two ways: the **point error**, each \
@@ -759,7 +759,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
          wall section passed (sampled every 0.5 mm of arclength) to its nearest estimated \
          point: mean, 90th percentile, and the fraction within 5 mm (`sim_core::coverage`; \
          the sweep summary's `mapping_coverage_error_mm`, `mapping_coverage_p90_mm`, \
-         `mapping_completeness`). The seed's \"mean spatial error from the ground truth\" \
+         `mapping_completeness`). The thesis's \"mean spatial error from the ground truth\" \
          grows because troughs the antenna bridges are never touched: the coverage measures \
          that, the point error cannot.\n\n\
          Two sensor sets: **ideal** (the 12-bit angles, every contact closing its switch at \
@@ -776,7 +776,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
          - *The error grows with the wall's frequency*, from 2.8 to 9.5 1/m: \
          fast-exponential {}, constant {} (with ideal sensors: {}, {}). At 14.2 1/m it grows no further \
          (fast-exponential {} mm against {} mm at 9.5 1/m): the antenna then touches only \
-         the crests, and the trough depth, not the frequency, bounds the error. The seed's \
+         the crests, and the trough depth, not the frequency, bounds the error. The thesis's \
          decreasing profile gave 2.7, 5.1, 12.1 and 25.0 mm; ours gives {} mm from 2.8 to \
          14.2 1/m.\n\
          - *The decreasing profile resolves finer walls*: fast-exponential's coverage error \
@@ -791,7 +791,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
          misses those contacts, leaving gaps in its map; the decreasing profile presses \
          harder with its stiff proximal joints. With switches that close at any force \
          (ideal, or the robot's with the threshold removed) the two profiles map about \
-         equally well and the seed's comparison fails; with a threshold of 5 mN or more it \
+         equally well and the thesis's comparison fails; with a threshold of 5 mN or more it \
          holds; angle noise and calibration errors of the sizes assumed change the coverage \
          by little, and the point error by about a millimetre. The table below varies one \
          setting at a time.\n",
@@ -961,9 +961,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut md = String::new();
     writeln!(
         md,
-        "# Reproducing the seed's experiments\n\n\
+        "# Reproducing the thesis's experiments\n\n\
          Generated by `scripts/reproduce` (`cargo run -p antenna-tests --release --example \
-         reproduce`), which also draws the figures in `docs/figures/`. The seed's claims that \
+         reproduce`), which also draws the figures in `docs/figures/`. The thesis's claims that \
          hold are asserted by the tests named in each section (`scripts/check` runs them); \
          where the model cannot reproduce a claim, the section says so and why.\n"
     )?;

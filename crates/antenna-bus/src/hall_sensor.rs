@@ -1,4 +1,4 @@
-//! A simulated segment's Hall sensor and ADC as they are (seed 2.3.1; issue #18): the
+//! A simulated segment's Hall sensor and ADC as they are (thesis 2.3.1; issue #18): the
 //! conversions the firmware oversamples, with the joint's calibration error and seeded noise.
 //!
 //! # The model

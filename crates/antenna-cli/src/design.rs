@@ -1,5 +1,5 @@
 //! `antenna design`: joint stiffness targets to the nearest available Nitinol wire per joint
-//! (model.md 5: `k = 2.0614e12 r^4 + 0.0016` N m/rad), as a table or JSON.
+//! (docs/model.md 5: `k = 2.0614e12 r^4 + 0.0016` N m/rad), as a table or JSON.
 
 use std::fmt::Write as _;
 

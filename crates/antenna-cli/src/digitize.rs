@@ -3,7 +3,7 @@
 //! scan of the wall would give (issue #14). The result is a `points_file` for a `[[walls]]`
 //! table ([`points_csv`]; the format is in [`crate::scene::points_file`]).
 //!
-//! `examples/walls/trapezoid_10k.csv` is the seed's 4.2.2 trapezoid (the wall of
+//! `examples/walls/trapezoid_10k.csv` is the thesis's 4.2.2 trapezoid (the wall of
 //! `examples/wall_polyline.toml`) digitized with [`TRAPEZOID_10K`]; regenerate it with
 //!
 //! ```sh

@@ -1,4 +1,4 @@
-//! `antenna identify`: joint stiffness from a free-oscillation recording (seed 6.2, model.md
+//! `antenna identify`: joint stiffness from a free-oscillation recording (thesis 6.2, docs/model.md
 //! 9), as a summary or JSON. The method is sim-core's [`identify_stiffness`].
 
 use std::fmt::Write as _;
@@ -19,7 +19,7 @@ pub struct IdentifyReport {
     pub inertia_kg_m2: f64,
     /// Damped frequency used, Hz.
     pub f_d_hz: f64,
-    /// Damped frequency at the spectrum peak, Hz (the seed's estimate).
+    /// Damped frequency at the spectrum peak, Hz (the thesis's estimate).
     pub f_d_spectrum_peak_hz: f64,
     /// Damping ratio used.
     pub zeta: f64,
@@ -92,7 +92,7 @@ pub fn identify_report(
     })
 }
 
-/// The default `C` for `--wire-radius` (seed 6.2.0.33).
+/// The default `C` for `--wire-radius` (thesis 6.2.0.33).
 pub const DEFAULT_WIRE_CONSTANT: f64 = WIRE_CONSTANT_N_M_PER_RAD_PER_M4;
 
 /// A short human summary of the report.

@@ -1,5 +1,5 @@
 //! `antenna solve`: a [`Scene`] through sim-core's equilibrium solver, reported exactly as
-//! `scene-format.md` says ([`SolveReport`]), or as a short human summary.
+//! `docs/scene-format.md` says ([`SolveReport`]), or as a short human summary.
 //!
 //! sim-core works relative to the base attachment point; the report is in the ground frame,
 //! so the base position (`[base] position_m`) is added to every point and subtracted from
@@ -16,7 +16,7 @@ use sim_core::{
 
 use crate::scene::{Scene, Start};
 
-/// The JSON object `antenna solve --json` prints (field names fixed by scene-format.md).
+/// The JSON object `antenna solve --json` prints (field names fixed by docs/scene-format.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SolveReport {
     /// The `n + 1` joint angles, radians, `theta_0` first.

@@ -1,6 +1,6 @@
 //! `antenna solve` on a scene with walls: the antenna placed as `[start]` says and settled
 //! with friction (step 0 of the scene's sweep) is the equilibrium, reported with exactly the
-//! fields of scene-format.md ([`SolveReport`]).
+//! fields of docs/scene-format.md ([`SolveReport`]).
 //!
 //! - `tip_force_n` is the force the tip exerts on what holds it: minus the walls' force on
 //!   the tip when the tip (the distal end of link `n`) is a contact, zero otherwise.

@@ -232,7 +232,7 @@ fn available_wires_are_reported_per_joint_and_the_table_names_them() {
     let wires = report["wire_diameters_in"].as_array().unwrap();
     assert_eq!(values.len(), wires.len());
     for (k, d) in values.iter().zip(wires) {
-        // k = 2.0614e12 r^4 + 0.0016 N m/rad (model.md 5)
+        // k = 2.0614e12 r^4 + 0.0016 N m/rad (docs/model.md 5)
         let r_m = num(d) * 0.0254 / 2.0;
         let made = 2.0614e12 * r_m.powi(4) + 0.0016;
         assert!(

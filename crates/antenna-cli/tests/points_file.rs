@@ -16,7 +16,7 @@ use common::{WALL_SCENE, examples_dir, run, stderr, stdout};
 use serde_json::Value;
 use sim_core::WallShape;
 
-/// The seed's trapezoid (`examples/wall_polyline.toml`) as `vertices_m`.
+/// The thesis's trapezoid (`examples/wall_polyline.toml`) as `vertices_m`.
 const TRAPEZOID_VERTICES: &str =
     "[[0.0, 0.2], [0.25, 0.2], [0.35, 0.14], [0.55, 0.14], [0.65, 0.2], [1.0, 0.2]]";
 

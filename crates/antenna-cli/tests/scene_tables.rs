@@ -1,4 +1,4 @@
-//! The scene tables beyond scene-format.md's core (`[antenna.hairs]`, `[[walls]]`,
+//! The scene tables beyond docs/scene-format.md's core (`[antenna.hairs]`, `[[walls]]`,
 //! `[[walls.zones]]`, `[sweep]`, `[start]`, `[contact]`, `[sensors]`): every error exits 2 with nothing on
 //! stdout and names the file, the line and column, the key and the table, under both
 //! `antenna solve` and `antenna sweep`; good tables reach sim-core as written.

@@ -10,7 +10,7 @@ mod common;
 use common::{run, scratch, stderr, stdout};
 use serde_json::Value;
 
-/// A short version of `examples/mapping_4_2_2.toml` (seed 4.2.2): 2 s, 200 steps along the
+/// A short version of `examples/mapping_4_2_2.toml` (thesis 4.2.2): 2 s, 200 steps along the
 /// sinusoidal wall, touching it at every step.
 fn mapping_scene() -> String {
     let text = std::fs::read_to_string(common::example("mapping_4_2_2.toml")).unwrap();

@@ -1,5 +1,5 @@
 //! `antenna solve` on every `examples/*.toml`: each converges (exit 0) and `--json` prints
-//! exactly the fields of scene-format.md with the right lengths and consistent values; the
+//! exactly the fields of docs/scene-format.md with the right lengths and consistent values; the
 //! pinned examples reach the C and S shapes they name, and `--all-minima` lists at least two
 //! stable equilibria sorted by energy. A scene with walls reports its placed and settled
 //! posture: step 0 of its sweep, with the tip's force on the walls.
@@ -39,7 +39,7 @@ fn check_report(v: &Value, scene: &Scene, label: &str) {
     expected.sort_unstable();
     assert_eq!(
         keys, expected,
-        "{label}: exactly the fields of scene-format.md"
+        "{label}: exactly the fields of docs/scene-format.md"
     );
 
     let n = scene.n();

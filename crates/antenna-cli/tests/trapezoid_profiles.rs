@@ -1,4 +1,4 @@
-//! `examples/wall_polyline.toml` (the seed 4.2.2 trapezoid): the antenna crosses the whole
+//! `examples/wall_polyline.toml` (the thesis 4.2.2 trapezoid): the antenna crosses the whole
 //! bump with each of the seven Table 4.1 stiffness profiles at 16.7 and 24 mm/s, every step
 //! certified by sim-core's independent check, and its contacts go down the first ramp,
 //! along the top, over its far corner and on past the bump.

@@ -1,8 +1,8 @@
 //! The antenna segment protocol: the one owner of the encoding.
 //!
-//! Every segment of the robotic antenna (seed 2.3.1) is an I2C target on one shared bus. The
+//! Every segment of the robotic antenna (thesis 2.3.1) is an I2C target on one shared bus. The
 //! firmware, its 8051 C shim, the host daemon and the simulated rig all speak the protocol
-//! defined here (`shared/spec/segment-protocol.md`); nothing else re-implements it.
+//! defined here (`docs/segment-protocol.md`); nothing else re-implements it.
 //!
 //! - [`SampleWord`]: 12-bit joint angle and 4 touch bits in one 16-bit word.
 //! - [`pec`]: SMBus packet error code (CRC-8, polynomial 0x07, init 0).

@@ -1,4 +1,4 @@
-//! The segment's register map (segment-protocol.md, "Register access").
+//! The segment's register map (docs/segment-protocol.md, "Register access").
 
 use crate::ProtocolError;
 

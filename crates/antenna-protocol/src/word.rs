@@ -1,4 +1,4 @@
-//! The 16-bit sample word: `word = (angle << 4) | touch` (seed 2.3.1).
+//! The 16-bit sample word: `word = (angle << 4) | touch` (thesis 2.3.1).
 
 use crate::{ProtocolError, pec};
 

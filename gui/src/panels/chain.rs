@@ -13,7 +13,7 @@
 //! length and shaded by each sample's distance to the nearest estimated contact point
 //! ([`coverage_colour`]: captured, bluish green, to missed, vermillion, at the completeness
 //! threshold), on a dark band so that it reads on either theme; the estimated points as small
-//! dots (as in the seed's Figures 4.15 and 4.16); a colour bar in the panel's lower right
+//! dots (as in the thesis's Figures 4.15 and 4.16); a colour bar in the panel's lower right
 //! corner; and the numbers (mean and 90th percentile coverage error, completeness, points) in
 //! the row above the panel.
 

@@ -1,4 +1,4 @@
-//! Offline: a mapping sweep (seed 4.2.2) run in the monitor; its wall map, gathered step by
+//! Offline: a mapping sweep (thesis 4.2.2) run in the monitor; its wall map, gathered step by
 //! step on the sweep's thread, is the coverage sim-core computes from the steps afresh, at
 //! every step drawn; the chain panel shows the map's numbers for the step at the cursor and
 //! hides them with **wall map**; the map's colour scale runs from captured to missed.

@@ -429,7 +429,7 @@ pub struct SimConfig {
     pub sensors: SimSensorsConfig,
 }
 
-/// `[sim.sensors]`: the simulated segments' sensors as they are (seed 2.3.1; issue #18), with
+/// `[sim.sensors]`: the simulated segments' sensors as they are (thesis 2.3.1; issue #18), with
 /// the keys and meaning of sim-core's [`SensorSettings`] (a scene's `[sensors]`), seeded so
 /// that one seed gives one run. Left out, the sensors are ideal and the simulated rig's words
 /// are exactly those of ideal sensors.

@@ -69,7 +69,7 @@ pub fn date() -> String {
     format!("{year:04}-{month:02}-{day:02}")
 }
 
-/// The seed's 4.2.2 trapezoid (a 6 cm deep recess from x = 0.25 m to 0.65 m, solid above),
+/// The thesis's 4.2.2 trapezoid (a 6 cm deep recess from x = 0.25 m to 0.65 m, solid above),
 /// with friction `mu`.
 pub fn trapezoid_4_2_2(mu: f64) -> Result<sim_core::Wall, Box<dyn std::error::Error>> {
     let vertices = [
@@ -88,7 +88,7 @@ pub fn trapezoid_4_2_2(mu: f64) -> Result<sim_core::Wall, Box<dyn std::error::Er
     ))
 }
 
-/// The sinusoid of the seed's highest spatial frequency (4.2.2: 14.2 cycles/m), 10 mm
+/// The sinusoid of the thesis's highest spatial frequency (4.2.2: 14.2 cycles/m), 10 mm
 /// amplitude about y = 0.17 m (crests of 12.6 mm radius), solid above, with friction `mu`.
 pub fn sinusoid_14_2(mu: f64) -> Result<sim_core::Wall, Box<dyn std::error::Error>> {
     Ok(sim_core::Wall::new(
@@ -104,9 +104,9 @@ pub fn sinusoid_14_2(mu: f64) -> Result<sim_core::Wall, Box<dyn std::error::Erro
     ))
 }
 
-/// The seed's 0.36 m antenna cut into `links` equal links (`links - 1` flexible joints), base
+/// The thesis's 0.36 m antenna cut into `links` equal links (`links - 1` flexible joints), base
 /// angle 30 deg, joint limits +-90 deg, the fast-exponential profile scaled to stay the same
-/// beam (the seed's 0.004..0.082 N m/rad for 40 mm links times 40 mm / link).
+/// beam (the thesis's 0.004..0.082 N m/rad for 40 mm links times 40 mm / link).
 pub fn scaled_antenna(links: usize) -> Result<sim_core::Chain, Box<dyn std::error::Error>> {
     use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
     let n = links - 1;
@@ -129,9 +129,9 @@ pub fn scaled_antenna(links: usize) -> Result<sim_core::Chain, Box<dyn std::erro
         .build()?)
 }
 
-/// The seed's antenna, metres.
+/// The thesis's antenna, metres.
 pub const ANTENNA_LENGTH_M: f64 = 0.36;
-/// The seed's link, metres.
+/// The thesis's link, metres.
 pub const SEED_LINK_M: f64 = 0.04;
 
 /// The solver's settings for `links` links: the defaults, or with the jump threshold scaled to

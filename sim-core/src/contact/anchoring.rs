@@ -1,4 +1,4 @@
-//! Hairs anchoring in rough surfaces, and letting go (model.md 7).
+//! Hairs anchoring in rough surfaces, and letting go (docs/model.md 7).
 //!
 //! A hair tip touching a rough zone open against its stop anchors: the asperities hook it,
 //! and the anchored solve decides whether the load presses the hair against its stop (it

@@ -442,7 +442,7 @@ impl QuasiStatic {
     /// (it does not move along the crest), a crest pair of either of the joint's links
     /// whose foot lies past that link's end at the joint ([`Self::crest_past_joint`])
     /// measures the link's line run on past the joint, which no matter of the link
-    /// touches, at the joint's own contact. On the seed's 14.2 cycles/m sinusoid under 30
+    /// touches, at the joint's own contact. On the thesis's 14.2 cycles/m sinusoid under 30
     /// links (mu = 0.3), joint 23 stuck on a crest for 35 steps while the crest's foot on
     /// link 24's line went from 0.1% to 1.4% of the link before its start, 6 nm to 1.1 um
     /// through that line: with both pairs each full step's solve failed after 40 to 120
@@ -487,7 +487,7 @@ impl QuasiStatic {
     /// joint's links whose foot, past the link's end at the joint where the last step left
     /// the chain, the secant predictor at `goal` ([`Self::secant_prediction`]) puts on the
     /// link: the crest passes from the joint onto that link in this step. The joint's pair
-    /// leaves the step (the two would hold one contact). On the seed's 14.2 cycles/m
+    /// leaves the step (the two would hold one contact). On the thesis's 14.2 cycles/m
     /// sinusoid under 110 links, joint 87 slid on a crest whose foot on link 88 was 1.3% of
     /// the link before its start: with both pairs the step's solve failed, the step was
     /// halved, and the halves found the crest 6% and 11% into link 88 (30 Newton
@@ -743,7 +743,7 @@ impl QuasiStatic {
     /// smooth, and a chain bent around it passes its contact from link to link, the joint
     /// between them clear of the crest. Only where the other link is steeper than the
     /// crest's flanks (it cannot be tangent to the crest) does the joint ride over it: the
-    /// joint's point pair takes the force back as from a corner. On the seed's 14.2
+    /// joint's point pair takes the force back as from a corner. On the thesis's 14.2
     /// cycles/m sinusoid under 110 links, step 1014: the crest's foot on link 73 slid to
     /// 2.6% past the link's end, and the pair was dropped with no hand-over (past the 1% a
     /// joint takes a corner back from); the solve without it failed, the halved steps

@@ -1,4 +1,4 @@
-//! An independent check of a quasi-static state (model.md 6: "every step is checked"):
+//! An independent check of a quasi-static state (docs/model.md 6: "every step is checked"):
 //! recomputed from the posture and the reported contact forces with the crate's own
 //! kinematics ([`crate::frame_poses`], [`crate::hair_poses`]) and the walls' own distance
 //! queries, not from the solver's equations. [`super::QuasiStatic::step_to`] runs it on

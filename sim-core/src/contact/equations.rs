@@ -88,7 +88,7 @@ const HYSTERESIS_M: f64 = 1e-11;
 /// How deep in its wall a pair the last step let go (unloaded) may start a solve and keep
 /// its mode for the solve's first Newton step, metres ([`Equations::keep_last_modes`]): the
 /// last posture carried with the base may push a free contact into its wall as it lifts a
-/// pressed one off (the seed's 14.2 cycles/m sinusoid under 4 links: a joint 1.5 nm off the
+/// pressed one off (the thesis's 14.2 cycles/m sinusoid under 4 links: a joint 1.5 nm off the
 /// wall's flank carried 14 nm into it, pressed, took the load of the crest beside it, and the
 /// modes cycled, step after step, until the sweep failed at 6.19 s; kept free, it finishes,
 /// Newton p99 40). A pair deeper than this is a contact the step brings on, and presses at

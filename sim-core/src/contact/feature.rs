@@ -39,7 +39,7 @@ impl Feature {
     }
 }
 
-/// The friction law at one contact (model.md 6-7).
+/// The friction law at one contact (docs/model.md 6-7).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FrictionLaw {
     /// Coulomb: `N >= 0`, `|T| <= mu N`; sticks below the limit, slips at it.

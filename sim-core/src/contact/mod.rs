@@ -1,8 +1,8 @@
 //! Quasi-static contact with walls: non-penetration of every link and hair tip, Coulomb
-//! friction that truly sticks, anchoring hairs, snaps (model.md 6-7, seed 3.2-3.3, 4.2).
+//! friction that truly sticks, anchoring hairs, snaps (docs/model.md 6-7, thesis 3.2-3.3, 4.2).
 //!
 //! # The model
-//! The base pivot moves in small steps; inertia is neglected (the seed's base speeds are
+//! The base pivot moves in small steps; inertia is neglected (the thesis's base speeds are
 //! 2-17 mm/s). Each step finds the posture where the spring torques balance the contact
 //! forces, with
 //! - **non-penetration** of every link (its ends and, against a wall corner or crest, its
@@ -15,7 +15,7 @@
 //!   while `|T| < mu N` (stuck: exactly, no creep) and slides with `T = -mu N sign(slip)`
 //!   otherwise; the slip is measured from where the point was at the start of the step, so
 //!   the friction state carries from step to step;
-//! - **hairs** (model.md 7): each hair angle is a coordinate with its spring and its range
+//! - **hairs** (docs/model.md 7): each hair angle is a coordinate with its spring and its range
 //!   `[0, open]`, taking part only while its tip is near a wall. On a rough surface a hair
 //!   tip open against its stop and loaded toward opening **anchors**: it sticks and holds up
 //!   to the surface's shear and tension strengths; a load that folds it lets it collapse and

@@ -174,7 +174,7 @@ pub(crate) struct Pair {
     /// Stuck or slipping.
     pub slip: Slip,
     /// When set, the shear bound is `mu` times this normal force instead of the current one
-    /// (the Tresca problem of model.md 6's fixed point on the normal forces).
+    /// (the Tresca problem of docs/model.md 6's fixed point on the normal forces).
     pub tresca_n: Option<f64>,
     /// `Some(B)` where this step's solution bounded the shear force by `B` instead of the
     /// law's bound (a jam in the fixed point on the normal forces).

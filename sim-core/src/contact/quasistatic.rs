@@ -16,7 +16,7 @@ use super::ssn::Ssn;
 use super::substep::Accepted;
 use crate::{Chain, Wall};
 
-/// A chain moving quasi-statically against walls with friction and hairs (model.md 6-7).
+/// A chain moving quasi-statically against walls with friction and hairs (docs/model.md 6-7).
 ///
 /// The state carries from step to step: joint and hair angles, and every contact with its
 /// forces and friction state (anchored hairs stay anchored). See the

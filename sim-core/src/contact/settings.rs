@@ -2,7 +2,7 @@
 
 use super::ContactError;
 
-/// Options of [`super::QuasiStatic`], with defaults that suit the seed's robot (40 mm links,
+/// Options of [`super::QuasiStatic`], with defaults that suit the thesis's robot (40 mm links,
 /// stiffness 0.004-0.082 N m / rad, base steps of a fraction of a millimetre).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ContactSettings {

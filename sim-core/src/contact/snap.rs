@@ -1,7 +1,7 @@
 //! Following a snap downhill: where the posture's branch of equilibria ends under the moving
 //! base (the antenna flips or springs forward), the posture follows the friction-aware
 //! gradient flow by implicit (proximal) steps until a plain solve from where it got to
-//! converges without a jump (model.md 6: "follow the downhill path, not jump to whatever
+//! converges without a jump (docs/model.md 6: "follow the downhill path, not jump to whatever
 //! minimum a Newton step lands in").
 
 use nalgebra::Vector2;

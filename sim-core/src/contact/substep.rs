@@ -39,7 +39,7 @@ const QUICK_ITERATIONS: usize = 12;
 
 /// A quick attempt whose best merit has not halved in this many Newton iterations has
 /// stalled: friction still locks the antenna, and the step drops it at once. A step that
-/// sticks again converges without such a stall: over 20 s of the seed's walls under 4
+/// sticks again converges without such a stall: over 20 s of the thesis's walls under 4
 /// links (90 mm links; friction locks the antenna in 787-1,529 of 2,000 steps), 4 drops
 /// friction in as many steps on each wall as 14 ([`STALL_ITERATIONS`]) does, and the median
 /// step takes 6 Newton iterations instead of 14 (the failing quick attempt spent 12 of
@@ -244,11 +244,11 @@ impl QuasiStatic {
             let none_missed = missed.is_empty();
             changed |= !none_missed;
             // A link come down onto a crest beside its joint stuck there takes the joint's
-            // force (the seed's sinusoid at t = 3.03 s under 30 to 150 links: the solve with
+            // force (the thesis's sinusoid at t = 3.03 s under 30 to 150 links: the solve with
             // both stalled, 46 to 67 Newton iterations, and the fixed point handed it so).
             self.hand_stuck_joints_to_missed_links(&mut pairs, &mut missed, &mut handed_over);
             pairs.extend(missed);
-            // Hair anchoring on rough surfaces (model.md 7).
+            // Hair anchoring on rough surfaces (docs/model.md 7).
             changed |= self.update_anchors(&x, &hair_links, &mut pairs, &mut anchoring);
             if changed {
                 // Rounds that take turns between two sets of pairs (a crest's force handed

@@ -1,4 +1,4 @@
-//! Static equilibria of the chain (seed 2.3.2, model.md 3, 4, 6): KKT points of
+//! Static equilibria of the chain (thesis 2.3.2, docs/model.md 3, 4, 6): KKT points of
 //!
 //! ```text
 //! minimize   P(theta) = U(theta) - F . p_n(theta)      over theta_1..theta_n (theta_0 fixed)

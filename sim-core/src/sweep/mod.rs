@@ -1,10 +1,10 @@
-//! Quasi-static sweeps (seed 3.3, 4.2): the base moves at a set velocity for a set time in
+//! Quasi-static sweeps (thesis 3.3, 4.2): the base moves at a set velocity for a set time in
 //! fixed steps; every step is a [`QuasiStatic`] step with its contacts, friction and hairs,
-//! and the wall-following metrics of model.md 8.
+//! and the wall-following metrics of docs/model.md 8.
 //!
 //! A sweep starts from a [`Placement`]: the rest posture as it is, an approach (the base
 //! starts away from a wall and moves onto it, which leaves the antenna projecting forward),
-//! the tip placed on a wall with the distal part bent back (the seed 4.2.1 start: a pinned
+//! the tip placed on a wall with the distal part bent back (the thesis 4.2.1 start: a pinned
 //! equilibrium, released), or explicit angles. What was done is in [`Sweep::placement_note`].
 //!
 //! # Example
@@ -19,7 +19,7 @@
 //!     .base_angle_rad(30f64.to_radians())
 //!     .stiffness_nm_per_rad(0.01)
 //!     .build()?;
-//! // The seed's 4.2.1 wall: 8 degrees to the track, 0.2 m from the base, smooth (mu = 0.3).
+//! // The thesis's 4.2.1 wall: 8 degrees to the track, 0.2 m from the base, smooth (mu = 0.3).
 //! let wall = Wall::smooth(Line::new(Vector2::new(0.0, 0.2), -8f64.to_radians(), SolidSide::Left)?);
 //! let scene = SweepScene {
 //!     placement: Placement::TipOnWall { wall: 0, ahead_m: 0.05, start: InitialGuess::C },
@@ -65,7 +65,7 @@ pub struct Motion {
 }
 
 impl Default for Motion {
-    /// The seed's 4.2.1 sweep: 16.7 mm/s along x for 50 s at 100 Hz.
+    /// The thesis's 4.2.1 sweep: 16.7 mm/s along x for 50 s at 100 Hz.
     fn default() -> Self {
         Motion {
             velocity_m_per_s: Vector2::new(0.0167, 0.0),
@@ -179,14 +179,14 @@ pub struct SweepStep {
     pub hair_angles_rad: Vec<f64>,
     /// The contacts.
     pub contacts: Vec<Contact>,
-    /// The point of bend: the joint with the greatest `|theta_j|` (model.md 8).
+    /// The point of bend: the joint with the greatest `|theta_j|` (docs/model.md 8).
     pub bend_joint: Option<usize>,
     /// The point of contact: the most proximal contact's nearest point number (joint `j`,
     /// or `n + 1` for the tip).
     pub contact_joint: Option<usize>,
-    /// The preview distance, metres (model.md 8); `None` without contacts.
+    /// The preview distance, metres (docs/model.md 8); `None` without contacts.
     pub preview_m: Option<f64>,
-    /// The distal segment against the nearest wall (model.md 7): its angle and whether it
+    /// The distal segment against the nearest wall (docs/model.md 7): its angle and whether it
     /// has flipped (beyond 90 degrees). `None` without walls.
     pub flip: Option<FlipState>,
     /// The touch bits per link (bit `k`: switch `k`, from each contact's place on its link).

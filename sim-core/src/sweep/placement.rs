@@ -1,4 +1,4 @@
-//! Putting the antenna against the walls before a sweep (model.md 6: "provide a way to place
+//! Putting the antenna against the walls before a sweep (docs/model.md 6: "provide a way to place
 //! the antenna in a chosen posture against the wall, release it, and then sweep; say what
 //! was done").
 
@@ -26,7 +26,7 @@ pub enum Placement {
     /// a straight line onto its start position in `steps` equal steps: the tip meets the
     /// wall and the antenna bends, as when a robot comes up to a wall. With `along_m = 0` or
     /// negative (the base sliding back as it comes in, dragging the tip backward) the antenna
-    /// ends projecting forward (the seed 3.3.1 start, "projecting in the direction of
+    /// ends projecting forward (the thesis 3.3.1 start, "projecting in the direction of
     /// motion"); a steep antenna meeting the wall head-on needs the backward slide.
     Approach {
         /// The wall to approach.
@@ -42,7 +42,7 @@ pub enum Placement {
     /// The tip is held on wall `wall` at the point `ahead_m` ahead of the base along the
     /// direction of motion, the chain solved for that pin from `start` (a pinned
     /// equilibrium: with a C start the antenna bends toward the wall and its distal part
-    /// lies back along it, the seed 4.2.1 start "bent backwards and in contact with the
+    /// lies back along it, the thesis 4.2.1 start "bent backwards and in contact with the
     /// wall"), then let go and settled with friction.
     TipOnWall {
         /// The wall.

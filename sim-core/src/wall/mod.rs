@@ -1,4 +1,4 @@
-//! Walls (model.md 6, seed 3.3, 4.2): curves with a solid side, in the ground frame.
+//! Walls (docs/model.md 6, thesis 3.3, 4.2): curves with a solid side, in the ground frame.
 //!
 //! # Conventions
 //! - Every wall curve has a **tangent orientation**: the direction of increasing arclength
@@ -18,7 +18,7 @@
 //! Queries ([`Wall::signed_distance`], [`Wall::segment_contact`], [`Wall::surface_at`]) do
 //! not allocate.
 //!
-//! # Example: a link against the seed's 4.2.1 wall
+//! # Example: a link against the thesis's 4.2.1 wall
 //! ```
 //! use nalgebra::Vector2;
 //! use sim_core::{Line, SolidSide, Wall};
@@ -211,9 +211,9 @@ pub struct SegmentContact {
 pub enum WallShape {
     /// A straight line.
     Line(Line),
-    /// An open polyline with infinite end rays (the seed's trapezoid).
+    /// An open polyline with infinite end rays (the thesis's trapezoid).
     Polyline(Polyline),
-    /// A sinusoid about a straight baseline (seed 4.2.2).
+    /// A sinusoid about a straight baseline (thesis 4.2.2).
     Sinusoid(Sinusoid),
 }
 
@@ -440,7 +440,7 @@ impl Wall {
         }
     }
 
-    /// A smooth wall with the default friction (`mu = 0.3`, model.md 6) everywhere.
+    /// A smooth wall with the default friction (`mu = 0.3`, docs/model.md 6) everywhere.
     pub fn smooth(shape: impl Into<WallShape>) -> Wall {
         Wall::new(shape, SurfaceMap::default())
     }

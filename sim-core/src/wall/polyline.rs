@@ -1,4 +1,4 @@
-//! A polyline wall (the seed's trapezoid, 4.2.2): an open chain of straight edges whose first
+//! A polyline wall (the thesis's trapezoid, 4.2.2): an open chain of straight edges whose first
 //! and last edges extend to infinity as rays, so the wall splits the plane into a solid and a
 //! free side.
 //!

@@ -1,4 +1,4 @@
-//! A sinusoidal wall (seed 4.2.2): `c(t) = o + t u + A sin(2 pi f t + phase) v` about a
+//! A sinusoidal wall (thesis 4.2.2): `c(t) = o + t u + A sin(2 pi f t + phase) v` about a
 //! straight baseline through `o` with direction `u = (cos a, sin a)`, `v = (-sin a, cos a)`.
 //!
 //! **Frequency unit.** `frequency_per_m` counts **cycles per metre** (wavelength `1 / f`).

@@ -1,11 +1,11 @@
-//! Wall surfaces (model.md 6-7): smooth (Coulomb friction) or rough (asperities that anchor
-//! hair tips), and zones of different surface along one wall (the seed's smooth zone followed
+//! Wall surfaces (docs/model.md 6-7): smooth (Coulomb friction) or rough (asperities that anchor
+//! hair tips), and zones of different surface along one wall (the thesis's smooth zone followed
 //! by felt or abrasive, 3.3.2).
 
 use super::WallPoint;
 use super::error::{WallError, finite};
 
-/// The friction coefficient of a smooth wall when none is given (model.md 6).
+/// The friction coefficient of a smooth wall when none is given (docs/model.md 6).
 pub const SMOOTH_MU_DEFAULT: f64 = 0.3;
 
 /// What a wall is made of at one point.

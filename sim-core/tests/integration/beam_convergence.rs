@@ -1,4 +1,4 @@
-//! Chains converge to the elastica (model.md 5), at the orders `sim_core::beam` documents:
+//! Chains converge to the elastica (docs/model.md 5), at the orders `sim_core::beam` documents:
 //! measured here for a cantilever with a perpendicular tip load, `alpha = F L^2 / EI` in
 //! {0.5, 1, 2, 5, 10}, against the Bisshopp-Drucker closed form, and for a tapered beam with an
 //! oblique load against the elastica shooting solver.

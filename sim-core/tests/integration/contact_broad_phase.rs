@@ -8,7 +8,7 @@ use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, Stiffnes
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
 use sim_core::{Chain, JointLimit, Line, Sinusoid, SolidSide, Wall, WallShape};
 
-/// The seed's 4.2.1 antenna: 9 links of 40 mm, fast-exponential.
+/// The thesis's 4.2.1 antenna: 9 links of 40 mm, fast-exponential.
 fn antenna() -> Chain {
     let lengths = vec![0.04; 9];
     let k = StiffnessProfile::FastExponential

@@ -1,4 +1,4 @@
-//! Coulomb friction in the quasi-static contact solver (model.md 6): a stuck contact does not
+//! Coulomb friction in the quasi-static contact solver (docs/model.md 6): a stuck contact does not
 //! creep, a sliding one slides at `|T| = mu N` against its motion, the forces agree with an
 //! independent statics of the chain, and every step passes the independent check.
 #![allow(clippy::unwrap_used)]

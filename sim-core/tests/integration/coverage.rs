@@ -108,7 +108,7 @@ fn no_points_no_errors_and_nothing_complete() {
 
 #[test]
 fn sinusoid_samples_are_even_in_arclength() {
-    // 1 cm amplitude, 14.2 1/m (the seed's finest wall): its arclength per metre of baseline
+    // 1 cm amplitude, 14.2 1/m (the thesis's finest wall): its arclength per metre of baseline
     // is well above 1; the samples must follow the curve, not the baseline.
     let wave = Sinusoid::new(
         Vector2::new(0.0, 0.1),
@@ -156,7 +156,7 @@ fn sinusoid_samples_are_even_in_arclength() {
 
 #[test]
 fn trapezoid_samples_cover_its_edges() {
-    // The seed's trapezoid shape: up, across, down; the section spans all of it.
+    // The thesis's trapezoid shape: up, across, down; the section spans all of it.
     let vertices = vec![
         Vector2::new(0.0, 0.0),
         Vector2::new(0.1, 0.0),

@@ -8,8 +8,8 @@
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use sim_core::{Chain, Equilibrium, tip_jacobian, tip_pose};
 
-/// The seed's robot as in scene-format.md: 9 links (n = 8 flexible joints) of 40 mm, the
-/// fast-exponential profile of model.md 5 between 0.004 and 0.082 N m/rad, limits +-90 deg.
+/// The thesis's robot as in docs/scene-format.md: 9 links (n = 8 flexible joints) of 40 mm, the
+/// fast-exponential profile of docs/model.md 5 between 0.004 and 0.082 N m/rad, limits +-90 deg.
 pub fn seed_exponential_chain(base_angle_rad: f64) -> Chain {
     let n = 8;
     let f: Vec<f64> = (1..=n)
@@ -53,7 +53,7 @@ pub fn residual_torques(chain: &Chain, theta: &[f64], f: Vector2<f64>) -> DVecto
 }
 
 /// The least-squares force on the tip from `J^T F = K (theta - rest) - J^T F_dead` over the
-/// free joints (seed 3.2.2.11, computed here with nalgebra's SVD).
+/// free joints (thesis 3.2.2.11, computed here with nalgebra's SVD).
 pub fn least_squares_pin_force(
     chain: &Chain,
     eq: &Equilibrium,

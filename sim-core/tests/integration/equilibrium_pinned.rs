@@ -22,7 +22,7 @@ fn pin_at(chain: &Chain, fraction_of_reach: f64, angle_deg: f64) -> Vector2<f64>
     first_joint(chain) + Vector2::new(a.cos(), a.sin()) * reach * fraction_of_reach
 }
 
-/// The seed robot's chain with wide limits (+-3 rad) so that the folded shapes are allowed.
+/// The thesis's robot's chain with wide limits (+-3 rad) so that the folded shapes are allowed.
 fn wide_chain() -> Chain {
     let seed = seed_exponential_chain(0.0);
     Chain::builder(8)
@@ -68,7 +68,7 @@ fn check_pinned(chain: &Chain, pin: Vector2<f64>, dead: Vector2<f64>, eq: &sim_c
     );
 }
 
-/// (d) On the seed robot (fast-exponential 0.082 -> 0.004 N m/rad, limits +-90 deg), with
+/// (d) On the thesis's robot (fast-exponential 0.082 -> 0.004 N m/rad, limits +-90 deg), with
 /// the pin 32 mm from the first joint at 100 deg to the base link: the C start reaches a
 /// C (0 inflections), the S start an S (1 inflection); both stable, the C lower.
 #[test]

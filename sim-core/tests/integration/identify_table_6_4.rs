@@ -1,4 +1,4 @@
-//! Stiffness identification against the seed's Table 6.4 (seed 6.2; model.md 9), through the
+//! Stiffness identification against the thesis's Table 6.4 (thesis 6.2; docs/model.md 9), through the
 //! public API: `f_n` from `f_d` and `zeta`, `k_eq = J_s (2 pi f_n)^2` with `J_s = 3.25e-6`
 //! kg m^2, and the wire constant `C` of `k_wire = C r^4` from the table's rows.
 //!

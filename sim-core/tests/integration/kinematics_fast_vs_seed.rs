@@ -1,4 +1,4 @@
-//! The `O(n)` fast paths of sim-core equal the seed's matrix forms (seed 2.2.1.6, 2.2.1.14,
+//! The `O(n)` fast paths of sim-core equal the thesis's matrix forms (thesis 2.2.1.6, 2.2.1.14,
 //! 2.2.2.1-3, 2.2.3.3-7, 3.2.1.1-3) to 1e-12 relative, for random chains with n from 1 to
 //! 2000, random link lengths (uniform or per link), random angles and any frame pair.
 //!
@@ -153,7 +153,7 @@ fn check_all_jacobians(c: &Case) -> Result<(), TestCaseError> {
     )
 }
 
-/// All Jacobians against the seed's per-frame Jacobians (2.2.3.5) for a few frames: the
+/// All Jacobians against the thesis's per-frame Jacobians (2.2.3.5) for a few frames: the
 /// O(n^3) stacked product is too slow at n = 2000 for the test budget.
 fn check_all_jacobians_sampled(c: &Case) -> Result<(), TestCaseError> {
     let fast = all_jacobians(&c.chain, &c.theta, c.s).unwrap();
@@ -172,8 +172,8 @@ fn check_all_jacobians_sampled(c: &Case) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-/// A chain like `c`'s with the seed's hair (left, distal, centred) on every link 0..=n, the
-/// hair angles and rates, and the seed's hair angles `theta' = beta - pi`.
+/// A chain like `c`'s with the thesis's hair (left, distal, centred) on every link 0..=n, the
+/// hair angles and rates, and the thesis's hair angles `theta' = beta - pi`.
 fn with_seed_hairs(c: &Case, hair_length_m: f64, betas: &[f64]) -> (Chain, Vec<f64>) {
     let n = c.chain.n();
     let mut builder = Chain::builder(n)

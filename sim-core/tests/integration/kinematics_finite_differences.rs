@@ -1,6 +1,6 @@
 //! Every Jacobian and velocity of sim-core equals central finite differences of the
 //! positions; the limit map's derivatives equal finite differences of the map (settling the
-//! seed's sign slip in 2.2.4.5-6, model.md 3); the energy's gradient and Hessian equal finite
+//! seed's sign slip in 2.2.4.5-6, docs/model.md 3); the energy's gradient and Hessian equal finite
 //! differences of the energy and gradient, in theta and in q.
 //!
 //! Tolerances are relative to the magnitude of what is differenced: position rows to the
@@ -366,7 +366,7 @@ proptest! {
 
 /// The seed prints `J_g = -1/2 diag(cos q) diag(ccw - cw)` (2.2.4.5) and
 /// `dJ_g/dq = 1/2 [diag(ccw - cw) (.) diag(cos q)]` (2.2.4.6). Finite differences say the
-/// signs and the trig function are as in model.md 3: `+h cos q` and `-h sin q`.
+/// signs and the trig function are as in docs/model.md 3: `+h cos q` and `-h sin q`.
 #[test]
 fn seed_limit_map_derivatives_have_a_sign_slip() {
     let lim = JointLimit::new(-0.5, 1.5); // h = 1
@@ -376,13 +376,13 @@ fn seed_limit_map_derivatives_have_a_sign_slip() {
     assert!((lim.dtheta_dq(q) - fd1).abs() < 1e-9);
     assert!(
         (seed1 - fd1).abs() > 0.5,
-        "the seed's printed J_g would agree"
+        "the thesis's printed J_g would agree"
     );
     let fd2 = (lim.dtheta_dq(q + H) - lim.dtheta_dq(q - H)) / (2.0 * H);
     let seed2 = 0.5 * (lim.ccw_rad - lim.cw_rad) * q.cos();
     assert!((lim.d2theta_dq2(q) - fd2).abs() < 1e-9);
     assert!(
         (seed2 - fd2).abs() > 0.5,
-        "the seed's printed second derivative would agree"
+        "the thesis's printed second derivative would agree"
     );
 }

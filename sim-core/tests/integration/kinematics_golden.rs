@@ -1,4 +1,4 @@
-//! Golden cases worked by hand: the seed's own examples in 2.2.1 and 2.2.3 (n = 8, s = 5,
+//! Golden cases worked by hand: the thesis's own examples in 2.2.1 and 2.2.3 (n = 8, s = 5,
 //! b = 1 and s = 1, b = 5: alpha and A exactly as printed), and small chains whose positions,
 //! Jacobians, limit map, energy and hair tips can be read off a sketch.
 //!
@@ -228,7 +228,7 @@ fn energy_by_hand() {
     );
 }
 
-/// The seed's hair (3.2.1): 18 mm at 45 degrees, pivot at the middle of a 40 mm link.
+/// The thesis's hair (3.2.1): 18 mm at 45 degrees, pivot at the middle of a 40 mm link.
 #[test]
 fn hair_tip_by_hand() {
     let hair = Hair::seed(0.04);

@@ -1,4 +1,4 @@
-//! The seed's identities hold for the bookkeeping and the fast paths: 2.2.1.3-2.2.1.5 and
+//! The thesis's identities hold for the bookkeeping and the fast paths: 2.2.1.3-2.2.1.5 and
 //! 2.2.1.7-2.2.1.8 (and the two used between 2.2.1.13 and 2.2.1.14), 2.2.3.2 and 2.2.3.4,
 //! `J_b = blockdiag(R_sb^T, 1) J_sb`, `J_sigma = [I, -R90 p_sb; 0, 1] J_sb`,
 //! `g(g^-1(theta)) = theta` inside the limits, and rigid-motion invariance: changing

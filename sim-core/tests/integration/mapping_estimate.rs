@@ -1,4 +1,4 @@
-//! Wall mapping (seed 4.2.2, model.md 8): contact points estimated from 12-bit joint angles
+//! Wall mapping (thesis 4.2.2, docs/model.md 8): contact points estimated from 12-bit joint angles
 //! and touch bits. An exact posture on a line wall maps with only quantization error, which
 //! stays under its first-order bound; a wall offset by a known distance gives that distance;
 //! touch bits come from contacts as the switches would set them; bad input is rejected.

@@ -1,4 +1,4 @@
-//! Wall-following metrics (model.md 8) on hand-built postures: point of bend with its
+//! Wall-following metrics (docs/model.md 8) on hand-built postures: point of bend with its
 //! tie rule, point of contact, preview distance (ahead, behind, reversed motion), flip
 //! detection against the local wall tangent, and the correlations (undefined for a constant
 //! index).

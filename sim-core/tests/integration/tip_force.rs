@@ -1,8 +1,8 @@
-//! Tip forces (seed 3.2.2, model.md 4) on exact equilibria built without a solver
+//! Tip forces (thesis 3.2.2, docs/model.md 4) on exact equilibria built without a solver
 //! (`tip_force_common`): least squares `J^T F = -tau` recovers the force when no joint is on
 //! a limit; the free-body system agrees with it then, and with joints on a limit recovers
 //! the force and the stop torques where least squares is provably wrong; the free-body
-//! answer solves the seed's per-link system 3.2.2.9 (assembled densely here); the base
+//! answer solves the thesis's per-link system 3.2.2.9 (assembled densely here); the base
 //! reaction balances the chain and the servo torque is the virtual work of turning the base.
 #![allow(clippy::unwrap_used)]
 
@@ -24,7 +24,7 @@ fn cross(a: Vector2<f64>, b: Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
-/// The seed's free-body system 3.2.2.9, with a stop torque unknown at each joint on a limit,
+/// The thesis's free-body system 3.2.2.9, with a stop torque unknown at each joint on a limit,
 /// assembled densely and solved by SVD: per link `i`, two force equations and the moment
 /// about its proximal joint. Unknowns: `f_0..f_n` (the force link `i - 1`, or the ground, exerts on
 /// link `i`), `F`, `tau_servo`, then the stop torques in joint order. Returns the solution
@@ -180,7 +180,7 @@ proptest! {
         prop_assert!(lhs >= s.norm() * (1.0 - 1e-6), "LS wrong: {lhs:e} vs ||s|| {:e}", s.norm());
     }
 
-    /// The free-body answer solves the seed's per-link system 3.2.2.9 (with stop torques):
+    /// The free-body answer solves the thesis's per-link system 3.2.2.9 (with stop torques):
     /// the same `F`, servo torque, stop torques, and base reaction `f_0 = -F`; every
     /// intersegmental force is `-F`.
     #[test]
@@ -247,7 +247,7 @@ proptest! {
         }
     }
 
-    /// The wrench fit (seed 3.2.2.11 with the angular row) recovers a tip force and moment
+    /// The wrench fit (thesis 3.2.2.11 with the angular row) recovers a tip force and moment
     /// put in together, with three or more joints.
     #[test]
     fn wrench_fit_recovers_force_and_moment(

@@ -1,4 +1,4 @@
-//! Castigliano's deflection (seed 3.2.2.12-15): `delta theta = K^-1 J^T (F, M)`.
+//! Castigliano's deflection (thesis 3.2.2.12-15): `delta theta = K^-1 J^T (F, M)`.
 //!
 //! It is the formula (checked against `tip_jacobian`), and it is the first-order response
 //! to a small tip load about an unloaded posture: the exact equilibrium under `eps (F, M)`

@@ -1,4 +1,4 @@
-//! Wall queries against brute force (model.md 6): the sinusoid's nearest point against dense
+//! Wall queries against brute force (docs/model.md 6): the sinusoid's nearest point against dense
 //! sampling of the curve, the polyline's signed distance against an independent
 //! point-to-segment computation, and `segment_contact` against dense sampling along the
 //! segment for all three shapes (amplitudes up to 5 cm, 1 to 20 cycles/m, links 5 to 60 mm,
@@ -361,7 +361,7 @@ proptest! {
 }
 
 /// The broad phase spares a sinusoid's search where the antenna is not near it: a link 5 mm
-/// clear of the seed's 14.2 cycles/m, 10 mm sinusoid (steepest slope 0.89) inside its band is
+/// clear of the thesis's 14.2 cycles/m, 10 mm sinusoid (steepest slope 0.89) inside its band is
 /// bounded above zero, within the `1 / sqrt(1 + 0.89^2)` of its vertical gap the bound
 /// promises; a link beyond the band by its height there; a link through the wall below zero.
 #[test]

@@ -1,4 +1,4 @@
-//! Wall geometry (model.md 6): analytic signed distances for a line and the seed's
+//! Wall geometry (docs/model.md 6): analytic signed distances for a line and the thesis's
 //! trapezoid, the sign and normal conventions, translation, surface zones and the
 //! constructors' errors.
 #![allow(clippy::unwrap_used)]
@@ -252,7 +252,7 @@ fn constructors_reject_bad_input() {
     );
 }
 
-/// The model.md 6 warning: joints alone miss a corner that pokes into the middle of a link.
+/// The docs/model.md 6 warning: joints alone miss a corner that pokes into the middle of a link.
 #[test]
 fn trapezoid_bottom_inside_a_link_is_found() {
     let wall = trapezoid();

@@ -5,7 +5,7 @@
 //! angles 10, 20, 60 and 70 deg with the wall distance scaled like the reach
 //! (`135 mm sin(theta_0) / sin(30 deg)`). `examples/flipping_3_3_1.toml` is the base scene.
 //!
-//! A flip is the distal segment beyond 90 deg to the wall (model.md 7).
+//! A flip is the distal segment beyond 90 deg to the wall (docs/model.md 7).
 
 use nalgebra::Vector2;
 use sim_core::sweep::{Sweep, SweepScene};
@@ -34,7 +34,7 @@ pub enum HairLayout {
 }
 
 impl HairLayout {
-    /// Every layout, in the seed's order.
+    /// Every layout, in the thesis's order.
     pub const ALL: [HairLayout; 3] = [
         HairLayout::Distal,
         HairLayout::DistalWithoutLastThree,
@@ -85,7 +85,7 @@ impl FlipRun {
     }
 }
 
-/// The geometric lock angle of model.md 7: with the hair anchored and unable to pull, the
+/// The geometric lock angle of docs/model.md 7: with the hair anchored and unable to pull, the
 /// distal segment stops where its end meets the wall, `tan(phi) = (w + l_h sin a) / (d - l_h
 /// cos a)` (`d` the pivot's distance from the segment's end, `a` the open angle), degrees.
 pub fn lock_angle_deg(hair: &Hair) -> f64 {

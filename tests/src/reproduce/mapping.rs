@@ -5,7 +5,7 @@
 //! `examples/mapping_4_2_2_sensors.toml`), scored against the true wall two ways: each
 //! estimated point's distance to the wall (the point error), and each point of the wall
 //! section passed to its nearest estimated point (the coverage, `sim_core::coverage`: what
-//! the seed's "mean spatial error from the ground truth" grows with).
+//! the thesis's "mean spatial error from the ground truth" grows with).
 //! `examples/mapping_4_2_2.toml` is the base scene of the sinusoids (its wall's frequency and
 //! the profile are varied here), `examples/mapping_trapezoid_4_2_2.toml` the trapezoid's.
 
@@ -17,7 +17,7 @@ use sim_core::{
 
 use super::{ReproduceError, with_profile};
 
-/// The seed's wall frequencies, 1/m.
+/// The thesis's wall frequencies, 1/m.
 pub const FREQUENCIES_PER_M: [f64; 5] = [2.8, 4.2, 6.3, 9.5, 14.2];
 
 /// One run: a profile against a wall frequency.

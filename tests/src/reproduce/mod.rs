@@ -1,6 +1,6 @@
-//! The seed's experiments run on sim-core (issue "contact, friction, hairs, sweeps"): each
+//! The thesis's experiments run on sim-core (issue "contact, friction, hairs, sweeps"): each
 //! module runs one experiment and returns its numbers; `tests/tests/cross/reproduce_*.rs` assert
-//! the seed's claims on them and `cargo run -p antenna-tests --release --example reproduce`
+//! the thesis's claims on them and `cargo run -p antenna-tests --release --example reproduce`
 //! draws the figures in `docs/figures/` and writes `docs/reproduction.md`.
 //!
 //! Every experiment starts from a scene file in `examples/` (parsed by `antenna-cli`) and
@@ -17,12 +17,12 @@ use std::path::PathBuf;
 use sim_core::sweep::SweepScene;
 use sim_core::{Chain, StiffnessProfile};
 
-/// The seed's stiffness range for the robot, N m / rad (seed 4.2.1.1).
+/// The thesis's stiffness range for the robot, N m / rad (thesis 4.2.1.1).
 pub const K_MIN_N_M_PER_RAD: f64 = 0.004;
 /// See [`K_MIN_N_M_PER_RAD`].
 pub const K_MAX_N_M_PER_RAD: f64 = 0.082;
 
-/// The seven profiles of the seed's Table 4.1, in its row order.
+/// The seven profiles of the thesis's Table 4.1, in its row order.
 pub const TABLE_4_1_PROFILES: [StiffnessProfile; 7] = [
     StiffnessProfile::Constant,
     StiffnessProfile::FastExponential,
@@ -100,7 +100,7 @@ pub fn load_sensors(name: &str) -> Result<sim_core::SensorSettings, ReproduceErr
     Ok(scene.sensors)
 }
 
-/// `chain` with the stiffness of `profile` normalized to the seed's range.
+/// `chain` with the stiffness of `profile` normalized to the thesis's range.
 ///
 /// # Errors
 /// [`ReproduceError::Profile`], [`ReproduceError::Chain`].

@@ -1,6 +1,6 @@
 //! Seed 3.3.2: the tip forces through a flip. Nine segments with distal hairs run along a
 //! smooth wall that ends in an abrasive strip; the distal hair anchors there and the antenna
-//! flips with its tip pivoting on the strip (the seed's force pad). The normal and shear
+//! flips with its tip pivoting on the strip (the thesis's force pad). The normal and shear
 //! forces on the distal segment from the wall (its tip and its hair: what the pad measures)
 //! are recorded through the flip at base angles 30 and 60 deg, the wall distance scaled like
 //! the reach. `examples/tip_forces_3_3_2.toml` is the base scene.

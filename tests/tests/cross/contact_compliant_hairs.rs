@@ -1,4 +1,4 @@
-//! Hairs with a compliant root (model.md 7, issue #18): on the seed's 3.3.1 scene
+//! Hairs with a compliant root (docs/model.md 7, issue #18): on the thesis's 3.3.1 scene
 //! (`examples/flipping_3_3_1.toml`, rough wall, 18 mm distal hairs, base angle 30 deg) an
 //! anchored hair with a root stiffness bends past its stop, and every such state passes the
 //! independent equilibrium check with the hair as an interior coordinate (its torque

@@ -1,4 +1,4 @@
-//! Non-penetration of every link, not only the joints (model.md 6): a polyline corner poking
+//! Non-penetration of every link, not only the joints (docs/model.md 6): a polyline corner poking
 //! into a link between its joints, a sinusoid's crests, a link lying flat on a wall; and the
 //! independent check after every step.
 #![allow(clippy::unwrap_used)]

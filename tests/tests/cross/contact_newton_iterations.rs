@@ -1,4 +1,4 @@
-//! What the contact solver spends on a long antenna (issue #13, items 2 and 7): the seed's
+//! What the contact solver spends on a long antenna (issue #13, items 2 and 7): the thesis's
 //! 0.36 m antenna cut into 150 links, swept along the 4.2.1 wall as `scripts/bench-sweep`
 //! sweeps it (`sim-core/examples/sweep_scaling_bench.rs`, the jump threshold scaled to the
 //! link). Its distal part lies bent back along the wall, and every few seconds the contact
@@ -16,7 +16,7 @@ use sim_core::{
     Chain, InitialGuess, JointLimit, Line, Sinusoid, SolidSide, Surface, SurfaceMap, Wall,
 };
 
-/// The seed's antenna and link, metres.
+/// The thesis's antenna and link, metres.
 const LENGTH_M: f64 = 0.36;
 const SEED_LINK_M: f64 = 0.04;
 
@@ -142,7 +142,7 @@ fn a_150_link_antenna_on_the_4_2_1_wall_does_not_spend_iterations_cycling() {
     assert!(worst <= 30, "a step took {worst} Newton iterations");
 }
 
-/// The seed's tightest sinusoid (4.2.2: 14.2 cycles/m), 10 mm amplitude about y = 0.17 m
+/// The thesis's tightest sinusoid (4.2.2: 14.2 cycles/m), 10 mm amplitude about y = 0.17 m
 /// (crests of 12.6 mm radius), mu = 0.3.
 fn seed_sinusoid() -> Wall {
     seed_sinusoid_with(0.3)
@@ -203,14 +203,14 @@ fn a_quick_solve_where_friction_still_locks_stops_after_a_few_iterations() {
     assert_eq!(dropped, 1_529, "steps that dropped friction");
 }
 
-/// The seed's tightest sinusoid (4.2.2: 14.2 cycles/m; 10 mm amplitude, crests of 12.6 mm
-/// radius) under a 72-link antenna for 20 s (BENCHMARKS.md, "Newton iterations on the seed's
+/// The thesis's tightest sinusoid (4.2.2: 14.2 cycles/m; 10 mm amplitude, crests of 12.6 mm
+/// radius) under a 72-link antenna for 20 s (BENCHMARKS.md, "Newton iterations on the thesis's
 /// walls"). A crest's contact crosses a joint: the step's solve failed with the crest inside
 /// the next link and no pair for it (that check ran only after a solve that converged), the
 /// step was halved twelve times and followed as a snap. A failed solve with something in a
 /// wall that no pair holds now solves the round again with that pair: the p99 per step 46 ->
 /// 25, 16,512 -> 12,129 Newton iterations (12,940 since an unloaded pair keeps its mode for
-/// a solve's first Newton step). (At N = 150 the seed's sinusoid still misses the
+/// a solve's first Newton step). (At N = 150 the thesis's sinusoid still misses the
 /// issue's goal: issue #13.)
 #[test]
 fn a_crest_inside_a_link_after_a_failed_solve_joins_the_step() {

@@ -2,14 +2,14 @@
 //! smooth wall x distal hairs, the three distal-most removed, proximal hairs) and rough +
 //! distal at base angles 10, 20, 60 and 70 deg.
 //!
-//! With the seed's hair geometry (18 mm) model.md 7's anchored hair locks the distal segment
+//! With the thesis's hair geometry (18 mm) docs/model.md 7's anchored hair locks the distal segment
 //! at 60.3 deg to the wall, short of a flip: the model cannot flip at 30 deg, and the test
-//! says so. With 30 mm hairs (lock beyond 90 deg) the seed's claims hold: only rough + distal
+//! says so. With 30 mm hairs (lock beyond 90 deg) the thesis's claims hold: only rough + distal
 //! flips, and it flips at every base angle. docs/reproduction.md shows both.
 //!
-//! With a compliant root (issue #18) the seed's 18 mm hairs bend past the lock: at a root
+//! With a compliant root (issue #18) the thesis's 18 mm hairs bend past the lock: at a root
 //! stiffness of 1.5e-3 N m/rad (a 0.1 mm Nitinol tip protruding about 6 mm; 10 deg of bend
-//! take 15 mN at the tip) the six experiments at 30 deg come out as the seed's: only the
+//! take 15 mN at the tip) the six experiments at 30 deg come out as the thesis's: only the
 //! rough wall with distal hairs flips (it flips from 1e-3 to 2e-3 N m/rad, and at some
 //! softer roots down to 3e-4). A root of 2.5e-3 N m/rad or stiffer holds the segment short of 90 deg again, and
 //! a stiff one (0.1) locks it near the rigid hair's lock angle. At 10 and 20 deg no root
@@ -106,7 +106,7 @@ fn compliant_seed_hairs_flip_only_on_the_rough_wall_with_distal_hairs() {
             }
         }
     }
-    // The seed's base-angle control (rough wall, distal hairs): it flipped at 10, 20, 60 and
+    // The thesis's base-angle control (rough wall, distal hairs): it flipped at 10, 20, 60 and
     // 70 deg too. At this root 60 and 70 deg flip; 10 and 20 deg do not (docs/reproduction.md
     // says so).
     for (deg, flips) in [(10.0, false), (20.0, false), (60.0, true), (70.0, true)] {

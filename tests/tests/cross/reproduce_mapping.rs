@@ -4,7 +4,7 @@
 //!   joint also touches and the ones where a crest crosses a joint, and with ideal sensors
 //!   the estimated points lie within a few millimetres of the wall (the 12-bit angles and four
 //!   switches per link bound the point error);
-//! - with the robot's sensors (`examples/mapping_4_2_2_sensors.toml`), the seed's claims
+//! - with the robot's sensors (`examples/mapping_4_2_2_sensors.toml`), the thesis's claims
 //!   about the coverage (docs/reproduction.md, section 3): the error grows with the wall's
 //!   frequency from 2.8 to 9.5 1/m for both profiles; the decreasing profile maps every
 //!   frequency and the trapezoid better than the constant one, and at 14.2 1/m at least as
@@ -78,7 +78,7 @@ fn sinusoid_sweeps_run_to_the_end_and_map_within_the_sensing_resolution() {
         check(run);
     }
     // With ideal sensors the decreasing profile at 14.2 1/m maps worse than the constant one
-    // at 6.3 1/m does (the seed's comparison needs a switch that takes a force).
+    // at 6.3 1/m does (the thesis's comparison needs a switch that takes a force).
     let c63 = sinusoids(&[(StiffnessProfile::Constant, 6.3)], &SensorSettings::IDEAL);
     let fe142 = coverage(&runs, &StiffnessProfile::FastExponential, 14.2);
     let c63 = coverage(&c63, &StiffnessProfile::Constant, 6.3);

@@ -1,6 +1,6 @@
 //! `antenna optimize OPT.toml`: the stiffness profile that maximizes a task's metric over a
-//! set of sweeps (seed 4.2: which profile makes the best antenna), searched by argmin's
-//! derivative-free solvers. The seven named profiles of the seed's Table 4.1 are swept first
+//! set of sweeps (thesis 4.2: which profile makes the best antenna), searched by argmin's
+//! derivative-free solvers. The seven named profiles of the thesis's Table 4.1 are swept first
 //! and the search starts from the best of them, so it never reports worse; every evaluation
 //! is a certified sweep of each scene, and a sweep that fails (or jams, or never touches the
 //! wall) makes its evaluation infeasible, counted and reported.

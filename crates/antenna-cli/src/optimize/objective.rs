@@ -3,14 +3,14 @@
 
 use crate::sweep::SweepSummary;
 
-/// The task metric of a sweep (seed 4.2), metres, larger is better.
+/// The task metric of a sweep (thesis 4.2), metres, larger is better.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Objective {
     /// The mean preview distance over the steps with a contact (`preview_mean_m`): how far
-    /// ahead of the base the antenna feels the wall (seed 4.2.1, Table 4.1).
+    /// ahead of the base the antenna feels the wall (thesis 4.2.1, Table 4.1).
     PreviewMean,
     /// Minus the mean distance of the mapped contact points (from the sensed 12-bit angles
-    /// and touch bits) to the true wall (`-mapping_mean_error_mm / 1000`; seed 4.2.2).
+    /// and touch bits) to the true wall (`-mapping_mean_error_mm / 1000`; thesis 4.2.2).
     MappingError,
     /// The preview mean times the share of the sweep before the distal segment first flips
     /// (`first_flip_t_s / sweep_time_s`; 1 without a flip): a sweep that never flips scores

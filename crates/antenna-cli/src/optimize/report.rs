@@ -10,7 +10,7 @@ use super::{Evaluation, OptimizeSpec, Wires};
 /// A named profile's evaluation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NamedResult {
-    /// The profile's name (model.md 5).
+    /// The profile's name (docs/model.md 5).
     pub name: String,
     /// Its objective, metres (`null`: infeasible).
     pub objective_value: Option<f64>,
@@ -212,7 +212,7 @@ impl OptimizeReport {
             self.method,
             self.budget
         );
-        let _ = writeln!(out, "named profiles (seed Table 4.1):");
+        let _ = writeln!(out, "named profiles (thesis Table 4.1):");
         for n in &self.named_profiles {
             let _ = writeln!(out, "  {:<18} {}", n.name, mm(n.objective_value));
         }

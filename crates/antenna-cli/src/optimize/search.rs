@@ -1,4 +1,4 @@
-//! The search of `antenna optimize`: the seven named profiles of the seed's Table 4.1 first,
+//! The search of `antenna optimize`: the seven named profiles of the thesis's Table 4.1 first,
 //! then argmin's Nelder-Mead or particle swarm from the best of them, until the budget of
 //! sweeps is spent or the solver converges.
 
@@ -20,7 +20,7 @@ use super::evaluator::Stop;
 use super::log::{LogError, open_log};
 use super::{Evaluator, Method, NamedResult, OptimizeReport, OptimizeSpec, Space};
 
-/// The seven profiles of the seed's Table 4.1, in its order.
+/// The seven profiles of the thesis's Table 4.1, in its order.
 pub const TABLE_4_1: [StiffnessProfile; 7] = [
     StiffnessProfile::Constant,
     StiffnessProfile::Linear,

@@ -8,7 +8,7 @@
 //! exponential-taper:  k_j = k_1 (k_n / k_1)^((x_j - x_1) / (x_n - x_1)),  k_1, k_n as above
 //! ```
 //!
-//! `x_j` is joint `j`'s normalized position along the antenna (model.md 5). A coordinate
+//! `x_j` is joint `j`'s normalized position along the antenna (docs/model.md 5). A coordinate
 //! outside `[0, 1]` (Nelder-Mead's simplex may step out) is projected onto the box: the best
 //! profiles lie on the bounds (joints as stiff or as soft as allowed), which a projected
 //! simplex reaches and keeps. Measured on the worked example (docs/optimize.md), reflecting
@@ -37,7 +37,7 @@ file_names!(Family {
 pub enum Wires {
     /// Any stiffness within the bounds.
     Any,
-    /// Only what one of the available Nitinol wires makes (with the cable, model.md 5),
+    /// Only what one of the available Nitinol wires makes (with the cable, docs/model.md 5),
     /// within the bounds.
     Available,
 }

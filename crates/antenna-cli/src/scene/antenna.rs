@@ -1,4 +1,4 @@
-//! `[antenna]` and `[antenna.stiffness]` (the fixed core of scene-format.md) with
+//! `[antenna]` and `[antenna.stiffness]` (the fixed core of docs/scene-format.md) with
 //! `[antenna.hairs]`: the chain, validated key by key.
 
 use std::ops::Range;

@@ -1,4 +1,4 @@
-//! `[antenna.hairs]`: anisotropic hairs on the flagellar links (model.md 7), one hair
+//! `[antenna.hairs]`: anisotropic hairs on the flagellar links (docs/model.md 7), one hair
 //! description for the links it names; unset keys take [`Hair::seed`]'s values.
 
 use std::fmt;

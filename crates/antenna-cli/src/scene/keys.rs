@@ -1,4 +1,4 @@
-//! The keys each table of a scene file allows: the fixed core of scene-format.md and our own
+//! The keys each table of a scene file allows: the fixed core of docs/scene-format.md and our own
 //! tables (hairs, walls, the sweep, the start, the contact solver, the sensors).
 
 /// Keys allowed at the top level of a scene file.

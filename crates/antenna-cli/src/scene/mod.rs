@@ -1,5 +1,5 @@
 //! Scene files: the TOML description of one antenna, its base, and what acts on it
-//! (`shared/spec/scene-format.md`), parsed with serde and validated into a [`Scene`]; and our
+//! (`docs/scene-format.md`), parsed with serde and validated into a [`Scene`]; and our
 //! own tables for sweeps along walls: `[antenna.hairs]`, `[[walls]]` with
 //! `[[walls.zones]]`, `[sweep]`, `[start]`, `[contact]` and `[sensors]` (documented in the
 //! README's scene table). [`Scene::sweep_scene`] turns a scene into sim-core's [`SweepScene`](sim_core::sweep::SweepScene).
@@ -265,7 +265,7 @@ impl Scene {
 }
 
 // ---------------------------------------------------------------------------------------
-// Raw serde model: the keys of scene-format.md and our own tables.
+// Raw serde model: the keys of docs/scene-format.md and our own tables.
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]

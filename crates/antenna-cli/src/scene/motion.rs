@@ -1,5 +1,5 @@
 //! `[sweep]`: how the base moves during `antenna sweep` (a constant velocity for a set time
-//! in fixed steps); unset keys take [`Motion::default`] (the seed's 4.2.1 sweep: 16.7 mm/s
+//! in fixed steps); unset keys take [`Motion::default`] (the thesis's 4.2.1 sweep: 16.7 mm/s
 //! along x for 50 s at 100 Hz).
 
 use serde::Deserialize;

@@ -1,4 +1,4 @@
-//! `[sensors]`: the robot's sensors as they are (seed 2.3.1, 4.2.2; issue #18): Hall angle
+//! `[sensors]`: the robot's sensors as they are (thesis 2.3.1, 4.2.2; issue #18): Hall angle
 //! noise, per-joint calibration offset and gain errors, the touch switches' force threshold
 //! and debounce, and the rate at which the robot samples, seeded. Unset keys take
 //! [`SensorSettings::IDEAL`]'s values; without the table the sensors are ideal and a sweep's

@@ -1,4 +1,4 @@
-//! `[solver]` (the fixed core of scene-format.md): the equilibrium solver's tolerance,
+//! `[solver]` (the fixed core of docs/scene-format.md): the equilibrium solver's tolerance,
 //! iterations and start, for scenes without walls.
 
 use std::fmt;

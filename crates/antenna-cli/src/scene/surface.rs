@@ -1,6 +1,6 @@
 //! The surface keys a `[[walls]]` table and each of its `[[walls.zones]]` share: `surface`
 //! (`"smooth"` or `"rough"`), `mu`, and for a rough surface `hold_shear_n` and
-//! `hold_tension_n` (model.md 6-7).
+//! `hold_tension_n` (docs/model.md 6-7).
 
 use std::ops::Range;
 

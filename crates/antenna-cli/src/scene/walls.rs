@@ -1,6 +1,6 @@
 //! `[[walls]]` (any number, wall 0 first) with their `[[walls.zones]]`: a line, a polyline
-//! (the seed's trapezoid; its vertices in `vertices_m` or, digitized, in a `points_file`) or a
-//! sinusoid, solid on one side, with a surface or surface zones (model.md 6).
+//! (the thesis's trapezoid; its vertices in `vertices_m` or, digitized, in a `points_file`) or a
+//! sinusoid, solid on one side, with a surface or surface zones (docs/model.md 6).
 
 use std::ops::Range;
 use std::path::Path;

@@ -97,7 +97,7 @@ impl HairLayout {
     }
 
     /// The hairs of this layout on a chain of `n` flexible links whose scene has `scene`'s
-    /// hairs (their parameters are kept; without any, the seed's hair).
+    /// hairs (their parameters are kept; without any, the thesis's hair).
     pub fn spec(&self, scene: Option<&HairSpec>, link_lengths_m: &[f64]) -> Option<HairSpec> {
         let n = link_lengths_m.len().saturating_sub(1);
         match self {

@@ -11,7 +11,7 @@
 //! stiffness_bounds_n_m_per_rad = [0.004, 0.082]  # optional: for `profiles` (default: the scene's)
 //!
 //! [axes]                                # each optional; absent = the scene's own value
-//! profiles = ["constant", "linear"]     # stiffness profiles (model.md 5)
+//! profiles = ["constant", "linear"]     # stiffness profiles (docs/model.md 5)
 //! base_angles_deg = [20.0, 30.0]        # the base angle theta_0
 //! wall_distances_m = [0.15, 0.2]        # the base pivot's start distance from the wall
 //! hairs = ["none", "distal", "proximal", "distal-without-3"]

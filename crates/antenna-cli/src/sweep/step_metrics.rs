@@ -1,6 +1,6 @@
 //! What the CLI derives from each sweep step besides sim-core's own metrics: the base's
 //! distance to the walls, the joint positions, and the wall mapping from what the robot
-//! would sense (12-bit joint angles and touch bits, seed 4.2.2) through the scene's
+//! would sense (12-bit joint angles and touch bits, thesis 4.2.2) through the scene's
 //! `[sensors]` ([`Sensors`]: noise, calibration, the touch switches' threshold and debounce,
 //! the sample rate). A step the robot does not sample maps no points.
 

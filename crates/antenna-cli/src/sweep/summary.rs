@@ -1,4 +1,4 @@
-//! The summary of a sweep (model.md 8): steps, time, contacts, snaps, flips, preview
+//! The summary of a sweep (docs/model.md 8): steps, time, contacts, snaps, flips, preview
 //! distance, the correlations of the point of bend and of the point of contact with the
 //! base's distance to the wall, and the mapping error; accumulated step by step
 //! ([`SweepStats`]) and reported as a [`SweepSummary`].

@@ -77,7 +77,7 @@ pub fn scratch(name: &str, text: &str) -> String {
     path.display().to_string()
 }
 
-/// A short version of the seed's 4.2.1 sweep (`examples/sweep_line_wall.toml`): 20 steps.
+/// A short version of the thesis's 4.2.1 sweep (`examples/sweep_line_wall.toml`): 20 steps.
 /// Line numbers matter to the error tests: `[[walls]]` is line 11, `[sweep]` line 17,
 /// `[start]` line 22.
 pub const WALL_SCENE: &str = r#"[antenna]

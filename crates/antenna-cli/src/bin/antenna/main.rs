@@ -2,7 +2,7 @@
 //! search the stiffness profile that maximizes a task metric,
 //! design Nitinol wires for a stiffness profile, identify joint stiffness from a
 //! free-oscillation recording, export recorded trials, commission the robot's segments. See the README section "Scene files
-//! and the `antenna` command" and `shared/spec/scene-format.md`.
+//! and the `antenna` command" and `docs/scene-format.md`.
 //!
 //! Exit status: 0 success; 1 the solver did not converge (`solve`; the JSON is still printed
 //! for a scene without walls), a sweep step failed (`sweep`), a study run failed (`study`;
@@ -66,7 +66,7 @@ enum Command {
   antenna solve examples/pinned_c.toml --json
   antenna solve examples/pinned_c.toml --all-minima --random-starts 128")]
 struct SolveArgs {
-    /// The scene file (TOML; see scene-format.md).
+    /// The scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
     /// Print exactly one JSON object (with --all-minima: a JSON array of them).
     #[arg(long)]
@@ -99,7 +99,7 @@ struct DesignArgs {
     /// Take the stiffness (and link lengths) from this scene file.
     #[arg(long, conflicts_with_all = ["profile", "values", "links", "link_length_m", "min_n_m_per_rad", "max_n_m_per_rad"])]
     scene: Option<PathBuf>,
-    /// A profile name (model.md 5): constant, linear, slow-exponential, fast-exponential,
+    /// A profile name (docs/model.md 5): constant, linear, slow-exponential, fast-exponential,
     /// logarithmic, slow-reciprocal, fast-reciprocal, cockroach.
     #[arg(long, conflicts_with = "values")]
     profile: Option<String>,
@@ -123,7 +123,7 @@ struct DesignArgs {
     json: bool,
 }
 
-/// Identify a joint's stiffness from a free-oscillation recording (seed 6.2).
+/// Identify a joint's stiffness from a free-oscillation recording (thesis 6.2).
 ///
 /// RECORDING is a CSV file ("-" reads stdin): an optional header naming `t_s` and
 /// `angle_rad` or `angle_deg` (other columns are ignored); without a header one column is
@@ -137,7 +137,7 @@ struct DesignArgs {
 struct IdentifyArgs {
     /// The recording (CSV; "-" for stdin).
     recording: PathBuf,
-    /// Inertia of the oscillating body about the joint, kg m^2 (the seed's segment: 3.25e-6).
+    /// Inertia of the oscillating body about the joint, kg m^2 (the thesis's segment: 3.25e-6).
     #[arg(long)]
     inertia_kg_m2: f64,
     /// Sample rate, Hz (required without a time column; must agree with one within 0.1 %).
@@ -188,13 +188,13 @@ struct ExportArgs {
 enum FrequencyArg {
     /// Least-squares damped-sinusoid fit seeded by the spectrum peak.
     Fit,
-    /// The spectrum peak alone (the seed's method; biased for strong damping).
+    /// The spectrum peak alone (the thesis's method; biased for strong damping).
     SpectrumPeak,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum DampingArg {
-    /// Logarithmic decrement averaged over all peak pairs (the seed's method).
+    /// Logarithmic decrement averaged over all peak pairs (the thesis's method).
     LogDecrement,
     /// The decay rate of the damped-sinusoid fit.
     Fit,

@@ -20,7 +20,7 @@ use crate::{Failure, check_plot_file};
 /// `mapping-error` or `flip-free-preview`, averaged over the scenes, maximized), the
 /// parameters (`per-joint` or `exponential-taper`), the stiffness bounds, the wires (`any`
 /// or `available`), the method (argmin's `nelder-mead` or `particle-swarm`), the budget of
-/// sweeps and the seed. The seven named profiles of the seed's Table 4.1 are swept first and
+/// sweeps and the seed. The seven named profiles of the thesis's Table 4.1 are swept first and
 /// the search starts from the best of them, so the result is never worse. Every evaluation
 /// is a certified sweep of each scene; a sweep that fails, jams or never touches the wall
 /// makes its evaluation infeasible, counted in `failed_evaluations` and listed.
