@@ -23,7 +23,7 @@ use sim_core::{
 /// and long chains for the O(n) ratio time(4096) / time(512).
 pub const SIZES: [usize; 5] = [9, 150, 512, 1000, 4096];
 
-/// The O(n^3) seed form is skipped above this n.
+/// The O(n^3) thesis form is skipped above this n.
 pub const SEED_CUBIC_MAX_N: usize = 1000;
 
 fn setup(n: usize) -> (Chain, Vec<f64>, Vec<f64>) {

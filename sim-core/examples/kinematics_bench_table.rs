@@ -85,10 +85,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("all_jacobians", "all Jacobians"),
     ];
     let seed = [
-        ("seed_positions", "seed positions (2.2.3.3)"),
-        ("seed_velocities", "seed velocities (2.2.3.6)"),
-        ("seed_tip_jacobian", "seed tip Jacobian (2.2.2.1)"),
-        ("seed_all_jacobians", "seed all Jacobians (2.2.3.6, O(n^3))"),
+        ("seed_positions", "thesis positions (2.2.3.3)"),
+        ("seed_velocities", "thesis velocities (2.2.3.6)"),
+        ("seed_tip_jacobian", "thesis tip Jacobian (2.2.2.1)"),
+        ("seed_all_jacobians", "thesis all Jacobians (2.2.3.6, O(n^3))"),
     ];
 
     // Fast paths with their ratio to the floor.

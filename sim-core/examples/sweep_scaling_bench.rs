@@ -127,7 +127,7 @@ fn seed_walls(mu: f64) -> BoxResult<Vec<(&'static str, Wall, f64)>> {
     ])
 }
 
-/// Newton iterations per step of one sweep on a seed wall, or where it failed.
+/// Newton iterations per step of one sweep on a thesis wall, or where it failed.
 struct NewtonRun {
     iterations: Vec<usize>,
     snaps: usize,
@@ -333,7 +333,7 @@ fn newton_table(md: &mut String, mu: f64) -> BoxResult<()> {
             let worst = run.iterations.iter().max().copied().unwrap_or(0);
             let over = run.iterations.iter().filter(|&&i| i > GOAL_P99).count();
             eprintln!(
-                "seed wall {name} (mu = {mu}), N = {links}: median {median}, p99 {p99}, max {worst}"
+                "thesis wall {name} (mu = {mu}), N = {links}: median {median}, p99 {p99}, max {worst}"
             );
             let cell = format!(
                 "{median} / {p99} / {worst}; {over} of {} steps over {GOAL_P99}, {} snaps",
@@ -429,7 +429,7 @@ fn main() -> BoxResult<()> {
          sweep_scaling_bench`; measured {}). The thesis's antenna, 0.36 m, cut into N equal links (N - 1 \
          flexible joints), base angle 30 deg, joint limits +-90 deg, the fast-exponential \
          profile over the joints' normalized positions scaled to stay the same beam (the \
-         seed's 0.004..0.082 N m/rad for 40 mm links times 40 mm / (0.36 m / N)); the 4.2.1 \
+         thesis's 0.004..0.082 N m/rad for 40 mm links times 40 mm / (0.36 m / N)); the 4.2.1 \
          wall (8 deg, mu = 0.3), 16.7 mm/s for {DURATION_S} s at {STEP_S} s \
          ({} steps), the tip placed on the wall above the base (not timed). Time per step: \
          the sweep's steps, each certified inside `step_to` by `QuasiStatic::check`; \

@@ -39,7 +39,7 @@ pub(crate) fn alpha_entry(i: usize, s: Frame, b: Frame) -> f64 {
 /// `A_sb` built from `alpha` by the thesis's formula 2.2.1.2:
 /// `A = (alpha alpha^T)^lower + 1/2 (alpha |alpha|^T - alpha alpha^T)`, where `^lower` keeps
 /// the lower triangle with the diagonal. Works for any `alpha` with entries in `{-1, 0, 1}`
-/// (the seed also applies it to `alpha_sG + alpha_sn`, 2.2.3.2).
+/// (the thesis also applies it to `alpha_sG + alpha_sn`, 2.2.3.2).
 pub fn active_frames_matrix_from_vector(alpha: &DVector<f64>) -> DMatrix<f64> {
     let m = alpha.len();
     DMatrix::from_fn(m, m, |i, j| {

@@ -44,7 +44,7 @@ pub struct CoverageSettings {
 
 impl Default for CoverageSettings {
     /// Samples every 0.5 mm; captured within 5 mm (about a segment's width, and below the
-    /// seed's smallest mean error, 2.7 mm at 2.8 1/m, doubled).
+    /// thesis's smallest mean error, 2.7 mm at 2.8 1/m, doubled).
     fn default() -> Self {
         Self {
             spacing_m: 5e-4,

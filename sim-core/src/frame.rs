@@ -2,7 +2,7 @@
 
 use crate::KinematicsError;
 
-/// A coordinate frame of the chain, numbered as in the seed (2.2.1, Definition 2.2.1):
+/// A coordinate frame of the chain, numbered as in the thesis (2.2.1, Definition 2.2.1):
 /// `-1` is the ground frame `C_G` at the base attachment, `i` in `0..=n` is the frame `C_i`
 /// at the distal end of link `i` (x-axis along the link). `C_n` is the tip.
 ///

@@ -3,8 +3,8 @@
 //! kinematics: tip position, orientation, velocity and Jacobian.
 //!
 //! # Geometry (in the link's frame `C_b`: origin at the distal end, x along the link)
-//! - pivot `p' = (-d, sigma w)`: `d` = `pivot_from_distal_end_m` (the seed: `l/2`, the
-//!   midpoint), `w` = `lateral_offset_m` (the segment's half-width; the seed: 0), and
+//! - pivot `p' = (-d, sigma w)`: `d` = `pivot_from_distal_end_m` (the thesis: `l/2`, the
+//!   midpoint), `w` = `lateral_offset_m` (the segment's half-width; the thesis: 0), and
 //!   `sigma = +1` for a hair on the left (`+y`, counter-clockwise) side, `-1` on the right.
 //! - the hair angle `beta` is the angle between the rod and the link: `0` folded along the
 //!   link, `open_angle_rad` (45 degrees on the robot) open against its stop. A rigid hair
@@ -58,7 +58,7 @@ pub struct Hair {
     /// the robot).
     pub open_angle_rad: f64,
     /// Distance of the pivot from the link's distal end, along the link (in `[0, l_b]`; the
-    /// seed puts it at `l_b / 2`).
+    /// thesis puts it at `l_b / 2`).
     pub pivot_from_distal_end_m: f64,
     /// Lateral offset of the pivot from the link axis, towards `side` (`>= 0`).
     pub lateral_offset_m: f64,
@@ -83,7 +83,7 @@ pub struct Hair {
 impl Hair {
     /// The thesis's hair on a link of length `link_length_m`: 18 mm, open at 45 degrees,
     /// pointing distally, pivot on the axis at the link's midpoint, on the left side. The
-    /// seed gives no spring constants (a 0.1 mm Nitinol wire swings the hair open, 3.3.1.1);
+    /// thesis gives no spring constants (a 0.1 mm Nitinol wire swings the hair open, 3.3.1.1);
     /// this takes a light spring: preload `1e-4` N m (5.6 mN at the tip of an open hair) and
     /// stiffness `2e-4` N m / rad.
     pub fn seed(link_length_m: f64) -> Hair {
@@ -129,7 +129,7 @@ impl Hair {
     }
 
     /// The range of the hair angle: `0 <= beta <= max_angle_rad` (`open_angle_rad` for a
-    /// rigid hair), as a [`JointLimit`] so the limit map `g` applies to hairs too (seed
+    /// rigid hair), as a [`JointLimit`] so the limit map `g` applies to hairs too (thesis
     /// 3.2.1: `theta' = g'(q')`).
     pub fn fold_limit(&self) -> JointLimit {
         JointLimit::new(0.0, self.max_angle_rad())

@@ -8,7 +8,7 @@
 //!    spectrum peak, refined to the maximum of the DTFT (golden-section search within one
 //!    padded bin). No taper is applied: the ring-down's own decay is its window, and a window
 //!    centred on the record (Hann) would suppress its start, where a strongly damped record
-//!    has its energy. That peak is what the seed uses, but for strong damping and few periods
+//!    has its energy. That peak is what the thesis uses, but for strong damping and few periods
 //!    it is biased (the peak of a decaying sinusoid's spectrum is broadened by `zeta w_n` and
 //!    pulled by the negative-frequency image and by truncation). So it only seeds a
 //!    least-squares fit of `c + exp(-sigma t)(a cos w t + b sin w t)` to the whole record,
@@ -35,7 +35,7 @@
 //! [`wire_constant`] then gives `C` in `k_wire = C r^4` as the mean of `k_i / r_i^4`
 //! (thesis 6.2.0.33).
 //!
-//! The record should start at or after release (the seed trimmed each trial to start at its
+//! The record should start at or after release (the thesis trimmed each trial to start at its
 //! global extremum); a constant offset (the rest angle) is estimated and removed.
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
@@ -970,7 +970,7 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    // Seed Table 6.4 is reproduced through the public API in
+    // Thesis Table 6.4 is reproduced through the public API in
     // tests/integration/identify_table_6_4.rs.
 
     #[test]

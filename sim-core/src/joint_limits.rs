@@ -5,7 +5,7 @@
 //! `g` acts joint by joint, so its Jacobian is diagonal and its second derivative is a
 //! diagonal third-order tensor; both are returned as vectors of the diagonal:
 //! `dtheta_j/dq_j = +(ccw_j - cw_j)/2 cos q_j` and `d2theta_j/dq_j^2 = -(ccw_j - cw_j)/2 sin q_j`.
-//! (The seed prints the first with a minus sign, 2.2.4.5, and the second with `cos q`,
+//! (The thesis prints the first with a minus sign, 2.2.4.5, and the second with `cos q`,
 //! 2.2.4.6; docs/model.md 3 records the erratum and the tests check these against finite
 //! differences.)
 

@@ -14,7 +14,7 @@
 //!   ([`switch_for_fraction`]).
 //!
 //! # The estimate
-//! The seed does not spell out its estimator; this one uses only the sensed data: for every
+//! The thesis does not spell out its estimator; this one uses only the sensed data: for every
 //! touched switch, the point at the middle of its quarter, `(k + 1/2)/4` of the way along the
 //! link from its proximal joint, offset by [`TouchLayout::lateral_offset_m`] along the link's
 //! left normal, placed by forward kinematics of the sensed angles from the known base pose.
@@ -138,7 +138,7 @@ pub struct TouchLayout {
     /// the link like any other switch; `true` at the tip of the hair open against its stop
     /// (the robot knows its hairs' geometry but not their angle, and a hair touching lightly
     /// stays open). A hair's tip touches up to its length away from the link (18 mm on the
-    /// seed's robot), so on an antenna with hairs this places the point where the hair
+    /// thesis's robot), so on an antenna with hairs this places the point where the hair
     /// meets the wall rather than on the link.
     pub hair_tips: bool,
 }

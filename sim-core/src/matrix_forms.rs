@@ -303,7 +303,7 @@ fn link_length(chain: &Chain, link: usize) -> Result<f64, KinematicsError> {
 }
 
 /// The thesis's hair tip velocity (3.2.1.3): `(p_dot'_sb, omega'_sb) = H_dot_sb (p'_b, 1)` with
-/// `H_dot_sb = [omega^ R_sb, p_dot_sb; 0, omega_sb]`, `omega = alpha_sb^T theta_dot`. The seed
+/// `H_dot_sb = [omega^ R_sb, p_dot_sb; 0, omega_sb]`, `omega = alpha_sb^T theta_dot`. The thesis
 /// treats the hair as fixed on its segment here (no `theta_dot'` term).
 ///
 /// # Errors

@@ -1,4 +1,4 @@
-//! The force at the tip that holds a chain in static equilibrium at a given posture (seed
+//! The force at the tip that holds a chain in static equilibrium at a given posture (thesis
 //! 3.2.2, docs/model.md 4): the least-squares solution of `J_Gn^T F = -tau` (thesis 3.2.2.11), and
 //! the free-body system (thesis 3.2.2.9) with an unknown stop torque at every joint resting on
 //! a limit, with the base reaction and the servo torque.
@@ -129,7 +129,7 @@ pub struct FreeBodyForces {
     /// `n + 1` entries: the total torque joint `j` exerts on link `j`, spring plus stop,
     /// `-k_j (theta_j - rest_j) + s_j`; entry 0 is the base mount's moment
     /// ([`Self::base_reaction_moment_nm`]). At equilibrium it equals `-(J_Gn^T F)_j`, the
-    /// seed's "correct joint torques" `J_Gn^T F_(n,E)`.
+    /// thesis's "correct joint torques" `J_Gn^T F_(n,E)`.
     pub joint_torques_nm: Vec<f64>,
     /// The force the base mount exerts on link 0, ground frame, newtons: `-F`.
     pub base_reaction_force_n: Vector2<f64>,

@@ -19,7 +19,7 @@ pub struct Twist2 {
     pub angular_rad_per_s: f64,
 }
 
-/// The hybrid velocities of every frame `-1..=n` relative to `s` (seed `P_dot_s`,
+/// The hybrid velocities of every frame `-1..=n` relative to `s` (thesis `P_dot_s`,
 /// `Theta_dot_s`, 2.2.3.2): column/entry `b + 1` belongs to frame `b`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameVelocities {

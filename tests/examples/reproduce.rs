@@ -135,7 +135,7 @@ fn wall_following(md: &mut String, figures: bool) -> Result<(), Box<dyn std::err
     let runs = wall_following::run_all(&base)?;
     writeln!(
         md,
-        "## 1. Seed 4.2.1 / Table 4.1: stiffness profiles along a wall\n"
+        "## 1. Thesis 4.2.1 / Table 4.1: stiffness profiles along a wall\n"
     )?;
     writeln!(
         md,
@@ -251,7 +251,7 @@ fn flipping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::erro
     let seed_hair = first_hair(&base)?;
     writeln!(
         md,
-        "## 2. Seed 3.3.1: distally pointing hairs make the antenna flip\n"
+        "## 2. Thesis 3.3.1: distally pointing hairs make the antenna flip\n"
     )?;
     writeln!(
         md,
@@ -491,7 +491,7 @@ fn compliant_flipping_runs(
 fn tip_force_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error::Error>> {
     let base = reproduce::load_scene("tip_forces_3_3_2.toml")?;
     let runs = [tip_forces::run(&base, 30.0)?, tip_forces::run(&base, 60.0)?];
-    writeln!(md, "## 4. Seed 3.3.2: tip forces through a flip\n")?;
+    writeln!(md, "## 4. Thesis 3.3.2: tip forces through a flip\n")?;
     writeln!(
         md,
         "`examples/tip_forces_3_3_2.toml` (30 mm distal hairs, an abrasive strip from x = \
@@ -746,7 +746,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
     let yes = |b: bool| if b { "yes" } else { "no" };
     writeln!(
         md,
-        "## 3. Seed 4.2.2: mapping a trapezoid and sinusoidal walls\n"
+        "## 3. Thesis 4.2.2: mapping a trapezoid and sinusoidal walls\n"
     )?;
     writeln!(
         md,
@@ -764,8 +764,8 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
          that, the point error cannot.\n\n\
          Two sensor sets: **ideal** (the 12-bit angles, every contact closing its switch at \
          once, a sample every step) and **robot**, the `[sensors]` of \
-         `examples/mapping_4_2_2_sensors.toml`: from the seed, the 12-bit angles, the \
-         firmware's three-read debounce and a 100 Hz sample rate; assumed (the seed gives \
+         `examples/mapping_4_2_2_sensors.toml`: from the thesis, the 12-bit angles, the \
+         firmware's three-read debounce and a 100 Hz sample rate; assumed (the thesis gives \
          none), 1 count of angle noise, calibration offsets drawn with a spread of 4 counts \
          (0.35 deg) and gains of 1 %, and a switch that closes at 5 mN. \
          `tests/tests/cross/reproduce_mapping.rs` asserts the claims that hold.\n"
@@ -782,8 +782,8 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
          - *The decreasing profile resolves finer walls*: fast-exponential's coverage error \
          is below the constant profile's at {} of the 5 frequencies (ideal sensors: {} of \
          5), and at 14.2 1/m ({} mm) it is {} the constant one's at 6.3 1/m ({} mm): the \
-         seed's comparison {}.\n\
-         - *The trapezoid*: fast-exponential {} mm against constant {} mm (the seed: 5.0 and \
+         thesis's comparison {}.\n\
+         - *The trapezoid*: fast-exponential {} mm against constant {} mm (the thesis: 5.0 and \
          9.4 mm; ideal sensors: {} and {} mm).\n\n\
          **Why, and for which parameters.** The profile's advantage comes from the touch \
          switch's force: the constant profile is soft everywhere (every joint at \

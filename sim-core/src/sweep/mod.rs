@@ -60,7 +60,7 @@ pub struct Motion {
     pub velocity_m_per_s: Vector2<f64>,
     /// How long the base moves, seconds.
     pub duration_s: f64,
-    /// The time step, seconds (the seed records at 100-120 Hz: 0.01 s).
+    /// The time step, seconds (the thesis records at 100-120 Hz: 0.01 s).
     pub step_s: f64,
 }
 

@@ -2,7 +2,7 @@
 //! straight baseline through `o` with direction `u = (cos a, sin a)`, `v = (-sin a, cos a)`.
 //!
 //! **Frequency unit.** `frequency_per_m` counts **cycles per metre** (wavelength `1 / f`).
-//! The seed writes only "1/m" for its walls (2.8 to 14.2 1/m); cycles per metre puts the
+//! The thesis writes only "1/m" for its walls (2.8 to 14.2 1/m); cycles per metre puts the
 //! finest at a 70 mm wavelength, under two 40 mm segments, which fits its mapping errors
 //! growing to 25 mm there; radians per metre would make even the finest wall 0.44 m per cycle.
 //!

@@ -11,7 +11,7 @@ use sim_core::identify::{
     natural_frequency_hz, wire_constant,
 };
 
-/// Seed Table 6.4: d (in), f_d (Hz), zeta, f_n (Hz), k_eq (N m/rad), k_1 (N m/rad). The
+/// Thesis Table 6.4: d (in), f_d (Hz), zeta, f_n (Hz), k_eq (N m/rad), k_1 (N m/rad). The
 /// 0.010 row prints `k_1 < 0.0006`; it enters `C` at that bound.
 const TABLE_6_4: [(f64, f64, f64, f64, f64, f64); 20] = [
     (0.010, 2.867, 0.161, 2.905, 0.0011, 0.0006),

@@ -1,6 +1,6 @@
 //! Every Jacobian and velocity of sim-core equals central finite differences of the
 //! positions; the limit map's derivatives equal finite differences of the map (settling the
-//! seed's sign slip in 2.2.4.5-6, docs/model.md 3); the energy's gradient and Hessian equal finite
+//! thesis's sign slip in 2.2.4.5-6, docs/model.md 3); the energy's gradient and Hessian equal finite
 //! differences of the energy and gradient, in theta and in q.
 //!
 //! Tolerances are relative to the magnitude of what is differenced: position rows to the
@@ -364,7 +364,7 @@ proptest! {
     }
 }
 
-/// The seed prints `J_g = -1/2 diag(cos q) diag(ccw - cw)` (2.2.4.5) and
+/// The thesis prints `J_g = -1/2 diag(cos q) diag(ccw - cw)` (2.2.4.5) and
 /// `dJ_g/dq = 1/2 [diag(ccw - cw) (.) diag(cos q)]` (2.2.4.6). Finite differences say the
 /// signs and the trig function are as in docs/model.md 3: `+h cos q` and `-h sin q`.
 #[test]

@@ -2,7 +2,7 @@
 //! b = 1 and s = 1, b = 5: alpha and A exactly as printed), and small chains whose positions,
 //! Jacobians, limit map, energy and hair tips can be read off a sketch.
 //!
-//! One erratum, found here: the seed declares the all-frames matrix A for n = 8, s = 5 as
+//! One erratum, found here: the thesis declares the all-frames matrix A for n = 8, s = 5 as
 //! 9 x 10 (2.2.3.1) but prints 9 columns. The printed matrix is A without its zero column
 //! alpha_55 (b = s); the test checks exactly that.
 #![allow(clippy::unwrap_used)]

@@ -1,4 +1,4 @@
-//! Seed 3.3.1: the sufficiency of distally pointing hairs. Eight segments (`links = 8`),
+//! Thesis 3.3.1: the sufficiency of distally pointing hairs. Eight segments (`links = 8`),
 //! the cockroach profile, base angle 30 deg, a wall 135 mm from the base, 15 mm/s, starting
 //! projecting forward (an approach onto the wall); six experiments (rough or smooth wall x
 //! distal hairs, the three distal-most removed, proximal hairs), then rough + distal at base

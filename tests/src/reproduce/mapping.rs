@@ -1,4 +1,4 @@
-//! Seed 4.2.2: wall shape against wall following. Sinusoidal walls of spatial frequency
+//! Thesis 4.2.2: wall shape against wall following. Sinusoidal walls of spatial frequency
 //! 2.8, 4.2, 6.3, 9.5 and 14.2 1/m, and the trapezoid; a distally decreasing profile against
 //! the constant one; the contact points the robot would estimate from its 12-bit joint
 //! angles and touch bits through a scene's `[sensors]` (ideal, or the robot's of

@@ -4,7 +4,7 @@
 //! draws the figures in `docs/figures/` and writes `docs/reproduction.md`.
 //!
 //! Every experiment starts from a scene file in `examples/` (parsed by `antenna-cli`) and
-//! varies what the seed varied (stiffness profile, wall surface, hair layout, base angle,
+//! varies what the thesis varied (stiffness profile, wall surface, hair layout, base angle,
 //! wall frequency) in code.
 
 pub mod flipping;

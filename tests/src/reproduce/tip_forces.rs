@@ -1,4 +1,4 @@
-//! Seed 3.3.2: the tip forces through a flip. Nine segments with distal hairs run along a
+//! Thesis 3.3.2: the tip forces through a flip. Nine segments with distal hairs run along a
 //! smooth wall that ends in an abrasive strip; the distal hair anchors there and the antenna
 //! flips with its tip pivoting on the strip (the thesis's force pad). The normal and shear
 //! forces on the distal segment from the wall (its tip and its hair: what the pad measures)
@@ -83,7 +83,7 @@ pub fn run(base: &SweepScene, base_angle_deg: f64) -> Result<TipForceRun, Reprod
         )?,
         wall.surfaces.clone(),
     );
-    // The seed put the tip on the pad "at a forward looking configuration": the base comes
+    // The thesis put the tip on the pad "at a forward looking configuration": the base comes
     // onto the wall sliding back as far as it comes in, so a steep antenna is not buckled
     // backward by meeting the wall head-on.
     let placement = match &base.placement {

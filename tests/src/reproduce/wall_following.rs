@@ -1,4 +1,4 @@
-//! Seed 4.2.1 / Table 4.1: the stiffness profile against wall following. Nine segments of
+//! Thesis 4.2.1 / Table 4.1: the stiffness profile against wall following. Nine segments of
 //! 40 mm (`links = 9`: a base link and 8 flexible joints), base angle 30 deg, a smooth wall
 //! at 8 deg closing from 20 to 9 cm over the run, 16.7 mm/s for 50 s sampled at 100 Hz,
 //! starting bent backwards with the tip on the wall (`examples/wall_following_4_2_1.toml`),

@@ -1,4 +1,4 @@
-//! Seed 3.3.1 on sim-core (`examples/flipping_3_3_1.toml`): the six experiments (rough or
+//! Thesis 3.3.1 on sim-core (`examples/flipping_3_3_1.toml`): the six experiments (rough or
 //! smooth wall x distal hairs, the three distal-most removed, proximal hairs) and rough +
 //! distal at base angles 10, 20, 60 and 70 deg.
 //!

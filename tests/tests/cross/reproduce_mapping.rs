@@ -1,4 +1,4 @@
-//! Seed 4.2.2 on sim-core (`examples/mapping_4_2_2.toml`, `mapping_trapezoid_4_2_2.toml`):
+//! Thesis 4.2.2 on sim-core (`examples/mapping_4_2_2.toml`, `mapping_trapezoid_4_2_2.toml`):
 //! mapping a wall from what the robot senses. Asserted:
 //! - the sweeps run to their end, including the ones where a link rests on a crest while a
 //!   joint also touches and the ones where a crest crosses a joint, and with ideal sensors

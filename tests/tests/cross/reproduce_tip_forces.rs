@@ -1,4 +1,4 @@
-//! Seed 3.3.2 on sim-core (`examples/tip_forces_3_3_2.toml`): the distal hair anchors on the
+//! Thesis 3.3.2 on sim-core (`examples/tip_forces_3_3_2.toml`): the distal hair anchors on the
 //! abrasive strip and the antenna flips at base angles 30 and 60 deg; through the flip the
 //! 60 deg one presses harder for its shear (the higher normal-to-shear ratio). Figure:
 //! docs/reproduction.md.

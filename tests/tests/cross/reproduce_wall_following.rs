@@ -1,4 +1,4 @@
-//! Seed 4.2.1 / Table 4.1 on sim-core (`examples/wall_following_4_2_1.toml`, the seven
+//! Thesis 4.2.1 / Table 4.1 on sim-core (`examples/wall_following_4_2_1.toml`, the seven
 //! profiles): every decreasing profile previews further than the constant one; the
 //! exponential and logarithmic ones beat linear, linear beats the reciprocals; the point of
 //! bend follows the base-to-wall distance better for a decreasing profile than for the
