@@ -39,6 +39,7 @@
 //! # }
 //! ```
 
+mod driven;
 mod placement;
 
 use nalgebra::Vector2;
@@ -50,6 +51,7 @@ use crate::{
 };
 use crate::{MappingError, Wall};
 
+pub use driven::{BasePose, TURN_CLEARANCE_M, place_at, step_base_to, turn_base};
 pub use placement::Placement;
 
 /// How the base moves: a constant velocity for a set time, in fixed steps.
