@@ -1,6 +1,6 @@
 //! Frame time of the monitor with a long chain and a full history, in a real window:
 //! `scripts/bench-monitor` runs it under Xvfb with Mesa's software OpenGL and writes the
-//! figures into BENCHMARKS.md.
+//! figures into docs/benchmarks/monitor.md.
 //!
 //! A stream server (antennad's own `StreamServer`) announces a rig of `--segments` segments
 //! and publishes one `samples` line per millisecond through TCP to the monitor's real client;

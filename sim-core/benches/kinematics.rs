@@ -2,7 +2,7 @@
 //! (n + 1 `sin_cos` calls plus the prefix sums of angles and positions: what any forward
 //! kinematics must at least do), and the thesis's matrix forms at the same n.
 //!
-//! Run through `scripts/bench-kinematics`, which also rewrites the table in BENCHMARKS.md.
+//! Run through `scripts/bench-kinematics`, which also rewrites the table in docs/benchmarks/kinematics.md.
 //! Results land in `target/criterion/kinematics/<function>/<n>/new/estimates.json`.
 #![allow(missing_docs, clippy::unwrap_used)]
 

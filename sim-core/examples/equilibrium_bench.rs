@@ -1,5 +1,5 @@
 //! Run time against error for the equilibrium solvers (issue 4): writes the "Equilibrium"
-//! section of BENCHMARKS.md (between `<!-- equilibrium:begin -->` and
+//! section of docs/benchmarks/equilibrium.md (between `<!-- equilibrium:begin -->` and
 //! `<!-- equilibrium:end -->`, appended when missing) and the plot
 //! `docs/figures/equilibrium_time_vs_error.svg`.
 //!
@@ -394,7 +394,7 @@ fn section(
     )?;
     writeln!(
         s,
-        "![relative error of the tip deflection against time per solve, one panel per alpha](docs/figures/equilibrium_time_vs_error.svg)\n"
+        "![relative error of the tip deflection against time per solve, one panel per alpha](../figures/equilibrium_time_vs_error.svg)\n"
     )?;
 
     // The goal.
@@ -638,8 +638,9 @@ fn plot(points: &[Point], path: &Path) -> BoxResult<()> {
 }
 
 fn write_section(workspace: &Path, section: &str) -> BoxResult<()> {
-    let path = workspace.join("BENCHMARKS.md");
-    let old = std::fs::read_to_string(&path).unwrap_or_else(|_| "# Benchmarks\n".to_string());
+    let path = workspace.join("docs/benchmarks/equilibrium.md");
+    let old = std::fs::read_to_string(&path)
+        .unwrap_or_else(|_| "# Benchmarks: Equilibrium (sim-core)\n".to_string());
     let new = match (old.find(BEGIN), old.find(END)) {
         (Some(b), Some(e)) if b < e => {
             format!(

@@ -1,4 +1,4 @@
-//! Writes the "Kinematics" section of BENCHMARKS.md from criterion's results
+//! Writes the "Kinematics" section of docs/benchmarks/kinematics.md (BENCHMARKS.md's detail) from criterion's results
 //! (`target/criterion/kinematics/<function>/<n>/new/estimates.json`, median point estimates: robust to interference from other work on the machine).
 //! Only the text between `<!-- kinematics:begin -->` and `<!-- kinematics:end -->` is
 //! replaced; the section is appended if the markers are missing.
@@ -88,7 +88,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("seed_positions", "thesis positions (2.2.3.3)"),
         ("seed_velocities", "thesis velocities (2.2.3.6)"),
         ("seed_tip_jacobian", "thesis tip Jacobian (2.2.2.1)"),
-        ("seed_all_jacobians", "thesis all Jacobians (2.2.3.6, O(n^3))"),
+        (
+            "seed_all_jacobians",
+            "thesis all Jacobians (2.2.3.6, O(n^3))",
+        ),
     ];
 
     // Fast paths with their ratio to the floor.
@@ -171,8 +174,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     writeln!(s, "{END}")?;
 
-    let md_path = workspace.join("BENCHMARKS.md");
-    let old = std::fs::read_to_string(&md_path).unwrap_or_else(|_| "# Benchmarks\n\n".to_string());
+    let md_path = workspace.join("docs/benchmarks/kinematics.md");
+    let old = std::fs::read_to_string(&md_path)
+        .unwrap_or_else(|_| "# Benchmarks: Kinematics (sim-core)\n\n".to_string());
     let new = match (old.find(BEGIN), old.find(END)) {
         (Some(b), Some(e)) if e > b => {
             format!("{}{}{}", &old[..b], s.trim_end(), &old[e + END.len()..])

@@ -1,5 +1,5 @@
 //! Run time against error for quasi-static sweeps (issue 13, item 6): writes the "Sweeps: run
-//! time against error" section of BENCHMARKS.md (between `<!-- sweep-accuracy:begin -->` and
+//! time against error" section of docs/benchmarks/sweeps.md (between `<!-- sweep-accuracy:begin -->` and
 //! `<!-- sweep-accuracy:end -->`, appended when missing) and the plot
 //! `docs/figures/sweep_time_vs_error.svg`.
 //!
@@ -834,7 +834,7 @@ fn main() -> BoxResult<()> {
     writeln!(
         md,
         "\n![error against the 0.001 s reference vs the sweep's run time, one column per \
-         wall](docs/figures/sweep_time_vs_error.svg)\n\nMedian of {rounds} runs per \
+         wall](../figures/sweep_time_vs_error.svg)\n\nMedian of {rounds} runs per \
          configuration, interleaved; one thread, release build, a 2-core AMD EPYC shared with \
          other builds (times are noisy: compare within a table). The errors are deterministic. \
          Joint angles: the largest and the RMS difference over all joints and the compared \

@@ -1,4 +1,4 @@
-//! The cost of a quasi-static sweep (issue 5): writes the "Sweeps" section of BENCHMARKS.md
+//! The cost of a quasi-static sweep (issue 5): writes the "Sweeps" section of docs/benchmarks/sweeps.md
 //! (between `<!-- sweep:begin -->` and `<!-- sweep:end -->`, appended when missing).
 //!
 //! 1. The thesis's 4.2.1 sweep (9 links of 40 mm: 8 flexible joints, base angle 30 deg, joint
@@ -21,7 +21,7 @@
 //! Times are medians of runs interleaved round by round (`std::time::Instant`, one thread);
 //! the placement is not timed. Run by `scripts/bench-sweep` (release build).
 //! `SWEEP_BENCH_ONLY=<part of a scene's name>` measures those scenes only and leaves
-//! BENCHMARKS.md alone (for a profiler).
+//! docs/benchmarks/sweeps.md alone (for a profiler).
 
 mod bench_common;
 
@@ -335,7 +335,7 @@ fn main() -> BoxResult<()> {
     let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let workspace = manifest.parent().ok_or("no workspace dir")?.to_path_buf();
     // `SWEEP_BENCH_ONLY=<part of a scene's name>`: measure those scenes only (for a
-    // profiler), print them and leave BENCHMARKS.md alone.
+    // profiler), print them and leave docs/benchmarks/sweeps.md alone.
     let only = std::env::var("SWEEP_BENCH_ONLY").ok();
     let mut all = scenarios()?;
     let table_scenes = all.len();

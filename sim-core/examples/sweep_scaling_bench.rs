@@ -1,6 +1,6 @@
 //! How a sweep's cost grows with the number of links, and what the per-step certification
 //! costs (issue 13, item 7): writes the "Sweeps: links and certification" section of
-//! BENCHMARKS.md (between `<!-- sweep-scaling:begin -->` and `<!-- sweep-scaling:end -->`,
+//! docs/benchmarks/sweeps.md (between `<!-- sweep-scaling:begin -->` and `<!-- sweep-scaling:end -->`,
 //! appended when missing).
 //!
 //! The thesis's antenna, 0.36 m long, cut into N = 9, 18, 36, 72, 150 equal links (N - 1

@@ -1,11 +1,11 @@
 //! What the sweep benchmark examples share: writing their generated section of
-//! `BENCHMARKS.md`, medians, human-readable times and today's date.
+//! `docs/benchmarks/sweeps.md` (the detail page of BENCHMARKS.md's "Sweeps"), medians, human-readable times and today's date.
 // Each example uses a part of it.
 #![allow(dead_code)]
 
 use std::path::Path;
 
-/// Replaces the text between `begin` and `end` in the workspace's `BENCHMARKS.md` with
+/// Replaces the text between `begin` and `end` in the workspace's `docs/benchmarks/sweeps.md` with
 /// `section` (which carries both markers), or appends it where the markers are missing.
 pub fn write_section(
     workspace: &Path,
@@ -13,8 +13,9 @@ pub fn write_section(
     end: &str,
     section: &str,
 ) -> std::io::Result<()> {
-    let path = workspace.join("BENCHMARKS.md");
-    let old = std::fs::read_to_string(&path).unwrap_or_else(|_| "# Benchmarks\n".to_string());
+    let path = workspace.join("docs/benchmarks/sweeps.md");
+    let old = std::fs::read_to_string(&path)
+        .unwrap_or_else(|_| "# Benchmarks: Sweeps (sim-core)\n".to_string());
     let new = match (old.find(begin), old.find(end)) {
         (Some(b), Some(e)) if b < e => format!(
             "{}{}{}",

@@ -11,6 +11,7 @@ mod contact_compliant_hairs;
 mod contact_geometry;
 mod contact_newton_iterations;
 mod crate_boundaries;
+mod docs;
 mod reproduce_flipping;
 mod reproduce_mapping;
 mod reproduce_tip_forces;
