@@ -292,16 +292,31 @@ impl<P: Read + Write> Vxm<P> {
     /// one), asks `V` and puts the VXM on line again. Also says whether the VXM echoed the
     /// `V`, the sign of a power cycle (see the module documentation): the position register
     /// survives a lost USB link but not a power cycle, so then home again.
+    ///
+    /// If the VXM does not answer, the driver keeps its old port and `port` is dropped
+    /// (closed): a serial port holds an exclusive lock on its device while open, so a port
+    /// kept after a failed attempt would make every later attempt to open the device fail.
     pub fn reconnect(&mut self, port: P) -> Result<(P, bool), VxmError> {
         let old = core::mem::replace(&mut self.port, port);
         self.finished_seen = false;
+        match self.handshake() {
+            Ok(power_cycled) => Ok((old, power_cycled)),
+            Err(e) => {
+                drop(core::mem::replace(&mut self.port, old));
+                Err(e)
+            }
+        }
+    }
+
+    /// `V` (whose echo is the sign of a power cycle), then on line.
+    fn handshake(&mut self) -> Result<bool, VxmError> {
         let power_cycled = match self.status() {
             Ok(_) => false,
             Err(VxmError::PowerCycled { .. }) => true,
             Err(e) => return Err(e),
         };
         self.online()?;
-        Ok((old, power_cycled))
+        Ok(power_cycled)
     }
 
     /// The port handle (e.g. to clone it for a [`VxmKill`]).

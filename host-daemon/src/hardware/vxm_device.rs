@@ -167,3 +167,121 @@ impl StageDevice for VxmDevice {
         self.with(|s| Ok(s.kill()?))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hardware::stage::HomingDirection;
+    use crate::sim::emulator::{VxmEmulator, VxmFault};
+    use serialport::TTYPort;
+    use std::path::Path;
+
+    /// Only a hang takes this long, however loaded the machine.
+    const PATIENCE: Duration = Duration::from_secs(60);
+
+    /// An emulated VXM on a new pseudo-terminal, its slave side reached through `link`.
+    fn vxm_behind(link: &Path, fault: VxmFault) -> VxmEmulator {
+        let (master, slave) = TTYPort::pair().unwrap();
+        let path = slave.name().unwrap();
+        drop(slave);
+        let vxm = VxmEmulator::spawn(master);
+        vxm.set_fault(fault);
+        std::os::unix::fs::symlink(path, link).unwrap();
+        vxm
+    }
+
+    /// Calls `is_moving` until it answers `Ok`, and returns the errors on the way.
+    fn until_it_answers(device: &mut VxmDevice) -> Vec<DeviceError> {
+        let deadline = Instant::now() + PATIENCE;
+        let mut errors = Vec::new();
+        loop {
+            match device.is_moving() {
+                Ok(_) => return errors,
+                Err(e) => errors.push(e),
+            }
+            assert!(
+                Instant::now() < deadline,
+                "it never answered again: {:?}",
+                errors.last()
+            );
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    #[test]
+    fn a_vxm_whose_first_handshake_fails_after_it_vanished_is_reopened_until_it_answers() {
+        let dir = std::env::temp_dir().join(format!("antennad-vxm-device-{}", std::process::id()));
+        std::fs::remove_dir_all(&dir).ok();
+        std::fs::create_dir_all(&dir).unwrap();
+        let link = dir.join("vxm");
+        let vxm = vxm_behind(&link, VxmFault::None);
+        let homing = HomingSettings {
+            toward: HomingDirection::Negative,
+            speed_steps_per_s: 800,
+            timeout: Duration::from_secs(10),
+        };
+        let geometry = StageGeometry::new(80.0, 0.0, 60.0).unwrap();
+        let mut device = VxmDevice::open(
+            link.to_str().unwrap(),
+            9600,
+            Duration::from_millis(200),
+            geometry,
+            homing,
+        )
+        .unwrap();
+        assert!(until_it_answers(&mut device).is_empty());
+
+        // It vanishes: unavailable from the next call on.
+        vxm.close();
+        std::fs::remove_file(&link).unwrap();
+        let gone = until_it_answers_not(&mut device);
+        assert!(matches!(gone, DeviceError::Unavailable { .. }), "{gone}");
+        assert!(!device.available());
+
+        // It comes back hung: the handshake on the new port (`V`) goes unanswered.
+        let vxm = vxm_behind(&link, VxmFault::Stall);
+        let deadline = Instant::now() + PATIENCE;
+        while !vxm.received().contains(&b'V') {
+            assert!(Instant::now() < deadline, "the port was never reopened");
+            let _ = device.is_moving();
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let deadline = Instant::now() + PATIENCE;
+        let failed = loop {
+            match device.is_moving() {
+                Err(e @ DeviceError::Unavailable { .. })
+                    if e.to_string().contains("back on line") =>
+                {
+                    break e;
+                }
+                other => assert!(Instant::now() < deadline, "{other:?}"),
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        assert!(!device.available(), "{failed}");
+
+        // Then it answers: the port is opened anew (the failed one closed, with its lock) and
+        // the VXM put on line.
+        vxm.set_fault(VxmFault::None);
+        let errors = until_it_answers(&mut device);
+        assert!(device.available(), "{errors:?}");
+        assert!(vxm.is_online(), "{errors:?}");
+        assert!(
+            errors.iter().all(|e| !e.to_string().contains("lock")),
+            "{errors:?}"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Calls `is_moving` until it fails, and returns the error.
+    fn until_it_answers_not(device: &mut VxmDevice) -> DeviceError {
+        let deadline = Instant::now() + PATIENCE;
+        loop {
+            if let Err(e) = device.is_moving() {
+                return e;
+            }
+            assert!(Instant::now() < deadline, "it never vanished");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+}
