@@ -71,7 +71,7 @@ pub enum MonitorError {
     /// A scene file that cannot be read, does not parse or cannot be swept; the message names
     /// the file, the key and, where known, its line and column.
     #[error("scene file {0}")]
-    Scene(#[from] antenna_cli::SceneError),
+    Scene(#[from] antenna_scene::SceneError),
     /// A simulated sweep stopped before its end (its placement or a step failed); the steps
     /// before it are kept.
     #[error("the sweep stopped at t = {t_s:.3} s, {frames_kept} frames kept: {source}")]
@@ -81,16 +81,16 @@ pub enum MonitorError {
         /// The frames computed before it (the placed posture counts as one).
         frames_kept: usize,
         /// What failed, worded with the scene file, the key or the step.
-        source: antenna_cli::sweep::SweepFailure,
+        source: antenna_scene::SweepFailure,
     },
     /// A control command was not sent.
     #[error("control: {0}")]
     Control(String),
 }
 
-impl From<antenna_cli::figure::FigureError> for MonitorError {
-    fn from(e: antenna_cli::figure::FigureError) -> Self {
-        use antenna_cli::figure::FigureError;
+impl From<antenna_figure::FigureError> for MonitorError {
+    fn from(e: antenna_figure::FigureError) -> Self {
+        use antenna_figure::FigureError;
         match e {
             FigureError::Write { path, source } => MonitorError::Write { path, source },
             FigureError::Encode { path, message } => MonitorError::Draw { path, message },

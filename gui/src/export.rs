@@ -16,7 +16,7 @@ use plotters::prelude::*;
 use crate::error::MonitorError;
 use crate::frame::ChainFrame;
 use crate::history::History;
-use antenna_cli::figure::{register_font, write_png};
+use antenna_figure::{register_font, write_png};
 
 /// Writes the samples of `t0_s..=t1_s` as CSV (see the module documentation); returns the
 /// number of rows.

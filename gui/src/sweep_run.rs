@@ -1,7 +1,7 @@
 //! [`SweepWorker`]: a scene file's simulated sweep, run on its own thread so that the monitor
 //! shows its progress and animates the steps already solved while the rest are being solved.
 //!
-//! [`SweepWorker::start`] reads the scene with `antenna-cli` ([`Scene::from_path`], then
+//! [`SweepWorker::start`] reads the scene with `antenna-scene` ([`Scene::from_path`], then
 //! [`Scene::sweep_scene`]); a file that does not parse is an error at once, naming the key
 //! and, where known, its line and column. The thread then places the antenna (sim-core's
 //! [`Sweep::new`]) and steps it, appending every step to the shared [`SweepRunState`]: the
@@ -23,8 +23,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError, TryLockError};
 use std::thread::JoinHandle;
 
-use antenna_cli::Scene;
-use antenna_cli::sweep::SweepFailure;
+use antenna_scene::{Scene, SweepFailure};
 use sim_core::sweep::{Sweep, SweepError, SweepScene, SweepStep};
 use sim_core::{Chain, SensorSettings, Wall};
 

@@ -956,7 +956,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let what = std::env::args().nth(1).unwrap_or_else(|| "all".into());
-    antenna_cli::figure::register_font()?;
+    antenna_figure::register_font()?;
     let all = what == "all";
     let mut md = String::new();
     writeln!(

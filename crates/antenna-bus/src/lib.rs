@@ -7,7 +7,9 @@
 //! - `linux_i2c::LinuxI2cBus` (Linux only): `/dev/i2c-N`, with a failed transfer's errno
 //!   sorted into a NACK (`ENXIO`, `EREMOTEIO`) or a bus error;
 //! - [`commission`]: scan, assign addresses, measure `zero_counts` and read the firmware's
-//!   status and version, on any embedded-hal [`embedded_hal::i2c::I2c`].
+//!   status and version, on any embedded-hal [`embedded_hal::i2c::I2c`];
+//! - [`config`]: the `[bus]` table of antennad's configuration (the device, the poll, the
+//!   segments' addresses and calibrations), which `antenna segments` reads too.
 //!
 //! # Example
 //!
@@ -24,6 +26,7 @@
 //! ```
 
 pub mod commission;
+pub mod config;
 pub mod hall_sensor;
 #[cfg(target_os = "linux")]
 pub mod linux_i2c;

@@ -14,8 +14,8 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use antenna_cli::Scene;
 use antenna_cli::digitize::{TRAPEZOID_10K, digitize, points_csv};
+use antenna_scene::Scene;
 use anyhow::{Context as _, bail};
 use sim_core::{Polyline, WallShape};
 

@@ -1,7 +1,7 @@
 //! Digitized walls made up: a polyline sampled at evenly spaced points along its arclength,
 //! each moved off the wall by Gaussian noise along the normal of the edge it lies on, as a
 //! scan of the wall would give (issue #14). The result is a `points_file` for a `[[walls]]`
-//! table ([`points_csv`]; the format is in [`crate::scene::points_file`]).
+//! table ([`points_csv`]; the format is in [`antenna_scene::points_file`]).
 //!
 //! `examples/walls/trapezoid_10k.csv` is the thesis's 4.2.2 trapezoid (the wall of
 //! `examples/wall_polyline.toml`) digitized with [`TRAPEZOID_10K`]; regenerate it with
@@ -283,7 +283,7 @@ mod tests {
         }
         assert!(p[2..48].iter().any(|q| q.y != 0.0));
         // The CSV reads back as exactly these points.
-        let back = crate::scene::points_file::parse_points(&points_csv(&p)).unwrap();
+        let back = antenna_scene::points_file::parse_points(&points_csv(&p)).unwrap();
         assert_eq!(back.points_m, p);
         assert!(matches!(
             digitize(&wall, SolidSide::Left, &Digitizing { points: 4, ..spec }),

@@ -105,7 +105,7 @@ pub struct Recording {
 /// blank lines and lines starting with `#` left out.
 fn data_rows(text: &str) -> Result<Vec<(usize, Vec<String>)>, RecordingError> {
     let mut rows = Vec::new();
-    for record in crate::csv_lines::Records::new(text) {
+    for record in antenna_scene::csv_lines::Records::new(text) {
         let (line, record) =
             record.map_err(|(line, why)| RecordingError::Unreadable { line, why })?;
         let fields: Vec<String> = match record.iter().collect::<Vec<_>>().as_slice() {

@@ -14,7 +14,7 @@ use sim_core::{
     LimitSide, MinimaSearch, SolveOptions, all_minima, frame_poses, solve_equilibrium,
 };
 
-use crate::scene::{Scene, Start};
+use antenna_scene::{Scene, Start};
 
 /// The JSON object `antenna solve --json` prints (field names fixed by docs/scene-format.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -18,10 +18,9 @@ use sim_core::equilibrium::count_inflections;
 use sim_core::sweep::{Sweep, SweepStep};
 use sim_core::{Frame, frame_poses, strain_energy_j};
 
-use crate::scene::Scene;
 use crate::solve::SolveReport;
-use crate::sweep::SweepFailure;
 use crate::sweep::record::ContactRecord;
+use antenna_scene::{Scene, SweepFailure};
 
 /// The settled posture of a scene with walls.
 #[derive(Debug, Clone)]

@@ -6,8 +6,8 @@
 
 mod common;
 
-use antenna_cli::Scene;
 use antenna_cli::sweep::{COMPLETE_WITHIN_MM, coverage_settings};
+use antenna_scene::Scene;
 use common::{run, scratch, stderr, stdout};
 use nalgebra::Vector2;
 use serde_json::Value;

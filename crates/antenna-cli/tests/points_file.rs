@@ -10,8 +10,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use antenna_cli::Scene;
 use antenna_cli::digitize::{TRAPEZOID_10K, digitize, points_csv};
+use antenna_scene::Scene;
 use common::{WALL_SCENE, examples_dir, run, stderr, stdout};
 use serde_json::Value;
 use sim_core::WallShape;

@@ -6,7 +6,7 @@
 
 mod common;
 
-use antenna_cli::Scene;
+use antenna_scene::Scene;
 use common::{WALL_SCENE, run, scratch, stderr, stdout};
 use sim_core::contact::ContactSettings;
 use sim_core::sweep::Placement;

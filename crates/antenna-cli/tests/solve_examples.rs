@@ -7,7 +7,7 @@
 
 mod common;
 
-use antenna_cli::{Scene, StiffnessSpec};
+use antenna_scene::{Scene, StiffnessSpec};
 use common::{example, example_scenes, run, stderr, stdout};
 use serde_json::Value;
 

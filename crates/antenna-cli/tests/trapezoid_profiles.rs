@@ -10,7 +10,7 @@
 
 mod common;
 
-use antenna_cli::scene::Scene;
+use antenna_scene::Scene;
 use sim_core::sweep::Sweep;
 
 /// The distance every sweep covers, metres (the example's 50 s at 16.7 mm/s): the base ends

@@ -7,7 +7,7 @@
 //! use plotters::prelude::*;
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
-//! antenna_cli::figure::register_font()?;
+//! antenna_figure::register_font()?;
 //! let (w, h) = (320, 200);
 //! let mut rgb = vec![0u8; (w * h * 3) as usize];
 //! {
@@ -16,7 +16,7 @@
 //!     root.draw(&Text::new("hello", (10, 10), ("sans-serif", 20).into_font()))?;
 //!     root.present()?;
 //! }
-//! antenna_cli::figure::write_png(std::path::Path::new("hello.png"), w, h, &rgb)?;
+//! antenna_figure::write_png(std::path::Path::new("hello.png"), w, h, &rgb)?;
 //! # Ok(())
 //! # }
 //! ```

@@ -7,7 +7,7 @@
 use csv::StringRecord;
 
 /// The records of `text`, each with its line.
-pub(crate) struct Records<'t> {
+pub struct Records<'t> {
     text: &'t str,
     reader: csv::StringRecordsIntoIter<&'t [u8]>,
     /// Where the last record started, and its line.
@@ -17,7 +17,7 @@ pub(crate) struct Records<'t> {
 
 impl<'t> Records<'t> {
     /// Reads `text` (a byte-order mark already removed).
-    pub(crate) fn new(text: &'t str) -> Records<'t> {
+    pub fn new(text: &'t str) -> Records<'t> {
         let reader = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)

@@ -83,7 +83,7 @@ pub enum SceneErrorKind {
         /// The table it is in.
         table: String,
         /// What is wrong in the file, and where.
-        error: crate::scene::points_file::PointsFileError,
+        error: crate::points_file::PointsFileError,
     },
     /// A key with a value out of its domain (a NaN, a list of the wrong length, min > max, an
     /// unknown profile name, ...).

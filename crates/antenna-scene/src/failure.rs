@@ -6,8 +6,8 @@ use sim_core::EquilibriumError;
 use sim_core::contact::ContactError;
 use sim_core::sweep::SweepError;
 
+use crate::Scene;
 use crate::error::SceneError;
-use crate::scene::Scene;
 
 /// A sweep that could not start or go on. Each variant's message names the scene file and,
 /// where it can, the key (`placement` in `[start]`) or the step and its time.

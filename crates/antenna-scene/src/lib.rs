@@ -1,20 +1,28 @@
-//! Scene files: the TOML description of one antenna, its base, and what acts on it
-//! (`docs/scene-format.md`), parsed with serde and validated into a [`Scene`]; and our
-//! own tables for sweeps along walls: `[antenna.hairs]`, `[[walls]]` with
-//! `[[walls.zones]]`, `[sweep]`, `[start]`, `[contact]` and `[sensors]` (documented in the
-//! README's scene table). [`Scene::sweep_scene`] turns a scene into sim-core's [`SweepScene`](sim_core::sweep::SweepScene).
+//! The one scene model of the toolkit: the TOML description of one antenna, its base, and what
+//! acts on it (`docs/scene-format.md`), parsed with serde and validated into a [`Scene`]. The
+//! `antenna` command (solve, sweep, study, optimize), the monitor's simulated sweeps and the
+//! simulated rig all read scenes through this crate, so a scene means the same everywhere.
+//!
+//! Besides the core tables (`[antenna]`, `[antenna.stiffness]`, `[tip_pin]`, `[solver]`), the
+//! tables for sweeps along walls: `[antenna.hairs]`, `[[walls]]` with `[[walls.zones]]`,
+//! `[sweep]`, `[start]`, `[contact]` and `[sensors]`. [`Scene::sweep_scene`] turns a scene into
+//! sim-core's [`SweepScene`](sim_core::sweep::SweepScene); a sweep's failure is worded with the
+//! scene's file and keys by [`SweepFailure`].
 //!
 //! Every error names the file, the key and, where the parser knows it, the line and column;
 //! see [`SceneError`]. Unknown keys are errors that list the keys allowed in their table.
+//! Other TOML files that describe runs of scenes (studies, optimizations) give their errors
+//! the same way through [`source`].
 //!
 //! One file per table: [`keys`] (what each table allows), `antenna.rs` (`[antenna]`,
 //! `[antenna.stiffness]`), [`hairs`], [`walls`] with [`surface`] and [`points_file`] (a
-//! digitized wall's CSV file of points), [`motion`] (`[sweep]`),
-//! [`start`], [`contact`], [`sensors`], `solver.rs` (`[solver]`), `sweep_scene.rs` (the conversion) and
-//! `source.rs` (located errors).
+//! digitized wall's CSV file of points, read by [`csv_lines`]), [`motion`] (`[sweep]`),
+//! [`start`], [`contact`], [`sensors`] (with [`sensors::CalibrationValue`], the "number or
+//! list" calibration value), `solver.rs` (`[solver]`), `sweep_scene.rs` (the conversion),
+//! [`source`] and [`error`] (located errors) and [`failure`] (a sweep's failure).
 //!
 //! ```
-//! use antenna_cli::scene::{Scene, Start};
+//! use antenna_scene::{Scene, Start};
 //!
 //! let text = r#"
 //! [antenna]
@@ -45,7 +53,7 @@
 //! A scene with a wall, swept:
 //!
 //! ```
-//! use antenna_cli::scene::Scene;
+//! use antenna_scene::Scene;
 //! use sim_core::sweep::Placement;
 //!
 //! let text = r#"
@@ -80,13 +88,16 @@
 
 mod antenna;
 pub mod contact;
+pub mod csv_lines;
+pub mod error;
+pub mod failure;
 pub mod hairs;
 pub mod keys;
 pub mod motion;
 pub mod points_file;
 pub mod sensors;
 mod solver;
-pub(crate) mod source;
+pub mod source;
 pub mod start;
 pub mod surface;
 mod sweep_scene;
@@ -101,9 +112,10 @@ use sim_core::sweep::{Motion, Placement};
 use sim_core::{Chain, SensorSettings, StiffnessProfile, Wall};
 use toml::Spanned;
 
-use crate::error::{Location, SceneError, SceneErrorKind};
 use antenna::RawAntenna;
 use contact::RawContact;
+pub use error::{Location, SceneError, SceneErrorKind};
+pub use failure::SweepFailure;
 pub use hairs::HairSpec;
 pub use keys::*;
 use motion::RawSweep;

@@ -11,7 +11,7 @@
 //! back, two edges that cross), told by the lines of the points involved.
 //!
 //! ```
-//! use antenna_cli::scene::points_file::parse_points;
+//! use antenna_scene::points_file::parse_points;
 //!
 //! let points = parse_points("x_m,y_m\r\n0.0, 0.2\r\n0.5,0.15\r\n1.0,0.2\r\n").unwrap();
 //! assert_eq!(points.points_m.len(), 3);

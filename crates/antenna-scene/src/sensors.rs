@@ -10,8 +10,8 @@
 use std::fmt;
 use std::ops::Range;
 
-use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::{Deserialize, Serialize, Serializer};
 use sim_core::{CalibrationError, SensorError, SensorField, SensorSettings};
 use toml::Spanned;
 
@@ -27,8 +27,8 @@ pub const MAX_DEBOUNCE_SAMPLES: usize = 1_000_000;
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSensors {
     angle_noise_counts: Option<Spanned<f64>>,
-    offset_counts: Option<Spanned<RawCalibration>>,
-    gain_error: Option<Spanned<RawCalibration>>,
+    offset_counts: Option<Spanned<CalibrationValue>>,
+    gain_error: Option<Spanned<CalibrationValue>>,
     touch_threshold_n: Option<Spanned<f64>>,
     touch_debounce_samples: Option<Spanned<i64>>,
     sample_rate_hz: Option<Spanned<f64>>,
@@ -37,15 +37,40 @@ pub(crate) struct RawSensors {
 }
 
 /// `offset_counts`, `gain_error`: a number (the spread drawn per joint) or a list (one value
-/// per joint).
-#[derive(Debug)]
-struct RawCalibration(CalibrationError);
+/// per joint), as sim-core's [`CalibrationError`]. The one "number or list" calibration value
+/// of the toolkit: any configuration that carries a calibration error reads it with this type
+/// (it serializes back to the same number or list).
+///
+/// ```
+/// use antenna_scene::sensors::CalibrationValue;
+/// use sim_core::CalibrationError;
+///
+/// #[derive(serde::Deserialize)]
+/// struct T {
+///     offset_counts: CalibrationValue,
+///     gain_error: CalibrationValue,
+/// }
+/// let t: T = toml::from_str("offset_counts = 3\ngain_error = [0.01, -0.02]").unwrap();
+/// assert_eq!(t.offset_counts.0, CalibrationError::Spread(3.0));
+/// assert_eq!(t.gain_error.0, CalibrationError::PerJoint(vec![0.01, -0.02]));
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationValue(pub CalibrationError);
 
-impl<'de> Deserialize<'de> for RawCalibration {
+impl Serialize for CalibrationValue {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match &self.0 {
+            CalibrationError::Spread(spread) => serializer.serialize_f64(*spread),
+            CalibrationError::PerJoint(values) => values.serialize(serializer),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for CalibrationValue {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         struct CalibrationVisitor;
         impl<'de> Visitor<'de> for CalibrationVisitor {
-            type Value = RawCalibration;
+            type Value = CalibrationValue;
             fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 write!(
                     f,
@@ -53,21 +78,24 @@ impl<'de> Deserialize<'de> for RawCalibration {
                      flexible joint"
                 )
             }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<RawCalibration, E> {
-                Ok(RawCalibration(CalibrationError::Spread(v)))
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<CalibrationValue, E> {
+                Ok(CalibrationValue(CalibrationError::Spread(v)))
             }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<RawCalibration, E> {
-                Ok(RawCalibration(CalibrationError::Spread(v as f64)))
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<CalibrationValue, E> {
+                Ok(CalibrationValue(CalibrationError::Spread(v as f64)))
             }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<RawCalibration, E> {
-                Ok(RawCalibration(CalibrationError::Spread(v as f64)))
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<CalibrationValue, E> {
+                Ok(CalibrationValue(CalibrationError::Spread(v as f64)))
             }
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<RawCalibration, A::Error> {
+            fn visit_seq<A: SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<CalibrationValue, A::Error> {
                 let mut values = Vec::new();
                 while let Some(v) = seq.next_element::<f64>()? {
                     values.push(v);
                 }
-                Ok(RawCalibration(CalibrationError::PerJoint(values)))
+                Ok(CalibrationValue(CalibrationError::PerJoint(values)))
             }
         }
         deserializer.deserialize_any(CalibrationVisitor)

@@ -1,6 +1,7 @@
 //! The scene text and its name, for turning spans into located errors; the checks every
 //! table's values share (finite numbers, positive numbers, lists of a given length, points,
-//! names from a list).
+//! names from a list). Public so that the toolkit's other input files (a study, an
+//! optimization) give their errors the way scenes do.
 
 use std::ops::Range;
 
@@ -15,7 +16,7 @@ use crate::error::{Location, SceneError, SceneErrorKind};
 ///
 /// # Errors
 /// [`SceneErrorKind::Io`] naming the file.
-pub(crate) fn read_input(
+pub fn read_input(
     path: &std::path::Path,
 ) -> Result<(String, String, &std::path::Path), SceneError> {
     let label = path.display().to_string();
@@ -29,17 +30,21 @@ pub(crate) fn read_input(
 }
 
 /// The scene text and its name, for turning spans into located errors.
-pub(crate) struct Source<'a> {
-    pub(crate) text: &'a str,
-    pub(crate) path: &'a str,
+pub struct Source<'a> {
+    /// The whole text of the file.
+    pub text: &'a str,
+    /// The file's name as given (what errors start with).
+    pub path: &'a str,
 }
 
 impl Source<'_> {
-    pub(crate) fn at(&self, span: Range<usize>) -> Option<Location> {
+    /// The line and column where `span` starts.
+    pub fn at(&self, span: Range<usize>) -> Option<Location> {
         Some(Location::of_offset(self.text, span.start))
     }
 
-    pub(crate) fn error(&self, span: Option<Range<usize>>, kind: SceneErrorKind) -> SceneError {
+    /// An error of `kind` at `span` (without a location when `span` is `None`).
+    pub fn error(&self, span: Option<Range<usize>>, kind: SceneErrorKind) -> SceneError {
         SceneError {
             path: self.path.to_string(),
             location: span.and_then(|s| self.at(s)),
@@ -47,7 +52,8 @@ impl Source<'_> {
         }
     }
 
-    pub(crate) fn invalid(
+    /// [`SceneErrorKind::Invalid`]: `key` in `table` (at `span`) has a value out of its domain.
+    pub fn invalid(
         &self,
         span: Range<usize>,
         table: &str,
@@ -64,7 +70,8 @@ impl Source<'_> {
         )
     }
 
-    pub(crate) fn missing(&self, span: Range<usize>, table: &str, key: &str) -> SceneError {
+    /// [`SceneErrorKind::MissingKey`]: `table` (at `span`) lacks the required `key`.
+    pub fn missing(&self, span: Range<usize>, table: &str, key: &str) -> SceneError {
         self.error(
             Some(span),
             SceneErrorKind::MissingKey {
@@ -76,7 +83,7 @@ impl Source<'_> {
 
     /// Turns a TOML/serde error into a located scene error naming the key (where the text
     /// is TOML, its tables and keys are found with toml_edit's spans).
-    pub(crate) fn toml_error(&self, e: &toml::de::Error) -> SceneError {
+    pub fn toml_error(&self, e: &toml::de::Error) -> SceneError {
         let span = e.span();
         let offset = span.as_ref().map_or(0, |s| s.start);
         let message = e.message().trim().to_string();
@@ -123,12 +130,12 @@ impl Source<'_> {
 }
 
 /// The label of the `index`-th (0-based) `[[walls]]` table in errors.
-pub(crate) fn wall_table(index: usize) -> String {
+pub fn wall_table(index: usize) -> String {
     format!("[[walls]] (wall {index})")
 }
 
 /// The label of zone `zone` (0-based) of wall `wall` in errors.
-pub(crate) fn zone_table(wall: usize, zone: usize) -> String {
+pub fn zone_table(wall: usize, zone: usize) -> String {
     format!("[[walls.zones]] (wall {wall}, zone {zone})")
 }
 
@@ -284,7 +291,7 @@ impl Layout {
 }
 
 /// `"a", "b", "c"`.
-pub(crate) fn quoted_list(names: &[&str]) -> String {
+pub fn quoted_list(names: &[&str]) -> String {
     names
         .iter()
         .map(|n| format!("\"{n}\""))
@@ -293,7 +300,7 @@ pub(crate) fn quoted_list(names: &[&str]) -> String {
 }
 
 /// The index of `value` in `names`, or an error listing the names.
-pub(crate) fn one_of(
+pub fn one_of(
     source: &Source<'_>,
     table: &str,
     key: &str,
@@ -312,7 +319,7 @@ pub(crate) fn one_of(
 }
 
 /// Checks that every value of a list is finite; returns the list.
-pub(crate) fn finite_list(
+pub fn finite_list(
     source: &Source<'_>,
     table: &str,
     key: &str,
@@ -338,7 +345,7 @@ pub(crate) fn finite_list(
 }
 
 /// A finite list of exactly `len` values, `what` saying what each value is for.
-pub(crate) fn list_of_len(
+pub fn list_of_len(
     source: &Source<'_>,
     table: &str,
     key: &str,
@@ -359,7 +366,7 @@ pub(crate) fn list_of_len(
 }
 
 /// A point or vector `[x, y]`.
-pub(crate) fn point(
+pub fn point(
     source: &Source<'_>,
     table: &str,
     key: &str,
@@ -370,7 +377,7 @@ pub(crate) fn point(
 }
 
 /// A finite number.
-pub(crate) fn finite(
+pub fn finite(
     source: &Source<'_>,
     table: &str,
     key: &str,
@@ -390,7 +397,7 @@ pub(crate) fn finite(
 }
 
 /// A finite number > 0.
-pub(crate) fn positive(
+pub fn positive(
     source: &Source<'_>,
     table: &str,
     key: &str,
@@ -405,7 +412,7 @@ pub(crate) fn positive(
 }
 
 /// A finite number >= 0.
-pub(crate) fn non_negative(
+pub fn non_negative(
     source: &Source<'_>,
     table: &str,
     key: &str,
@@ -420,7 +427,7 @@ pub(crate) fn non_negative(
 }
 
 /// An integer in `min..=max`.
-pub(crate) fn count(
+pub fn count(
     source: &Source<'_>,
     table: &str,
     key: &str,
@@ -444,7 +451,7 @@ pub(crate) fn count(
 
 /// An error for a key that the table's chosen variant does not take (`what` names the
 /// variant, `takes` its keys).
-pub(crate) fn not_for(
+pub fn not_for(
     source: &Source<'_>,
     span: Range<usize>,
     table: &str,

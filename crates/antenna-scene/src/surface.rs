@@ -14,17 +14,21 @@ use crate::error::SceneError;
 pub const SURFACE_NAMES: &[&str] = &["smooth", "rough"];
 
 /// The surface keys of one table, as written.
-pub(crate) struct RawSurfaceKeys<'a> {
-    pub(crate) surface: Option<&'a Spanned<String>>,
-    pub(crate) mu: Option<&'a Spanned<f64>>,
-    pub(crate) hold_shear_n: Option<&'a Spanned<f64>>,
-    pub(crate) hold_tension_n: Option<&'a Spanned<f64>>,
+pub struct RawSurfaceKeys<'a> {
+    /// `surface`: `"smooth"` (the default) or `"rough"`.
+    pub surface: Option<&'a Spanned<String>>,
+    /// `mu`, the smooth surface's friction coefficient.
+    pub mu: Option<&'a Spanned<f64>>,
+    /// `hold_shear_n`, a rough surface's holding strength along it.
+    pub hold_shear_n: Option<&'a Spanned<f64>>,
+    /// `hold_tension_n`, a rough surface's holding strength away from it.
+    pub hold_tension_n: Option<&'a Spanned<f64>>,
 }
 
 impl RawSurfaceKeys<'_> {
     /// The surface: smooth with `mu` (default 0.3) unless `surface = "rough"`, which needs
     /// both holding strengths.
-    pub(crate) fn validate(
+    pub fn validate(
         &self,
         source: &Source<'_>,
         table: &str,

@@ -13,7 +13,7 @@ impl Scene {
     ///
     /// ```
     /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-    /// use antenna_cli::Scene;
+    /// use antenna_scene::Scene;
     /// use sim_core::sweep::Sweep;
     ///
     /// let scene = Scene::parse(

@@ -7,13 +7,13 @@
 use std::path::Path;
 
 use crate::support::{expect_label, harness, step_until, temp_dir};
-use antenna_cli::Scene;
 use antenna_monitor::mapping::{
     CAPTURED_COLOUR, COLOUR_BANDS, MIDWAY_COLOUR, MISSED_COLOUR, coverage_band, coverage_colour,
     coverage_summary,
 };
 use antenna_monitor::sweep_run::SweepRunState;
 use antenna_monitor::{AppOptions, MonitorApp};
+use antenna_scene::Scene;
 use egui::Color32;
 use egui::accesskit::Role;
 use egui_kittest::Harness;

@@ -77,7 +77,7 @@ pub fn example_path(name: &str) -> PathBuf {
 /// [`ReproduceError::Scene`] when the file cannot be read or is not a sweep scene.
 pub fn load_scene(name: &str) -> Result<SweepScene, ReproduceError> {
     let path = example_path(name);
-    let scene = antenna_cli::scene::Scene::from_path(&path).map_err(|e| ReproduceError::Scene {
+    let scene = antenna_scene::Scene::from_path(&path).map_err(|e| ReproduceError::Scene {
         path: path.display().to_string(),
         message: e.to_string(),
     })?;
@@ -93,7 +93,7 @@ pub fn load_scene(name: &str) -> Result<SweepScene, ReproduceError> {
 /// [`ReproduceError::Scene`] for a scene that does not parse.
 pub fn load_sensors(name: &str) -> Result<sim_core::SensorSettings, ReproduceError> {
     let path = example_path(name);
-    let scene = antenna_cli::scene::Scene::from_path(&path).map_err(|e| ReproduceError::Scene {
+    let scene = antenna_scene::Scene::from_path(&path).map_err(|e| ReproduceError::Scene {
         path: path.display().to_string(),
         message: e.to_string(),
     })?;

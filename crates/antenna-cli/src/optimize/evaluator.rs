@@ -14,8 +14,8 @@ use serde::{Deserialize, Serialize};
 use super::log::LogWriter;
 use super::{Objective, OptimizeSpec};
 use crate::progress;
-use crate::scene::{Scene, StiffnessSpec};
 use crate::sweep::SweepRun;
+use antenna_scene::{Scene, StiffnessSpec};
 
 /// One scene's sweep of an evaluation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

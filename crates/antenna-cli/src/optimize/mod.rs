@@ -89,10 +89,10 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::error::SceneError;
-use crate::scene::motion::MAX_SWEEP_STEPS;
-use crate::scene::source::{Source, list_of_len, one_of, positive, read_input};
-use crate::scene::{Scene, StiffnessSpec};
+use antenna_scene::error::SceneError;
+use antenna_scene::motion::MAX_SWEEP_STEPS;
+use antenna_scene::source::{Source, list_of_len, one_of, positive, read_input};
+use antenna_scene::{Scene, StiffnessSpec};
 pub use best_scene::best_scene_text;
 pub use evaluator::{Evaluation, Evaluator, STALL_CALLS, SceneResult, Stop, with_stiffness};
 pub use log::{LogError, LogHeader};

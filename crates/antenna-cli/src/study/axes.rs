@@ -9,7 +9,7 @@ use sim_core::{
     Wall, WallError,
 };
 
-use crate::scene::{HairSpec, Scene, StiffnessSpec};
+use antenna_scene::{HairSpec, Scene, StiffnessSpec};
 
 /// Why a variant of the base scene is not a valid scene.
 #[derive(Debug, thiserror::Error)]

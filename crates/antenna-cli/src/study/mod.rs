@@ -33,10 +33,10 @@ use serde::Deserialize;
 use sim_core::StiffnessProfile;
 use toml::Spanned;
 
-use crate::error::SceneError;
-use crate::scene::source::{Source, finite_list, list_of_len, non_negative, positive, read_input};
-use crate::scene::surface::RawSurfaceKeys;
-use crate::scene::{Scene, StiffnessSpec};
+use antenna_scene::error::SceneError;
+use antenna_scene::source::{Source, finite_list, list_of_len, non_negative, positive, read_input};
+use antenna_scene::surface::RawSurfaceKeys;
+use antenna_scene::{Scene, StiffnessSpec};
 pub use axes::{HairLayout, SurfaceChoice, Variant, VariantError};
 pub use grid::Shard;
 pub use row::{CSV_COLUMNS, StudyFormat, StudyRow};

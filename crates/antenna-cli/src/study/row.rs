@@ -5,8 +5,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::Variant;
-use crate::scene::{Scene, StiffnessSpec};
 use crate::sweep::SweepSummary;
+use antenna_scene::{Scene, StiffnessSpec};
 
 /// How rows are written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,10 +1,11 @@
 //! `antenna sweep`: a scene's sweep run step by step ([`SweepRun`]), each step with the
 //! CLI's own metrics ([`StepMetrics`]), summarized ([`SweepSummary`]), printed as JSON lines
-//! ([`record`]) and drawn ([`plot`]). Failures carry their exit status ([`SweepFailure`]).
+//! ([`record`]) and drawn ([`plot`]). Failures carry their exit status ([`SweepFailure`], worded
+//! by antenna-scene with the scene's file and keys).
 //!
 //! ```
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
-//! use antenna_cli::Scene;
+//! use antenna_scene::Scene;
 //! use antenna_cli::sweep::SweepRun;
 //!
 //! let scene = Scene::parse(
@@ -26,7 +27,6 @@
 //! # }
 //! ```
 
-pub mod failure;
 pub mod plot;
 pub mod record;
 mod step_metrics;
@@ -38,13 +38,12 @@ use sim_core::Wall;
 use sim_core::sweep::{Sweep, SweepStep};
 use sim_core::{Chain, Sensors};
 
-pub use failure::SweepFailure;
 pub use step_metrics::{SensorSample, StepMetrics};
 pub use summary::{
     COMPLETE_WITHIN_MM, SensorsSummary, SweepStats, SweepSummary, coverage_settings,
 };
 
-use crate::scene::Scene;
+use antenna_scene::{Scene, SweepFailure};
 
 /// One recorded state of a sweep: sim-core's step and the CLI's metrics of it.
 #[derive(Debug, Clone)]

@@ -15,7 +15,7 @@ use plotters::prelude::*;
 use sim_core::{Surface, Wall, WallShape};
 
 use super::SweepState;
-use crate::figure::{FigureError, register_font, write_png};
+use antenna_figure::{FigureError, register_font, write_png};
 
 /// Figure size, pixels (PNG) or user units (SVG).
 pub const FIGURE_SIZE: (u32, u32) = (1200, 1100);

@@ -11,8 +11,6 @@
 //! stdout); 3 the solver broke down numerically.
 
 mod optimize;
-mod segments;
-mod segments_config;
 mod study;
 mod sweep;
 
@@ -23,10 +21,11 @@ use std::process::ExitCode;
 use antenna_cli::design::{design_report, design_table};
 use antenna_cli::identify::{DEFAULT_WIRE_CONSTANT, identify_report, identify_summary};
 use antenna_cli::recording::Recording;
-use antenna_cli::scene::{Scene, Start};
+use antenna_cli::segments::SegmentsFailure;
 use antenna_cli::solve::{SolveError, all_minima_of_scene, solve_scene, summary};
 use antenna_cli::solve_walls::{solve_wall_scene, wall_summary};
-use antenna_cli::sweep::SweepFailure;
+use antenna_scene::SweepFailure;
+use antenna_scene::{Scene, Start};
 use anyhow::{Context as _, anyhow};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use sim_core::{
@@ -52,7 +51,7 @@ enum Command {
     Design(DesignArgs),
     Identify(IdentifyArgs),
     Export(ExportArgs),
-    Segments(segments::SegmentsArgs),
+    Segments(antenna_cli::segments::SegmentsArgs),
 }
 
 /// Find the static equilibrium of a scene file.
@@ -222,6 +221,15 @@ impl From<SweepFailure> for Failure {
     }
 }
 
+impl From<SegmentsFailure> for Failure {
+    fn from(e: SegmentsFailure) -> Self {
+        match e {
+            SegmentsFailure::NoSuccess(e) => Failure::NoSuccess(e),
+            SegmentsFailure::BadInput(e) => Failure::BadInput(e),
+        }
+    }
+}
+
 impl From<anyhow::Error> for Failure {
     fn from(e: anyhow::Error) -> Self {
         Failure::BadInput(e)
@@ -238,7 +246,9 @@ fn main() -> ExitCode {
         Command::Design(args) => run_design(&args),
         Command::Identify(args) => run_identify(&args),
         Command::Export(args) => run_export(&args),
-        Command::Segments(args) => segments::run(&args),
+        Command::Segments(args) => {
+            antenna_cli::segments::run(&args, &mut std::io::stdout()).map_err(Failure::from)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -271,7 +281,7 @@ pub(crate) fn print_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> 
 
 /// A solver error with the scene key it concerns, and its exit status.
 fn solve_failure(scene: &Scene, path: &Path, e: SolveError) -> Failure {
-    let place = |loc: Option<antenna_cli::Location>, key: &str| match loc {
+    let place = |loc: Option<antenna_scene::Location>, key: &str| match loc {
         Some(l) => format!("{}:{l}: {key}", path.display()),
         None => format!("{}: {key}", path.display()),
     };

@@ -5,11 +5,12 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use antenna_cli::progress;
-use antenna_cli::scene::Scene;
-use antenna_cli::scene::motion::MAX_SWEEP_STEPS;
+use antenna_cli::sweep::SweepRun;
 use antenna_cli::sweep::plot::SweepPlot;
 use antenna_cli::sweep::record::{PlacementRecord, StepRecord, SweepLine};
-use antenna_cli::sweep::{SweepFailure, SweepRun};
+use antenna_scene::Scene;
+use antenna_scene::SweepFailure;
+use antenna_scene::motion::MAX_SWEEP_STEPS;
 use anyhow::{Context as _, anyhow};
 use clap::Args;
 

@@ -1,7 +1,29 @@
 //! `antenna segments scan | assign | zero | status`: commissioning the segments over the
-//! daemon's bus, through `antenna-bus`'s `commission` module.
+//! daemon's bus, through `antenna-bus`'s `commission` module, as a library: another program
+//! runs the command's actions with [`run`] (its output written to any writer), or reads a
+//! configuration's bus with [`Config`] and commissions it with [`antenna_bus::commission`]
+//! itself. The bus and its segments are antennad's `[bus]` table ([`antenna_bus::config`],
+//! read by [`config`]).
+//!
+//! ```
+//! use antenna_cli::segments::{SegmentsCommand, run};
+//! use clap::Parser as _;
+//!
+//! let command = SegmentsCommand::try_parse_from([
+//!     "segments", "status", "0x20", "--bus", "sim", "--sim-segment", "0x20:1500", "--json",
+//! ])
+//! .unwrap();
+//! let mut out = Vec::new();
+//! run(&command.args, &mut out).unwrap();
+//! let status: serde_json::Value = serde_json::from_slice(&out).unwrap();
+//! assert_eq!(status["segments"][0]["address_hex"], "0x20");
+//! ```
 
+pub mod config;
+
+use std::io::Write;
 use std::path::{Path, PathBuf};
+#[cfg(target_os = "linux")]
 use std::time::Duration;
 
 use antenna_bus::commission::{
@@ -9,19 +31,69 @@ use antenna_bus::commission::{
 };
 use antenna_bus::{SegmentFault, SimBus, SimSegment};
 use anyhow::{Context as _, anyhow};
-use clap::{Args, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use embedded_hal::i2c::I2c;
 use serde_json::{Value, json};
 
-use crate::segments_config::BusConfig as Config;
-use crate::{Failure, bail_input, print_json};
+pub use config::Config;
+
+/// Why an action did not succeed, which decides the `antenna` command's exit status.
+#[derive(Debug, thiserror::Error)]
+pub enum SegmentsFailure {
+    /// Exit status 1: the bus failed, a segment did not answer or is unhealthy, a check after
+    /// a write failed (what was measured or found is already written out).
+    #[error("{}", .0.as_ref().map_or_else(String::new, |e| format!("{e:#}")))]
+    NoSuccess(Option<anyhow::Error>),
+    /// Exit status 2: bad input (arguments, the configuration, a refused assignment).
+    #[error("{0:#}")]
+    BadInput(anyhow::Error),
+}
+
+impl From<anyhow::Error> for SegmentsFailure {
+    fn from(e: anyhow::Error) -> Self {
+        SegmentsFailure::BadInput(e)
+    }
+}
+
+type Failure = SegmentsFailure;
+
+fn bail_input<T>(message: String) -> Result<T, Failure> {
+    Err(Failure::BadInput(anyhow!(message)))
+}
+
+/// Writes `value` as pretty JSON on a line of its own.
+fn print_json<T: serde::Serialize>(out: &mut dyn Write, value: &T) -> Result<(), Failure> {
+    let text = serde_json::to_string_pretty(value).context("writing JSON")?;
+    // An error (a closed pipe: `antenna segments status --json | head`), not a panic.
+    writeln!(out, "{text}")
+        .and_then(|()| out.flush())
+        .context("writing the JSON to stdout")?;
+    Ok(())
+}
+
+/// `writeln!` to the action's output; a failed write is an error, not a panic.
+macro_rules! say {
+    ($out:expr, $($arg:tt)*) => {
+        writeln!($out, $($arg)*).context("writing to stdout")?
+    };
+}
+
+/// `antenna segments` as a command of its own, for parsing its arguments in another program
+/// (`SegmentsCommand::try_parse_from(["segments", "status", "--bus", "sim"])`).
+#[derive(Debug, Parser)]
+#[command(name = "segments")]
+pub struct SegmentsCommand {
+    /// The action and its arguments.
+    #[command(flatten)]
+    pub args: SegmentsArgs,
+}
 
 /// Commission the segments: find them, give them addresses, measure their zeros, read
 /// their status.
 ///
 /// The bus is `--bus` (`sim`, or a Linux I2C device such as /dev/i2c-1), else `bus.device`
 /// of `--config` (antennad's configuration); one of them is required. `sim` is the simulated
-/// rig: the segments of `--config` (the default rig's nine without it), each at rest at joint
+/// rig: the segments of `--config` (the built-in rig's without it), each at rest at joint
 /// angle zero, or those `--sim-segment` lists. A simulated bus lives for one invocation: an
 /// assignment on it shows what the segment says at its new address, and is gone after.
 #[derive(Debug, Args)]
@@ -31,7 +103,7 @@ use crate::{Failure, bail_input, print_json};
   antenna segments zero --config /etc/antennad.toml -o antennad-zeroed.toml
   antenna segments status --bus sim --json
   antenna segments scan --bus sim --sim-segment 0x20:1500 --sim-segment 0x77")]
-pub(crate) struct SegmentsArgs {
+pub struct SegmentsArgs {
     #[command(subcommand)]
     action: Action,
 }
@@ -223,7 +295,7 @@ fn open_bus(bus: &BusArgs, config: Option<&Config>) -> Result<(Opened, String), 
             let config = match config {
                 Some(config) => config,
                 None => {
-                    built_in = Config::built_in()?;
+                    built_in = Config::built_in();
                     &built_in
                 }
             };
@@ -276,7 +348,12 @@ fn open_hardware(device: &str, _config: Option<&Config>) -> Result<(Opened, Stri
     ))
 }
 
-pub(crate) fn run(args: &SegmentsArgs) -> Result<(), Failure> {
+/// Runs the action of `args`, writing its table or JSON (what `antenna segments` prints) to
+/// `out`.
+///
+/// # Errors
+/// [`SegmentsFailure`]: bad input, or an action that did not succeed.
+pub fn run(args: &SegmentsArgs, out: &mut dyn Write) -> Result<(), Failure> {
     let bus_args = match &args.action {
         Action::Scan(a) => &a.bus,
         Action::Assign(a) => &a.bus,
@@ -291,14 +368,20 @@ pub(crate) fn run(args: &SegmentsArgs) -> Result<(), Failure> {
         json: bus_args.json,
     };
     match opened {
-        Opened::Sim(mut bus) => act(&args.action, &context, &mut bus, &mut SimBus::sample_all),
+        Opened::Sim(mut bus) => act(
+            &args.action,
+            &context,
+            &mut bus,
+            &mut SimBus::sample_all,
+            out,
+        ),
         #[cfg(target_os = "linux")]
         Opened::Linux(mut bus) => {
             // The segments sample at 1 kHz: two periods apart, every reading is a new one.
             let mut wait = |_: &mut antenna_bus::linux_i2c::LinuxI2cBus| {
                 std::thread::sleep(Duration::from_millis(2));
             };
-            act(&args.action, &context, &mut bus, &mut wait)
+            act(&args.action, &context, &mut bus, &mut wait, out)
         }
     }
 }
@@ -336,12 +419,13 @@ fn act<I: I2c>(
     ctx: &Ctx<'_>,
     bus: &mut I,
     between: &mut dyn FnMut(&mut I),
+    out: &mut dyn Write,
 ) -> Result<(), Failure> {
     match action {
-        Action::Scan(args) => scan(args, ctx, bus),
-        Action::Assign(args) => assign(args, ctx, bus),
-        Action::Zero(args) => zero(args, ctx, bus, between),
-        Action::Status(args) => status(args, ctx, bus),
+        Action::Scan(args) => scan(args, ctx, bus, out),
+        Action::Assign(args) => assign(args, ctx, bus, out),
+        Action::Zero(args) => zero(args, ctx, bus, between, out),
+        Action::Status(args) => status(args, ctx, bus, out),
     }
 }
 
@@ -449,7 +533,12 @@ fn bus_failure(ctx: &Ctx<'_>, e: CommissionError) -> Failure {
     Failure::NoSuccess(Some(anyhow!("{}: {e}", ctx.name)))
 }
 
-fn scan<I: I2c>(args: &ScanArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), Failure> {
+fn scan<I: I2c>(
+    args: &ScanArgs,
+    ctx: &Ctx<'_>,
+    bus: &mut I,
+    out: &mut dyn Write,
+) -> Result<(), Failure> {
     if args.from > args.to {
         return bail_input(format!(
             "--from {} is above --to {}",
@@ -466,15 +555,19 @@ fn scan<I: I2c>(args: &ScanArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), Failu
         .filter(|a| (args.from..=args.to).contains(a) && !found.iter().any(|f| f.address == *a))
         .collect();
     if ctx.json {
-        return print_json(&json!({
-            "bus": ctx.name,
-            "from": args.from,
-            "to": args.to,
-            "found": found.iter().map(|f| found_json(f, ctx)).collect::<Vec<_>>(),
-            "configured_missing": missing.iter().map(|&a| hex(a)).collect::<Vec<_>>(),
-        }));
+        return print_json(
+            out,
+            &json!({
+                "bus": ctx.name,
+                "from": args.from,
+                "to": args.to,
+                "found": found.iter().map(|f| found_json(f, ctx)).collect::<Vec<_>>(),
+                "configured_missing": missing.iter().map(|&a| hex(a)).collect::<Vec<_>>(),
+            }),
+        );
     }
-    println!(
+    say!(
+        out,
         "{}: {} address{} answer{} in {}..={}",
         ctx.name,
         found.len(),
@@ -484,19 +577,24 @@ fn scan<I: I2c>(args: &ScanArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), Failu
         hex(args.to)
     );
     if !found.is_empty() {
-        println!("{TABLE_HEADER}");
+        say!(out, "{TABLE_HEADER}");
     }
     for f in &found {
-        println!("{}", found_line(f, ctx));
+        say!(out, "{}", found_line(f, ctx));
     }
     if !missing.is_empty() {
         let list: Vec<String> = missing.iter().map(|&a| hex(a)).collect();
-        println!("configured but not answering: {}", list.join(", "));
+        say!(out, "configured but not answering: {}", list.join(", "));
     }
     Ok(())
 }
 
-fn assign<I: I2c>(args: &AssignArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), Failure> {
+fn assign<I: I2c>(
+    args: &AssignArgs,
+    ctx: &Ctx<'_>,
+    bus: &mut I,
+    out: &mut dyn Write,
+) -> Result<(), Failure> {
     let place = format!(
         "{}: assign {} -> {}",
         ctx.name,
@@ -526,18 +624,20 @@ fn assign<I: I2c>(args: &AssignArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), F
     if ctx.json {
         let mut value = found_json(&found, ctx);
         value["from"] = json!(hex(args.from));
-        return print_json(&value);
+        return print_json(out, &value);
     }
-    println!(
+    say!(
+        out,
         "{}: the segment at {} now answers at {}",
         ctx.name,
         hex(args.from),
         hex(args.to)
     );
-    println!("{TABLE_HEADER}");
-    println!("{}", found_line(&found, ctx));
+    say!(out, "{TABLE_HEADER}");
+    say!(out, "{}", found_line(&found, ctx));
     if ctx.config.is_some() && !ctx.configured(args.to) {
-        println!(
+        say!(
+            out,
             "add it to the configuration: [[bus.segments]] address = {}",
             hex(args.to)
         );
@@ -545,7 +645,12 @@ fn assign<I: I2c>(args: &AssignArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), F
     Ok(())
 }
 
-fn status<I: I2c>(args: &StatusArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), Failure> {
+fn status<I: I2c>(
+    args: &StatusArgs,
+    ctx: &Ctx<'_>,
+    bus: &mut I,
+    out: &mut dyn Write,
+) -> Result<(), Failure> {
     let addresses = ctx.addresses(&args.addresses)?;
     let found = commission::status(bus, &addresses);
     let unhealthy = found
@@ -557,15 +662,18 @@ fn status<I: I2c>(args: &StatusArgs, ctx: &Ctx<'_>, bus: &mut I) -> Result<(), F
         })
         .count();
     if ctx.json {
-        print_json(&json!({
-            "bus": ctx.name,
-            "segments": found.iter().map(|f| found_json(f, ctx)).collect::<Vec<_>>(),
-        }))?;
+        print_json(
+            out,
+            &json!({
+                "bus": ctx.name,
+                "segments": found.iter().map(|f| found_json(f, ctx)).collect::<Vec<_>>(),
+            }),
+        )?;
     } else {
-        println!("{}: {} segment(s)", ctx.name, found.len());
-        println!("{TABLE_HEADER}");
+        say!(out, "{}: {} segment(s)", ctx.name, found.len());
+        say!(out, "{TABLE_HEADER}");
         for f in &found {
-            println!("{}", found_line(f, ctx));
+            say!(out, "{}", found_line(f, ctx));
         }
     }
     if unhealthy == 0 {
@@ -584,6 +692,7 @@ fn zero<I: I2c>(
     ctx: &Ctx<'_>,
     bus: &mut I,
     between: &mut dyn FnMut(&mut I),
+    out: &mut dyn Write,
 ) -> Result<(), Failure> {
     let addresses = ctx.addresses(&args.addresses)?;
     // Everything about the output is checked before the measurement.
@@ -645,25 +754,33 @@ fn zero<I: I2c>(
             .iter()
             .map(|m| zero_json(m, previous(m.address)))
             .collect();
-        print_json(&json!({
-            "bus": ctx.name,
-            "samples": samples,
-            "segments": rows,
-            "written": if not_at_rest.is_empty() {
-                target.as_ref().map(|t| t.1.display().to_string())
-            } else {
-                None
-            },
-        }))?;
+        print_json(
+            out,
+            &json!({
+                "bus": ctx.name,
+                "samples": samples,
+                "segments": rows,
+                "written": if not_at_rest.is_empty() {
+                    target.as_ref().map(|t| t.1.display().to_string())
+                } else {
+                    None
+                },
+            }),
+        )?;
     } else {
-        println!(
+        say!(
+            out,
             "{}: zero_counts of {} joint(s), circular mean of {samples} readings each",
             ctx.name,
             measured.len()
         );
-        println!("address  zero_counts  configured  max_deviation_counts");
+        say!(
+            out,
+            "address  zero_counts  configured  max_deviation_counts"
+        );
         for m in &measured {
-            println!(
+            say!(
+                out,
                 "{:<8} {:>11}  {:>10}  {:>20}",
                 hex(m.address),
                 m.zero_counts,
@@ -704,7 +821,8 @@ fn zero<I: I2c>(
         std::fs::write(output, text)
             .with_context(|| format!("{}: cannot write", output.display()))?;
         if !ctx.json {
-            println!(
+            say!(
+                out,
                 "wrote {} (a copy of {} with these zero_counts)",
                 output.display(),
                 input.display()
