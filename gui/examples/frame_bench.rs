@@ -16,7 +16,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use antenna_data::stream::{RigInfo, RigWall, SegmentSample, StreamMessage};
+use antenna_data::stream::{RigInfo, SegmentSample, StreamMessage};
 use antenna_monitor::history::{Health, Sample, SegmentReading};
 use antenna_monitor::{AppOptions, MonitorApp, is_software_gl, tune_for_software_gl};
 use anyhow::{Context, Result, bail};
@@ -157,25 +157,23 @@ fn main() -> Result<()> {
     }
     let n = args.segments;
     let links = vec![LINK_M; n + 1];
+    // A chain of `n` segments against a wall 0.3 m from the track, tilted 30 degrees (the
+    // prediction's scene), or the links alone (--no-prediction: no scene, no prediction).
+    let scene = format!(
+        "[antenna]\nlinks = {}\nlink_length_m = {LINK_M}\nbase_angle_deg = 30.0\n\
+         [antenna.stiffness]\nprofile = \"linear\"\nmin_n_m_per_rad = 0.01\n\
+         max_n_m_per_rad = 0.05\n[[walls]]\nshape = \"line\"\npoint_m = [0.0, 0.3]\n\
+         angle_deg = -30.0\nsolid = \"left\"\nmu = 0.3\n",
+        n + 1
+    );
     let rig = RigInfo {
         poll_hz: RATE_HZ,
-        link_lengths_m: links,
-        base_mount_angle_deg: 30.0,
-        stiffness_profile: if args.no_prediction {
-            "none (--no-prediction)".to_owned()
-        } else {
-            "linear".to_owned()
-        },
-        k_min_n_m_per_rad: 0.01,
-        k_max_n_m_per_rad: 0.05,
-        stiffness_n_m_per_rad: Vec::new(),
-        wall: RigWall {
-            distance_m: 0.3,
-            angle_deg: 30.0,
-            stiffness_n_per_m: 200.0,
-        },
         stage_min_m: 0.0,
         stage_max_m: 0.3,
+        scene_toml: (!args.no_prediction).then_some(scene),
+        scene_source: Some("frame_bench".to_owned()),
+        link_lengths_m: links,
+        base_mount_angle_deg: 30.0,
     };
     let server = StreamServer::bind_with(
         "127.0.0.1:0",

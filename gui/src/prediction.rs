@@ -2,10 +2,11 @@
 //!
 //! The chain panel overlays the measured chain with [`Prediction`]s and draws their
 //! difference; it knows only [`Predictor`]. [`predictor_for`] is the one place that chooses
-//! the model: today [`QuasiStaticPredictor`], the simulated rig's own physics
-//! (`antenna_sim_physics::SimPhysics`: sim-core's quasi-static contact solver with friction
-//! against the flat wall, stepping from the previous posture). Another model is another
-//! implementation of [`Predictor`] and a change to [`predictor_for`].
+//! the model: today [`QuasiStaticPredictor`], the simulated rig's own physics built from the
+//! rig's scene (`antenna_sim_physics::SimPhysics`: sim-core's quasi-static contact solver
+//! with the scene's friction against its walls, hairs included, placed as the scene says and
+//! stepping from the previous posture). Another model is another implementation of
+//! [`Predictor`] and a change to [`predictor_for`].
 //!
 //! Solving can take milliseconds for long chains, so the UI asks a [`PredictionWorker`]: a
 //! thread that always solves the latest requested pose and never makes the UI wait. It uses
@@ -16,7 +17,7 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use antenna_sim_physics::{AntennaSpec, FlatWallSpec, SimPhysics};
+use antenna_sim_physics::SimPhysics;
 
 use crate::error::MonitorError;
 use crate::rig::RigGeometry;
@@ -48,7 +49,7 @@ pub struct Prediction {
     pub tip_force_n: f64,
 }
 
-/// Predicts the chain's posture for a base pose against the rig's wall.
+/// Predicts the chain's posture for a base pose against the rig's walls.
 pub trait Predictor: Send + std::fmt::Debug {
     /// The model's name, for the legend.
     fn name(&self) -> &'static str;
@@ -63,53 +64,26 @@ pub fn predictor_for(rig: &RigGeometry) -> Result<Box<dyn Predictor>, MonitorErr
 }
 
 /// sim-core's quasi-static contact solver, exactly the simulated rig's physics
-/// (`antenna_sim_physics::SimPhysics`).
+/// (`antenna_sim_physics::SimPhysics`) on the rig's scene.
 #[derive(Debug)]
 pub struct QuasiStaticPredictor {
     physics: SimPhysics,
-    mount_rad: f64,
 }
 
 impl QuasiStaticPredictor {
-    /// The predictor for `rig`, which needs a wall, a stiffness profile and equal link
-    /// lengths (what the simulated rig supports).
+    /// The predictor for `rig`, which needs its scene (daemons since issue #46 send it).
+    ///
+    /// # Errors
+    /// [`MonitorError::Prediction`] without a scene, or when its placement fails.
     pub fn new(rig: &RigGeometry) -> Result<Self, MonitorError> {
-        let wall = rig
-            .wall
-            .ok_or_else(|| MonitorError::Prediction("the source gives no wall".to_owned()))?;
-        let stiffness = rig.stiffness.as_ref().ok_or_else(|| {
-            MonitorError::Prediction("the source gives no joint stiffness".to_owned())
+        let scene = rig.scene.clone().ok_or_else(|| {
+            MonitorError::Prediction(
+                "the source gives no scene (no wall to predict against)".to_owned(),
+            )
         })?;
-        let link_length_m = rig.link_lengths_m[0];
-        if rig
-            .link_lengths_m
-            .iter()
-            .any(|&l| (l - link_length_m).abs() > 1e-12)
-        {
-            return Err(MonitorError::Prediction(
-                "the tip-penalty model needs equal link lengths".to_owned(),
-            ));
-        }
-        let antenna = AntennaSpec {
-            links: rig.segment_count(),
-            link_length_m,
-            stiffness_profile: stiffness.profile.clone(),
-            k_min_n_m_per_rad: stiffness.k_min_n_m_per_rad,
-            k_max_n_m_per_rad: stiffness.k_max_n_m_per_rad,
-            base_angle_deg: rig.base_mount_angle_rad.to_degrees(),
-        };
-        let wall = FlatWallSpec {
-            distance_m: wall.distance_m,
-            angle_deg: wall.angle_rad.to_degrees(),
-            // `hello` does not carry the wall's friction: the simulated rig's default.
-            mu: FlatWallSpec::default().mu,
-        };
-        let physics = SimPhysics::new(&antenna, &wall)
-            .map_err(|e| MonitorError::Prediction(e.to_string()))?;
-        Ok(Self {
-            physics,
-            mount_rad: rig.base_mount_angle_rad,
-        })
+        let physics =
+            SimPhysics::new(scene).map_err(|e| MonitorError::Prediction(e.to_string()))?;
+        Ok(Self { physics })
     }
 }
 
@@ -121,7 +95,7 @@ impl Predictor for QuasiStaticPredictor {
     fn predict(&mut self, pose: BasePose) -> Result<Prediction, MonitorError> {
         let state = self
             .physics
-            .update(pose.stage_position_m, self.mount_rad + pose.servo_angle_rad)
+            .update(pose.stage_position_m, pose.servo_angle_rad)
             .map_err(|e| MonitorError::Prediction(format!("{e:#}")))?;
         Ok(Prediction {
             pose,
@@ -248,20 +222,21 @@ impl Drop for PredictionWorker {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use antenna_data::stream::RigInfo;
 
     #[test]
     fn predicts_a_bend_against_the_wall_in_the_background() {
         let rig = crate::rig::tests::default_rig();
         let mut worker = PredictionWorker::start(predictor_for(&rig).unwrap()).unwrap();
-        let free = BasePose {
+        let home = BasePose {
             stage_position_m: 0.0,
             servo_angle_rad: 0.0,
         };
-        let pressed = BasePose {
+        let along = BasePose {
             stage_position_m: 0.15,
             servo_angle_rad: 0.0,
         };
-        for pose in [free, pressed] {
+        for pose in [home, along] {
             worker.request(pose);
             // Generous: only a hang takes this long, however loaded the machine.
             let deadline = Instant::now() + Duration::from_secs(60);
@@ -273,17 +248,62 @@ mod tests {
         let Some(Ok(p)) = worker.latest() else {
             panic!("no prediction")
         };
-        assert_eq!(p.pose, pressed);
-        assert!(p.tip_force_n > 0.0);
-        assert_ne!(p.touch_bits[8], 0);
+        assert_eq!(p.pose, along);
+        // The built-in scene's antenna, placed tip on the wall, bent back along it.
+        assert!(p.touch_bits.iter().any(|&b| b != 0));
         assert!(p.touch_bits.iter().all(|&b| b <= 0x0F));
-        assert!(p.joint_angles_rad.iter().all(|a| a.abs() > 0.01));
+        assert!(p.joint_angles_rad.iter().any(|a| a.abs() > 0.3));
+    }
+
+    /// The rig of the built-in scene with the wall's friction `mu`.
+    fn rig_with_mu(mu: f64) -> RigGeometry {
+        let text = host_daemon::service::config::scene::BUILT_IN_SCENE;
+        assert!(text.contains("mu = 0.3\n"));
+        let info = RigInfo {
+            poll_hz: 1000.0,
+            stage_min_m: 0.0,
+            stage_max_m: 0.6,
+            scene_toml: Some(text.replace("mu = 0.3\n", &format!("mu = {mu:?}\n"))),
+            scene_source: Some(format!("mu {mu}")),
+            link_lengths_m: vec![0.04; 9],
+            base_mount_angle_deg: 30.0,
+        };
+        RigGeometry::from_rig_info(&info, "test").unwrap()
+    }
+
+    /// The prediction is the scene's physics, friction included: along the same path, a
+    /// frictionless wall and one with mu = 1 bend the antenna differently, each exactly as
+    /// the simulated rig's physics does on that scene.
+    #[test]
+    fn the_prediction_uses_the_scene_s_friction() {
+        let path: Vec<f64> = (1..=50).map(|k| f64::from(k) * 2e-3).collect();
+        let run = |mu: f64| {
+            let rig = rig_with_mu(mu);
+            let mut predictor = predictor_for(&rig).unwrap();
+            let mut physics = SimPhysics::new(rig.scene.clone().unwrap()).unwrap();
+            let mut last = Vec::new();
+            for &s in &path {
+                let pose = BasePose {
+                    stage_position_m: s,
+                    servo_angle_rad: 0.0,
+                };
+                last = predictor.predict(pose).unwrap().joint_angles_rad;
+                assert_eq!(last, physics.update(s, 0.0).unwrap().joint_angles_rad);
+            }
+            last
+        };
+        let (slippery, rough) = (run(0.0), run(1.0));
+        let difference = slippery
+            .iter()
+            .zip(&rough)
+            .fold(0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(difference.to_degrees() > 1.0, "{slippery:?} {rough:?}");
     }
 
     #[test]
-    fn refuses_a_rig_without_a_wall() {
+    fn refuses_a_rig_without_a_scene() {
         let rig = RigGeometry::fallback(3).unwrap();
         let err = predictor_for(&rig).unwrap_err().to_string();
-        assert!(err.contains("no wall"), "{err}");
+        assert!(err.contains("no scene"), "{err}");
     }
 }

@@ -142,7 +142,7 @@ mod tests {
         metadata.rig = Some(host_daemon::service::daemon::rig_info(&config));
         let mut recorder = TrialRecorder::create(&path, &metadata).unwrap();
         for i in 0..300 {
-            let segments = synthetic_segments(i, 9);
+            let segments = synthetic_segments(i, 8);
             if i % 10 == 0 {
                 recorder
                     .record_stage(&StageMessage {
@@ -157,17 +157,17 @@ mod tests {
         let trial = open_trial(&path).unwrap();
         std::fs::remove_file(&path).ok();
         assert_eq!(trial.history.len(), 300);
-        assert_eq!(trial.history.segment_count(), 9);
-        assert_eq!(trial.rig.segment_count(), 9);
-        // The rig kept in the metadata: the simulated rig with its wall.
-        assert!(trial.rig.wall.is_some(), "{:?}", trial.geometry_note);
+        assert_eq!(trial.history.segment_count(), 8);
+        assert_eq!(trial.rig.segment_count(), 8);
+        // The rig kept in the metadata: the simulated rig with its scene's wall.
+        assert!(!trial.rig.walls.is_empty(), "{:?}", trial.geometry_note);
         let last = trial.history.sample(299).unwrap();
         assert!((last.stage_position_m.unwrap() - 0.029).abs() < 1e-6);
         assert!(trial.truncated.is_none());
         // The recording keeps each segment's four touch bits: every poll's come back as
         // written (none for a failed read), and its frame lights one switch per bit set.
         for i in 0..300 {
-            let written: Vec<Option<u8>> = synthetic_segments(i, 9)
+            let written: Vec<Option<u8>> = synthetic_segments(i, 8)
                 .segments
                 .iter()
                 .map(|s| s.touch)

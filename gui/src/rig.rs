@@ -1,67 +1,22 @@
-//! [`RigGeometry`]: the antenna and the wall as the daemon describes them (the `rig` object
-//! of the stream's `hello`, or a recording's configuration), and the conversion of one
-//! sample into a [`ChainFrame`] with sim-core's kinematics.
+//! [`RigGeometry`]: the rig as the daemon describes it (the `rig` object of the stream's
+//! `hello`, or a recording's metadata): its scene (the antenna, its walls of any shape, hairs,
+//! friction, placement), and the conversion of one sample into a [`ChainFrame`] with
+//! sim-core's kinematics. Stage position `s` puts the base at the scene's base position plus
+//! `s` along its direction of motion; the servo angle adds to its base angle.
 
 use antenna_data::stream::RigInfo;
-use sim_core::{Chain, Frame, frame_poses};
+use antenna_scene::Scene;
+use nalgebra::Vector2;
+use sim_core::sweep::SweepScene;
+use sim_core::{Chain, Frame, Wall, frame_poses};
 
 use crate::error::MonitorError;
 use crate::frame::{ChainFrame, PointM, SegmentState};
 use crate::history::{Health, History};
+use crate::sweep::wall_polyline_m;
 
 /// How many samples back a failed segment's last valid angle is looked for.
 const HOLD_SAMPLES: usize = 2000;
-
-/// A flat wall beside the track (see `docs/stream-protocol.md`, `rig.wall`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WallLine {
-    /// Distance from the track at its origin, metres.
-    pub distance_m: f64,
-    /// Angle to the track, radians (positive: closer as the stage moves forward).
-    pub angle_rad: f64,
-    /// Penalty stiffness of the simulated contact, N/m.
-    pub stiffness_n_per_m: f64,
-}
-
-impl WallLine {
-    /// Unit normal into the wall.
-    fn normal(&self) -> PointM {
-        let (s, c) = self.angle_rad.sin_cos();
-        [s, c]
-    }
-
-    /// Signed distance of `p` into the wall, metres (negative: in front of it).
-    pub fn penetration_m(&self, p: PointM) -> f64 {
-        let n = self.normal();
-        p[0] * n[0] + (p[1] - self.distance_m) * n[1]
-    }
-
-    /// The wall as a two-point polyline centred on the foot of the perpendicular from
-    /// `near_m`, `half_length_m` to either side.
-    pub fn polyline_m(&self, near_m: PointM, half_length_m: f64) -> Vec<PointM> {
-        let n = self.normal();
-        let along = [n[1], -n[0]];
-        let origin = [0.0, self.distance_m];
-        let s = (near_m[0] - origin[0]) * along[0] + (near_m[1] - origin[1]) * along[1];
-        [s - half_length_m, s + half_length_m]
-            .iter()
-            .map(|t| [origin[0] + t * along[0], origin[1] + t * along[1]])
-            .collect()
-    }
-}
-
-/// The joint stiffness model the prediction uses.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StiffnessModel {
-    /// A profile name of sim-core (`linear`, `fast-exponential`, ...).
-    pub profile: String,
-    /// The profile's smallest stiffness, N m/rad.
-    pub k_min_n_m_per_rad: f64,
-    /// The profile's largest stiffness, N m/rad.
-    pub k_max_n_m_per_rad: f64,
-    /// Per joint, base to tip, N m/rad (empty if unknown).
-    pub values_n_m_per_rad: Vec<f64>,
-}
 
 /// The rig's geometry (see the module documentation).
 #[derive(Debug, Clone)]
@@ -70,54 +25,87 @@ pub struct RigGeometry {
     pub link_lengths_m: Vec<f64>,
     /// The base link's angle from the track with the servo at 0, radians.
     pub base_mount_angle_rad: f64,
-    /// The wall, if known.
-    pub wall: Option<WallLine>,
-    /// The joint stiffnesses, if known (needed for a prediction).
-    pub stiffness: Option<StiffnessModel>,
+    /// The scene the rig runs (what the prediction is built from), if the source gives one
+    /// (`None` for daemons and recordings from before the scene, issue #46).
+    pub scene: Option<SweepScene>,
+    /// The scene's walls (empty without a scene).
+    pub walls: Vec<Wall>,
     /// The stage's soft limits, metres.
     pub stage_range_m: Option<(f64, f64)>,
     /// Polls per second.
     pub poll_hz: f64,
     /// Where this geometry came from, for the status line.
     pub source: String,
+    /// Where the base pivot is with the stage at 0, and the unit direction the stage carries
+    /// it along (the scene's; the track's x-axis without one).
+    base_start_m: Vector2<f64>,
+    direction: Vector2<f64>,
     chain: Chain,
 }
 
 impl RigGeometry {
-    /// The geometry of a `hello`'s `rig` object.
+    /// The geometry of a `hello`'s (or a recording's) `rig` object: its scene when it has
+    /// one, else (older daemons) the links and the mounting angle only, no walls (so no
+    /// prediction).
+    ///
+    /// # Errors
+    /// [`MonitorError::Geometry`] for a scene that does not read (its located error) or
+    /// cannot be swept, or links that make no chain.
     pub fn from_rig_info(rig: &RigInfo, source: impl Into<String>) -> Result<Self, MonitorError> {
-        let segments = rig.link_lengths_m.len().checked_sub(1).ok_or_else(|| {
-            MonitorError::Geometry("`link_lengths_m` is empty; it needs the base link".to_owned())
-        })?;
-        let mut geometry = Self::with_links(
-            rig.link_lengths_m.clone(),
-            rig.base_mount_angle_deg.to_radians(),
-            source,
-        )?;
-        geometry.wall = Some(WallLine {
-            distance_m: rig.wall.distance_m,
-            angle_rad: rig.wall.angle_deg.to_radians(),
-            stiffness_n_per_m: rig.wall.stiffness_n_per_m,
-        });
-        geometry.stiffness = Some(StiffnessModel {
-            profile: rig.stiffness_profile.clone(),
-            k_min_n_m_per_rad: rig.k_min_n_m_per_rad,
-            k_max_n_m_per_rad: rig.k_max_n_m_per_rad,
-            values_n_m_per_rad: rig.stiffness_n_m_per_rad.clone(),
-        });
-        if !rig.stiffness_n_m_per_rad.is_empty() && rig.stiffness_n_m_per_rad.len() != segments {
-            return Err(MonitorError::Geometry(format!(
-                "{} stiffness values for {segments} segments",
-                rig.stiffness_n_m_per_rad.len()
-            )));
-        }
+        let source = source.into();
+        let mut geometry = match &rig.scene_toml {
+            Some(text) => {
+                let name = rig.scene_source.as_deref().unwrap_or("the rig's scene");
+                let scene = Scene::parse_in(text, name, std::path::Path::new(""))
+                    .and_then(|scene| scene.sweep_scene())
+                    .map_err(|e| MonitorError::Geometry(e.to_string()))?;
+                Self::from_scene(scene, source)
+            }
+            None => {
+                if rig.link_lengths_m.is_empty() {
+                    return Err(MonitorError::Geometry(
+                        "`link_lengths_m` is empty; it needs the base link".to_owned(),
+                    ));
+                }
+                Self::with_links(
+                    rig.link_lengths_m.clone(),
+                    rig.base_mount_angle_deg.to_radians(),
+                    source,
+                )?
+            }
+        };
         geometry.stage_range_m = Some((rig.stage_min_m, rig.stage_max_m));
         geometry.poll_hz = rig.poll_hz;
         Ok(geometry)
     }
 
+    /// The geometry of a sweep scene: its chain, walls, base start and direction of motion.
+    pub fn from_scene(scene: SweepScene, source: impl Into<String>) -> Self {
+        let v = scene.motion.velocity_m_per_s;
+        let direction = if v == Vector2::zeros() || !v.iter().all(|c| c.is_finite()) {
+            Vector2::new(1.0, 0.0)
+        } else {
+            v.normalize()
+        };
+        Self {
+            link_lengths_m: scene.chain.link_lengths_m().to_vec(),
+            base_mount_angle_rad: scene.chain.base_angle_rad(),
+            walls: scene.walls.clone(),
+            stage_range_m: None,
+            poll_hz: 1000.0,
+            source: source.into(),
+            base_start_m: scene.base_start_m,
+            direction,
+            chain: scene.chain.clone(),
+            scene: Some(scene),
+        }
+    }
+
     /// A stand-in when the daemon sends no geometry: `segments` links of 40 mm on a 40 mm base
-    /// link along the track, no wall, no stiffness (so no prediction).
+    /// link along the track, no wall, no scene (so no prediction).
+    ///
+    /// # Errors
+    /// [`MonitorError::Geometry`] for no segments at all that make no chain.
     pub fn fallback(segments: usize) -> Result<Self, MonitorError> {
         Self::with_links(
             vec![0.04; segments + 1],
@@ -127,6 +115,9 @@ impl RigGeometry {
     }
 
     /// A bare geometry: links and mounting angle, nothing else.
+    ///
+    /// # Errors
+    /// [`MonitorError::Geometry`] for links that make no chain.
     pub fn with_links(
         link_lengths_m: Vec<f64>,
         base_mount_angle_rad: f64,
@@ -142,13 +133,21 @@ impl RigGeometry {
         Ok(Self {
             link_lengths_m,
             base_mount_angle_rad,
-            wall: None,
-            stiffness: None,
+            scene: None,
+            walls: Vec::new(),
             stage_range_m: None,
             poll_hz: 1000.0,
             source: source.into(),
+            base_start_m: Vector2::zeros(),
+            direction: Vector2::new(1.0, 0.0),
             chain,
         })
+    }
+
+    /// The base pivot for the stage at `stage_position_m` (0 when unknown).
+    pub fn base_m(&self, stage_position_m: Option<f64>) -> PointM {
+        let p = self.base_start_m + self.direction * stage_position_m.unwrap_or(0.0);
+        [p.x, p.y]
     }
 
     /// Segments (flexible joints).
@@ -180,7 +179,7 @@ impl RigGeometry {
             )));
         }
         let base_angle_rad = self.base_mount_angle_rad + servo_angle_rad.unwrap_or(0.0);
-        let base_m = [stage_position_m.unwrap_or(0.0), 0.0];
+        let base_m = self.base_m(stage_position_m);
         let mut theta = Vec::with_capacity(n + 1);
         theta.push(base_angle_rad);
         theta.extend_from_slice(joint_angles_rad);
@@ -192,14 +191,12 @@ impl RigGeometry {
                 [base_m[0] + p[0], base_m[1] + p[1]]
             })
             .collect();
+        let reach = self.total_length_m();
+        let track = self.stage_range_m.map_or(0.0, |(lo, hi)| (hi - lo).abs());
         let walls_m = self
-            .wall
+            .walls
             .iter()
-            .map(|w| {
-                let reach = self.total_length_m();
-                let track = self.stage_range_m.map_or(0.0, |(lo, hi)| (hi - lo).abs());
-                w.polyline_m(base_m, 1.5 * reach + track)
-            })
+            .map(|w| wall_polyline_m(w, base_m, 1.5 * reach + track))
             .collect();
         Ok(ChainFrame {
             t_s,
@@ -259,29 +256,61 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn straight_chain_along_the_mounting_angle() {
+    fn the_default_rig_is_its_scene_and_the_chain_starts_at_the_stage() {
         let rig = default_rig();
-        assert_eq!(rig.segment_count(), 9);
+        assert_eq!(rig.segment_count(), 8);
+        assert_eq!(rig.walls.len(), 1);
+        assert!(rig.scene.is_some());
         let frame = rig
             .frame(
                 0.0,
-                &[0.0; 9],
-                vec![SegmentState::QUIET; 9],
+                &[0.0; 8],
+                vec![SegmentState::QUIET; 8],
                 Some(0.1),
                 Some(0.0),
             )
             .unwrap();
-        assert_eq!(frame.joints_m.len(), 11);
+        assert_eq!(frame.joints_m.len(), 10);
         assert_eq!(frame.base_m, [0.1, 0.0]);
         let tip = frame.tip_m().unwrap();
         let a = 30f64.to_radians();
-        assert!((tip[0] - (0.1 + 0.4 * a.cos())).abs() < 1e-12);
-        assert!((tip[1] - 0.4 * a.sin()).abs() < 1e-12);
-        // The wall polyline lies on the wall.
-        let wall = rig.wall.unwrap();
+        assert!((tip[0] - (0.1 + 0.36 * a.cos())).abs() < 1e-12);
+        assert!((tip[1] - 0.36 * a.sin()).abs() < 1e-12);
+        // The wall polyline lies on the wall, the base in front of it.
         for p in &frame.walls_m[0] {
-            assert!(wall.penetration_m(*p).abs() < 1e-12);
+            let d = rig.walls[0].signed_distance(&Vector2::new(p[0], p[1]));
+            assert!(d.gap_m.abs() < 1e-12);
         }
-        assert!(wall.penetration_m([0.1, 0.0]) < 0.0);
+        assert!(rig.walls[0].signed_distance(&Vector2::new(0.1, 0.0)).gap_m > 0.0);
+    }
+
+    /// A `hello` from before the scene (issue #46) still gives the chain to draw, no walls.
+    #[test]
+    fn an_old_hello_gives_the_links_only() {
+        let old = r#"{"poll_hz":1000.0,"link_lengths_m":[0.04,0.04,0.04,0.04],"base_mount_angle_deg":30.0,"stiffness_profile":"linear","k_min_n_m_per_rad":0.01,"k_max_n_m_per_rad":0.05,"stiffness_n_m_per_rad":[0.05,0.03,0.01],"wall":{"distance_m":0.42,"angle_deg":30.0,"stiffness_n_per_m":200.0},"stage_min_m":0.0,"stage_max_m":0.3}"#;
+        let info: RigInfo = serde_json::from_str(old).unwrap();
+        let rig = RigGeometry::from_rig_info(&info, "old").unwrap();
+        assert_eq!(rig.segment_count(), 3);
+        assert!(rig.walls.is_empty() && rig.scene.is_none());
+        assert_eq!(rig.stage_range_m, Some((0.0, 0.3)));
+        assert_eq!(rig.base_m(Some(0.2)), [0.2, 0.0]);
+    }
+
+    /// A scene that does not read is said with its located error.
+    #[test]
+    fn a_scene_that_does_not_read_is_named() {
+        let info = RigInfo {
+            poll_hz: 1000.0,
+            stage_min_m: 0.0,
+            stage_max_m: 0.3,
+            scene_toml: Some("[antenna]\nlinks = 9\nfoo = 1\n".to_owned()),
+            scene_source: Some("rig.toml".to_owned()),
+            link_lengths_m: Vec::new(),
+            base_mount_angle_deg: 0.0,
+        };
+        let error = RigGeometry::from_rig_info(&info, "hello")
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("rig.toml:3:1: unknown key `foo`"), "{error}");
     }
 }

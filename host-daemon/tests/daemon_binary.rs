@@ -33,7 +33,7 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
     // The log, on stderr: timestamped and leveled.
     assert!(stderr.contains("watch it with: nc 127.0.0.1 "), "{stderr}");
     assert!(
-        stderr.contains("-- move 1: +150.0 mm at 30 mm/s"),
+        stderr.contains("-- move 1: +500.0 mm at 25 mm/s"),
         "{stderr}"
     );
     let started = stderr
@@ -45,12 +45,14 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
         started.starts_with("20") && started.contains('T'),
         "{started}"
     );
-    // The data, on stdout: sample lines ("   0.25     7.5  ...") and the summary.
-    assert!(
-        stdout
-            .lines()
-            .any(|l| l.trim_start().starts_with("0.") && l.ends_with("........."))
-    );
+    // The data, on stdout: sample lines ("   0.25     5.5  ...  ......##", a touch column
+    // per segment) and the summary.
+    assert!(stdout.lines().any(|l| {
+        l.trim_start().starts_with("0.")
+            && l.split_whitespace().last().is_some_and(|touch| {
+                touch.len() == 8 && touch.chars().all(|c| c == '.' || c == '#')
+            })
+    }));
     assert!(stdout.contains("polls in"), "{stdout}");
     assert!(!stdout.contains("watch it with"), "{stdout}");
     // "... ended (its duration passed); recorded N polls, ..." and the file agree.
@@ -73,10 +75,13 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
         trial
             .segments
             .iter()
-            .all(|m| m.segments.len() == 9 && m.segments.iter().all(|s| s.ok))
+            .all(|m| m.segments.len() == 8 && m.segments.iter().all(|s| s.ok))
     );
     assert!(trial.stage.last().unwrap().position_m > 0.02);
-    assert_eq!(trial.metadata.unwrap().notes["wall"], "simulated flat wall");
+    assert_eq!(
+        trial.metadata.unwrap().notes["wall"],
+        "thesis 4.2.1: smooth wall at 8 deg, mu 0.3"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -175,14 +180,45 @@ fn refused(name: &str, text: &str) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
 }
 
+/// The old `[sim.sensors]`, a missing scene file, a scene with `[tip_pin]`, a scene whose
+/// joints do not match the segments: each a located error, and antennad does not start.
 #[test]
-fn bad_sensor_settings_are_refused_before_the_daemon_starts() {
+fn a_configuration_the_simulated_rig_cannot_run_is_refused_before_the_daemon_starts() {
     let stderr = refused(
         "sensors",
         "[sim.sensors]\nseed = 1\nangle_noise_counts = -2.0\n",
     );
     assert!(
-        stderr.contains(":3:1: `sim.sensors.angle_noise_counts`: must be finite and at least 0"),
+        stderr.contains(":1:1: `sim.sensors`: [sim.sensors] is gone"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("watch it with"), "{stderr}");
+    let stderr = refused("antenna", "data_dir = \"d\"\n[sim.antenna]\nlinks = 9\n");
+    assert!(
+        stderr.contains(":2:1: `sim.antenna`: [sim.antenna] is gone"),
+        "{stderr}"
+    );
+    let stderr = refused("missing", "[sim]\nscene = \"no-such-scene.toml\"\n");
+    assert!(
+        stderr.contains(":2:1: `sim.scene`: cannot read the scene file"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("watch it with"), "{stderr}");
+    let examples = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples");
+    let stderr = refused(
+        "pinned",
+        &format!("[sim]\nscene = \"{examples}/scene_format.toml\"\n"),
+    );
+    assert!(stderr.contains(":2:1: `sim.scene`:"), "{stderr}");
+    assert!(stderr.contains("[tip_pin]"), "{stderr}");
+    let stderr = refused(
+        "segments",
+        &format!(
+            "[sim]\nscene = \"{examples}/mapping_4_2_2.toml\"\n[[bus.segments]]\naddress = 0x20\nzero_counts = 0\ndirection = \"cw\"\n"
+        ),
+    );
+    assert!(
+        stderr.contains("`bus.segments`: the simulated rig has one segment per flexible joint"),
         "{stderr}"
     );
     assert!(!stderr.contains("watch it with"), "{stderr}");
@@ -238,7 +274,7 @@ fn without_exit_after_trial_it_keeps_serving_and_stops_cleanly_on_sigterm() {
     let mut samples = 0;
     while samples < 100 {
         if let StreamMessage::Samples { segments, .. } = client.next_message() {
-            assert_eq!(segments.len(), 9);
+            assert_eq!(segments.len(), 8);
             samples += 1;
         }
     }
@@ -342,7 +378,7 @@ fn kill_9_during_a_trial_leaves_every_poll_up_to_the_last_flush() {
         trial
             .segments
             .iter()
-            .all(|m| m.segments.len() == 9 && m.segments.iter().all(|s| s.ok))
+            .all(|m| m.segments.len() == 8 && m.segments.iter().all(|s| s.ok))
     );
     assert!(trial.segments.windows(2).all(|w| w[1].t_s > w[0].t_s));
     std::fs::remove_dir_all(&dir).ok();
@@ -405,13 +441,13 @@ fn with_a_stage_configured_no_trial_starts_by_itself_and_it_waits_idle() {
 
 #[test]
 fn a_poll_rate_the_bus_cannot_carry_is_refused_with_the_arithmetic() {
-    // The default nine segments at the default 1 kHz, on a real device at the default 100 kHz.
+    // The default eight segments at the default 1 kHz, on a real device at the default 100 kHz.
     let stderr = refused("rate", "[bus]\ndevice = \"/dev/i2c-250\"\n");
     for part in [
         "`bus.poll_hz`",
-        "9 segments x 38 + 57 = 399 bit times",
-        "bus.speed_hz = 100000 is 3990 us",
-        "lower bus.poll_hz to 200 or less",
+        "8 segments x 38 + 57 = 361 bit times",
+        "bus.speed_hz = 100000 is 3610 us",
+        "lower bus.poll_hz to 221 or less",
     ] {
         assert!(stderr.contains(part), "{part:?} missing from: {stderr}");
     }

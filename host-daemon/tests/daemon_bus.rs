@@ -131,7 +131,7 @@ fn the_firmware_status_and_version_are_read_and_shown_in_status() {
         assert_eq!(segment.bus_error, 0);
     }
     // Round-robin: the tip segment's turn has not come yet.
-    assert_eq!(segments[8].firmware_version, None);
+    assert_eq!(segments[7].firmware_version, None);
     let summary = daemon.shutdown().unwrap();
     assert!(!summary.poll_thread_stuck);
     std::fs::remove_dir_all(&dir).ok();

@@ -39,27 +39,27 @@ fn a_segment_without_its_calibration_names_the_missing_key() {
 fn out_of_range_values_name_their_key_and_line() {
     let e = error("[stage]\nmin_mm = 10.0\nmax_mm = 5.0\n");
     assert_eq!((e.key.as_str(), e.line), ("stage.max_mm", Some(3)));
-    let e = error("[sim.wall]\ndistance_m = 0.3\nangle_deg = 95.0\n");
-    assert_eq!((e.key.as_str(), e.line), ("sim.wall.angle_deg", Some(3)));
     let e = error(
         "[[trials]]\nname = \"a\"\n[[trials.moves]]\ndistance_mm = 10.0\n\
          speed_mm_per_s = 500.0\n",
     );
     assert_eq!(e.key, "trials[0].moves[0].speed_mm_per_s");
     assert_eq!(e.line, Some(5));
-    let e = error("[sim.antenna]\nstiffness_profile = \"rubber\"\n");
-    assert_eq!(
-        (e.key.as_str(), e.line),
-        ("sim.antenna.stiffness_profile", Some(2))
-    );
-    assert!(e.message.contains("cockroach"), "{e}");
 }
 
 #[test]
 fn the_example_files_parse_and_sim_toml_is_the_default() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config");
-    let sim = Config::from_file(&dir.join("sim.toml")).unwrap();
-    assert_eq!(sim, Config::default());
+    let mut sim = Config::from_file(&dir.join("sim.toml")).unwrap();
+    // Its scene is the built-in one, read from the file beside it.
+    let default = Config::default();
+    assert_eq!(sim.sim.scene, Some(dir.join("wall_following_4_2_1.toml")));
+    assert_eq!(sim.sim.rig.text, default.sim.rig.text);
+    assert_eq!(sim.sim.rig.scene.chain, default.sim.rig.scene.chain);
+    assert_eq!(sim.sim.rig.scene.walls, default.sim.rig.scene.walls);
+    sim.sim.scene = None;
+    sim.sim.rig = default.sim.rig.clone();
+    assert_eq!(sim, default);
     // robot.toml takes its token from $ANTENNAD_TOKEN: given here in the file instead.
     let text = std::fs::read_to_string(dir.join("robot.toml")).unwrap();
     assert!(text.contains("\ntoken_env = \"ANTENNAD_TOKEN\"\n"));
@@ -108,7 +108,16 @@ fn no_trial_starts_by_itself_with_any_hardware_configured() {
 
 #[test]
 fn a_poll_rate_the_bus_cannot_carry_is_refused_with_the_arithmetic() {
-    // Nine segments (the default) at 1 kHz on a real device at the default 100 kHz.
+    // Nine segments at 1 kHz on a real device at the default 100 kHz.
+    let nine: String = (0..9)
+        .map(|k| {
+            format!(
+                "[[bus.segments]]\naddress = {}\nzero_counts = 0\ndirection = \"cw\"\n",
+                0x20 + k
+            )
+        })
+        .collect();
+    let error = |text: &str| error(&format!("{text}{nine}"));
     let e = error("[bus]\ndevice = \"/dev/i2c-1\"\npoll_hz = 1000.0\n");
     assert_eq!((e.key.as_str(), e.line), ("bus.poll_hz", Some(3)));
     for part in [
@@ -131,7 +140,10 @@ fn a_poll_rate_the_bus_cannot_carry_is_refused_with_the_arithmetic() {
         "[bus]\ndevice = \"/dev/i2c-1\"\nspeed_hz = 400000\npoll_hz = 500.0\n",
         "[bus]\ndevice = \"/dev/i2c-1\"\nspeed_hz = 1000000\n",
     ] {
-        assert!(Config::from_toml_str(text, "t.toml").is_ok(), "{text}");
+        assert!(
+            Config::from_toml_str(&format!("{text}{nine}"), "t.toml").is_ok(),
+            "{text}"
+        );
     }
     // The simulated bus moves no bits: unlimited unless a speed is given, then checked too.
     let sim = Config::from_toml_str("[bus]\npoll_hz = 5000.0\n", "t.toml").unwrap();
@@ -142,99 +154,159 @@ fn a_poll_rate_the_bus_cannot_carry_is_refused_with_the_arithmetic() {
     assert!(e.message.contains("must be positive"), "{e}");
 }
 
-/// `[sim.sensors]` (issue #18): every bad value is named with its line and column.
+/// A scratch directory with `files` written into it.
+fn scratch(name: &str, files: &[(&str, &str)]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("daemon-config-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (file, text) in files {
+        std::fs::write(dir.join(file), text).unwrap();
+    }
+    dir
+}
+
+/// The built-in scene's text with `replace` replacing `with`.
+fn scene_with(replace: &str, with: &str) -> String {
+    let text = host_daemon::service::config::scene::BUILT_IN_SCENE;
+    assert!(text.contains(replace), "{replace}");
+    text.replace(replace, with)
+}
+
+/// `[sim.antenna]`, `[sim.wall]`, `[sim.sensors]` (before issue #46) are refused where they
+/// are written, saying what replaces them.
 #[test]
-fn bad_sensor_settings_are_located() {
-    let located = |body: &str, key: &str, column: usize, part: &str| {
-        let e = error(&format!(
-            "[sim.wall]\nmu = 0.3\n\n[sim.sensors]\nseed = 4\n{body}\n"
-        ));
-        assert_eq!(e.key, format!("sim.sensors.{key}"), "{e}");
-        assert_eq!((e.line, e.column), (Some(6), Some(column)), "{e}");
+fn the_old_sim_tables_are_refused_with_what_replaces_them() {
+    for (text, key, line, part) in [
+        (
+            "data_dir = \"d\"\n[sim.antenna]\nlinks = 9\nlink_length_m = 0.04\n",
+            "sim.antenna",
+            2,
+            "the scene's [antenna] and [antenna.stiffness]",
+        ),
+        (
+            "[sim.wall]\ndistance_m = 0.3\nangle_deg = 30.0\n",
+            "sim.wall",
+            1,
+            "the scene's [[walls]]",
+        ),
+        (
+            "[sim]\n\n[sim.sensors]\nseed = 4\n",
+            "sim.sensors",
+            3,
+            "the scene's [sensors]",
+        ),
+    ] {
+        let e = error(text);
+        assert_eq!((e.key.as_str(), e.line), (key, Some(line)), "{e}");
         assert!(e.message.contains(part), "{part:?} missing from: {e}");
+        assert!(e.message.contains("`[sim] scene = \"FILE.toml\"`"), "{e}");
         assert!(
             e.to_string()
-                .starts_with(&format!("test.toml:6:{column}: `sim.sensors.{key}`")),
+                .starts_with(&format!("test.toml:{line}:1: `{key}`")),
             "{e}"
         );
+    }
+}
+
+/// The scene is read relative to the configuration's directory; a missing one, one with
+/// `[tip_pin]`, one whose joints do not match the segments, and one whose own keys are
+/// wrong are each refused at `sim.scene` (or `bus.segments`), the scene's own place named.
+#[test]
+fn a_scene_the_rig_cannot_run_is_refused_where_it_is_named() {
+    let dir = scratch(
+        "scenes",
+        &[
+            ("good.toml", &scene_with("", "")),
+            (
+                "pinned.toml",
+                &format!(
+                    "{}[tip_pin]\nposition_m = [0.2, 0.1]\n",
+                    &scene_with("", "")[..scene_with("", "").find("[[walls]]").unwrap()]
+                ),
+            ),
+            ("short.toml", &scene_with("links = 9\n", "links = 4\n")),
+            (
+                "noisy.toml",
+                &format!(
+                    "{}\n[sensors]\nangle_noise_counts = -1.0\n",
+                    scene_with("", "")
+                ),
+            ),
+        ],
+    );
+    let config = |scene: &str| {
+        let path = dir.join("rig.toml");
+        std::fs::write(
+            &path,
+            format!("data_dir = \"d\"\n\n[sim]\nscene = \"{scene}\"\n"),
+        )
+        .unwrap();
+        Config::from_file(&path)
     };
-    located(
-        "angle_noise_counts = -1.0",
-        "angle_noise_counts",
-        1,
-        "must be finite and at least 0, got -1",
-    );
-    located(
-        "touch_threshold_n = -0.2",
-        "touch_threshold_n",
-        1,
-        "must be finite and at least 0, got -0.2",
-    );
-    located(
-        "offset_counts = [1.0, 2.0]",
-        "offset_counts",
-        1,
-        "has 2 entries; a list needs one per segment on the bus, base to tip (9)",
-    );
-    located(
-        "offset_counts = -3",
-        "offset_counts",
-        1,
-        "the spread each segment's value is drawn from",
-    );
-    located(
-        "gain_error = [0, 0, 0, -1.0, 0, 0, 0, 0, 0]",
-        "gain_error",
-        1,
-        "has -1; every entry must be above -1",
-    );
-    // A value of the wrong type is put at the value.
-    located(
-        "gain_error = \"large\"",
-        "gain_error",
-        14,
-        "a number (the spread each segment's value is drawn from) or a list",
-    );
-    located("  angle_noise = 2.0", "angle_noise", 3, "unknown field");
-    located(
-        "touch_debounce_samples = 5",
-        "touch_debounce_samples",
-        1,
-        "debounces its touch switches over 3 consecutive reads",
-    );
-    located(
-        "sample_rate_hz = 120.0",
-        "sample_rate_hz",
-        1,
-        "the sample rate is bus.poll_hz (now 1000 Hz); set that instead",
-    );
-    let e = error("[sim.sensors]\nseed = -1\n");
+    let good = config("good.toml").unwrap();
+    assert_eq!(good.sim.scene, Some(dir.join("good.toml")));
+    assert_eq!(good.sim.rig.joints(), 8);
+
+    let e = config("missing.toml").unwrap_err();
     assert_eq!(
         (e.key.as_str(), e.line, e.column),
-        ("sim.sensors.seed", Some(2), Some(8))
+        ("sim.scene", Some(4), Some(1))
     );
-    assert!(e.message.contains("u64"), "{e}");
-    // The firmware's own debounce may be repeated; the list's length follows the bus.
-    let config = Config::from_toml_str(
-        "[bus]\n[[bus.segments]]\naddress = 0x20\nzero_counts = 1\ndirection = \"cw\"\n\
-         [[bus.segments]]\naddress = 0x21\nzero_counts = 2\ndirection = \"ccw\"\n\
-         [sim.antenna]\nlinks = 2\n[sim.sensors]\ntouch_debounce_samples = 3\n\
-         offset_counts = [1.5, -2]\ngain_error = 0.01\nangle_noise_counts = 0.5\nseed = 8\n",
-        "t.toml",
-    )
-    .unwrap();
+    assert!(e.message.contains("cannot read the scene file"), "{e}");
+    assert!(e.message.contains("missing.toml"), "{e}");
+
+    let e = config("pinned.toml").unwrap_err();
+    assert_eq!((e.key.as_str(), e.line), ("sim.scene", Some(4)));
+    assert!(e.message.contains("pinned.toml:"), "{e}");
+    assert!(e.message.contains("[tip_pin]"), "{e}");
+
+    let e = config("short.toml").unwrap_err();
+    assert_eq!(e.key, "bus.segments");
+    assert!(
+        e.message.contains("links = 4 (the base link and 3 flexible joints), so 3 [[bus.segments]] are needed, not 8"),
+        "{e}"
+    );
+
+    let e = config("noisy.toml").unwrap_err();
+    assert_eq!((e.key.as_str(), e.line), ("sim.scene", Some(4)));
+    assert!(e.message.contains("noisy.toml:"), "{e}");
+    assert!(e.message.contains("angle_noise_counts"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The scene's `[sensors]` are the simulated segments' sensors; what the rig cannot apply
+/// (its own sample rate, another debounce) is ignored with a warning, not refused.
+#[test]
+fn the_scene_s_sensors_are_the_segments_and_what_the_rig_cannot_apply_is_ignored() {
+    let sensors = "\n[sensors]\ntouch_debounce_samples = 5\nsample_rate_hz = 120.0\n\
+                   offset_counts = [1.5, -2, 0, 0, 0, 0, 0, 0]\ngain_error = 0.01\n\
+                   angle_noise_counts = 0.5\nseed = 8\n";
+    let dir = scratch(
+        "sensors",
+        &[("scene.toml", &format!("{}{sensors}", scene_with("", "")))],
+    );
+    let path = dir.join("rig.toml");
+    std::fs::write(&path, "[sim]\nscene = \"scene.toml\"\n").unwrap();
+    let config = Config::from_file(&path).unwrap();
     let settings = config.sensor_settings();
     assert_eq!(settings.touch_debounce_samples, 3);
     assert_eq!(settings.sample_rate_hz, Some(config.bus.poll_hz));
     assert_eq!(
         settings.offset_counts,
-        sim_core::CalibrationError::PerJoint(vec![1.5, -2.0])
+        sim_core::CalibrationError::PerJoint(vec![1.5, -2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     );
     assert_eq!(
         settings.gain_error,
         sim_core::CalibrationError::Spread(0.01)
     );
+    assert_eq!((settings.angle_noise_counts, settings.seed), (0.5, 8));
+    let said = config.sim.rig.ignored(config.bus.poll_hz);
+    let warnings: Vec<&String> = said.iter().filter(|(w, _)| *w).map(|(_, t)| t).collect();
+    assert_eq!(warnings.len(), 2, "{said:?}");
+    assert!(warnings[0].contains("sample_rate_hz (") && warnings[0].contains("1000 Hz"));
+    assert!(warnings[1].contains("touch_debounce_samples = 5"));
     // What is recorded reads back as what was in force.
     let back = Config::from_toml_str(&config.to_recorded_toml(), "recorded").unwrap();
     assert_eq!(back, config);
+    std::fs::remove_dir_all(&dir).unwrap();
 }

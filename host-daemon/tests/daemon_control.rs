@@ -75,7 +75,7 @@ fn watch(client: &mut Client, mut done: impl FnMut(Option<f64>, Option<f64>) -> 
     let deadline = Instant::now() + Duration::from_secs(60);
     let mut seen = Watched {
         stage: Vec::new(),
-        touch_bits_seen: vec![0; 9],
+        touch_bits_seen: vec![0; 8],
     };
     loop {
         assert!(
@@ -90,7 +90,7 @@ fn watch(client: &mut Client, mut done: impl FnMut(Option<f64>, Option<f64>) -> 
             ..
         } = client.next_message()
         {
-            assert_eq!(segments.len(), 9);
+            assert_eq!(segments.len(), 8);
             assert!(segments.iter().all(|s| s.error.is_none() && !s.stale));
             for (s, or) in segments.iter().zip(&mut seen.touch_bits_seen) {
                 let bits = s
@@ -180,8 +180,15 @@ fn every_command_but_stop_all_needs_the_token_and_malformed_ones_get_clear_error
         }
     });
     assert!(seen.stage.iter().all(|&m| m == 0.0), "{:?}", seen.stage);
-    // At home the straight antenna is clear of the wall: no switch fires.
-    assert_eq!(seen.touch_bits_seen, [0; 9]);
+    // At home the built-in scene's antenna is placed with its tip on the wall: the tip
+    // segment's switches fire, the proximal segments' do not.
+    assert_ne!(seen.touch_bits_seen[7], 0, "{:?}", seen.touch_bits_seen);
+    assert_eq!(
+        seen.touch_bits_seen[..4],
+        [0; 4],
+        "{:?}",
+        seen.touch_bits_seen
+    );
     let summary = daemon.shutdown().unwrap();
     assert!(summary.trials.is_empty());
     assert_eq!(summary.dropped, 0);
@@ -217,10 +224,14 @@ fn moves_and_angles_work_between_trials_and_never_pass_the_soft_limits() {
     assert!(reply.ok, "{reply:?}");
     let seen = watch(&mut client, |s, _| s == Some(0.09));
     assert!(seen.stage.windows(2).all(|w| w[1] >= w[0]));
-    // On the way the antenna met the wall (it is 20 mm from the straight tip at home and
-    // comes closer as the stage moves forward): the tip segment's switches fired, each
-    // poll's `contact` being any of its four bits (checked in `watch`).
-    assert_ne!(seen.touch_bits_seen[8], 0, "{:?}", seen.touch_bits_seen);
+    // On the way the antenna slid along the wall (it comes closer as the stage moves
+    // forward): the distal segments' switches fired, each poll's `contact` being any of its
+    // four bits (checked in `watch`).
+    assert!(
+        seen.touch_bits_seen[5..].iter().any(|&b| b != 0),
+        "{:?}",
+        seen.touch_bits_seen
+    );
     // From 90 mm, +20 mm would end at 110 mm: refused; the stage stays at 90 mm.
     let reply = request(&mut client, 4, r#""cmd":"move_stage","relative_m":0.02"#);
     assert!(

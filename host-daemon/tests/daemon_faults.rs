@@ -118,7 +118,7 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
     assert!((window..=251).contains(&nacks), "{nacks}, {summary:?}");
     assert!((window..=251).contains(&pecs), "{pecs}, {summary:?}");
     assert!(summary.health[6].stale >= 3, "{:?}", summary.health[6]);
-    for k in [0, 1, 3, 5, 7, 8] {
+    for k in [0, 1, 3, 5, 7] {
         assert!(summary.health[k].all_ok(), "{k}: {:?}", summary.health[k]);
     }
 

@@ -265,7 +265,7 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
         trial
             .segments
             .iter()
-            .all(|m| m.segments.len() == 9 && m.segments.iter().all(|s| s.ok))
+            .all(|m| m.segments.len() == 8 && m.segments.iter().all(|s| s.ok))
     );
     // The recording says why: when the stage vanished and when it came back. No stage
     // sample lies between the two (the outage is one hole in the stage samples, whatever

@@ -1,6 +1,7 @@
-//! `[sim.sensors]` on the simulated rig (issue #18): without the table, or with an explicitly
-//! ideal one, the polled words are exactly those of today's ideal segments; noise, calibration
-//! errors and the touch threshold change them, reproducibly for a seed.
+//! The scene's `[sensors]` on the simulated rig (issue #18; `[sim.sensors]` before issue #46):
+//! without the table, or with an explicitly ideal one, the polled words are exactly those of
+//! ideal segments; noise, calibration errors and the touch threshold change them,
+//! reproducibly for a seed.
 //!
 //! A trial on the rig runs in real time (its polls fall where the clock says), so two trials
 //! are never word for word alike; these tests drive the rig's own parts (the physics of
@@ -11,9 +12,8 @@
 use antenna_protocol::RAD_PER_COUNT;
 use host_daemon::service::acquisition::Shared;
 use host_daemon::service::config::Config;
-use host_daemon::sim::rig::{
-    SimPhysics, SimState, antenna_spec, sense, sim_bus, sim_physics, wall_spec,
-};
+use host_daemon::service::config::scene::BUILT_IN_SCENE;
+use host_daemon::sim::rig::{SimPhysics, SimState, sense, sim_bus, sim_physics};
 use host_daemon::{Poller, SegmentReading, SimBus, SimSegment};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -35,10 +35,9 @@ fn sweep(config: &Config, mut physics: SimPhysics, bus: SimBus) -> Vec<Vec<Segme
     let state: Shared<SimState> = Arc::new(Mutex::new(SimState::default()));
     let mut sense = sense(Arc::clone(&state));
     let mut poller = Poller::new(bus, &config.bus.addresses());
-    let base_rad = config.sim.antenna.base_angle_deg.to_radians();
     (0..POLLS)
         .map(|poll| {
-            *state.lock().unwrap() = physics.update(stage_m(poll), base_rad).unwrap();
+            *state.lock().unwrap() = physics.update(stage_m(poll), 0.0).unwrap();
             sense(poller.bus_mut(), Duration::from_millis(poll as u64));
             poller.poll_all()
         })
@@ -54,10 +53,9 @@ fn rig_sweep(config: &Config) -> Vec<Vec<SegmentReading>> {
     )
 }
 
-/// The sweep on the rig as it was before `[sim.sensors]`: the physics without a threshold,
-/// plain segments.
+/// The sweep on the rig with ideal sensors: the physics without a threshold, plain segments.
 fn todays_sweep(config: &Config) -> Vec<Vec<SegmentReading>> {
-    let physics = SimPhysics::new(&antenna_spec(config), &wall_spec(config)).unwrap();
+    let physics = SimPhysics::new(config.sim.rig.sweep_scene().unwrap()).unwrap();
     let bus = SimBus::new(
         config
             .bus
@@ -69,8 +67,25 @@ fn todays_sweep(config: &Config) -> Vec<Vec<SegmentReading>> {
     sweep(config, physics, bus)
 }
 
-fn config(text: &str) -> Config {
-    Config::from_toml_str(text, "test.toml").unwrap()
+/// The rig running `scene` (a scene file's text), configured by `config` besides.
+fn rig_of(scene: &str, config: &str) -> Config {
+    static FILES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = FILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("sim-sensors-{}-{k}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    let config = Config::from_toml_str(
+        &format!("{config}\n[sim]\nscene = \"scene.toml\"\n"),
+        &dir.join("rig.toml").display().to_string(),
+    )
+    .unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    config
+}
+
+/// The built-in rig with the scene's `[sensors]` table `sensors` (its body).
+fn config(sensors: &str) -> Config {
+    rig_of(&format!("{BUILT_IN_SCENE}\n[sensors]\n{sensors}"), "")
 }
 
 /// The words' angle counts of segment `k` over the sweep.
@@ -93,20 +108,20 @@ fn touch_bits(readings: &[Vec<SegmentReading>]) -> u32 {
 fn ideal_sensors_are_todays_words_exactly() {
     let absent = Config::default();
     let explicit = config(
-        "[sim.sensors]\nangle_noise_counts = 0.0\noffset_counts = 0.0\ngain_error = 0\n\
+        "angle_noise_counts = 0.0\noffset_counts = 0.0\ngain_error = 0\n\
          touch_threshold_n = 0.0\ntouch_debounce_samples = 3\nseed = 12345\n",
     );
     let listed = config(&format!(
-        "[sim.sensors]\noffset_counts = [{zeros}]\ngain_error = [{zeros}]\nseed = 9\n",
-        zeros = ["0.0"; 9].join(", ")
+        "offset_counts = [{zeros}]\ngain_error = [{zeros}]\nseed = 9\n",
+        zeros = ["0.0"; 8].join(", ")
     ));
     let today = todays_sweep(&absent);
     // The sweep reaches the wall: the angles and the touch bits move.
     assert!(touch_bits(&today) > 0);
     assert!(
-        counts(&today, 8)
+        counts(&today, 7)
             .iter()
-            .any(|&c| c != today[0][8].result.unwrap().angle_counts())
+            .any(|&c| c != today[0][7].result.unwrap().angle_counts())
     );
     assert_eq!(rig_sweep(&absent), today);
     assert_eq!(rig_sweep(&explicit), today);
@@ -115,18 +130,14 @@ fn ideal_sensors_are_todays_words_exactly() {
 
 #[test]
 fn noise_on_the_rig_is_seeded_per_segment() {
-    let noisy = |seed: u64| {
-        config(&format!(
-            "[sim.sensors]\nangle_noise_counts = 2.0\nseed = {seed}\n"
-        ))
-    };
+    let noisy = |seed: u64| config(&format!("angle_noise_counts = 2.0\nseed = {seed}\n"));
     let today = todays_sweep(&Config::default());
     let a = rig_sweep(&noisy(1));
     assert_eq!(rig_sweep(&noisy(1)), a);
     assert_ne!(rig_sweep(&noisy(2)), a);
     assert_ne!(a, today);
     // Noise, not a shift: each segment's counts scatter about today's.
-    for k in 0..9 {
+    for k in 0..8 {
         let (noisy, ideal) = (counts(&a, k), counts(&today, k));
         let differences: Vec<f64> = noisy
             .iter()
@@ -137,14 +148,19 @@ fn noise_on_the_rig_is_seeded_per_segment() {
         assert!(mean.abs() < 1.0, "segment {k}: mean difference {mean}");
         assert!(differences.iter().any(|&d| d != 0.0));
     }
-    // Segment 0's noise is its own: a bus of two segments gives it the same words.
-    let mut short = noisy(1);
-    short.bus.segments.truncate(2);
-    short.sim.antenna.links = 2;
-    let two = rig_sweep(&short);
-    let mut short_quiet = short.clone();
-    short_quiet.sim.sensors.angle_noise_counts = 0.0;
-    let quiet = rig_sweep(&short_quiet);
+    // Segment 0's noise is its own: a bus of two segments gives it the same words (an
+    // antenna of two joints, at rest clear of the wall).
+    let short_scene = |sensors: &str| {
+        let text = BUILT_IN_SCENE.replace("links = 9", "links = 3");
+        let text = &text[..text.find("[start]").unwrap()];
+        rig_of(
+            &format!("{text}\n[sensors]\n{sensors}"),
+            "[[bus.segments]]\naddress = 0x20\nzero_counts = 1500\ndirection = \"ccw\"\n\
+             [[bus.segments]]\naddress = 0x21\nzero_counts = 1597\ndirection = \"cw\"\n",
+        )
+    };
+    let two = rig_sweep(&short_scene("angle_noise_counts = 2.0\nseed = 1\n"));
+    let quiet = rig_sweep(&short_scene("seed = 1\n"));
     // (The two-segment antenna bends differently, so compare the noise, not the words.)
     let noise = |rig: &[Vec<SegmentReading>], ideal: &[Vec<SegmentReading>]| -> Vec<i32> {
         counts(rig, 0)
@@ -153,19 +169,15 @@ fn noise_on_the_rig_is_seeded_per_segment() {
             .map(|(&n, i)| i32::from(n) - i32::from(i))
             .collect()
     };
-    let nine_quiet = rig_sweep(&{
-        let mut c = noisy(1);
-        c.sim.sensors.angle_noise_counts = 0.0;
-        c
-    });
+    let nine_quiet = rig_sweep(&config("seed = 1\n"));
     assert_eq!(noise(&two, &quiet), noise(&a, &nine_quiet));
 }
 
 #[test]
 fn per_segment_offsets_and_gains_move_each_segments_counts() {
-    let offsets = [10.0, -20.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0];
+    let offsets = [10.0, -20.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0];
     let text = format!(
-        "[sim.sensors]\noffset_counts = [{}]\ngain_error = [0, 0, 0.1, 0, 0, 0, 0, 0, 0]\n",
+        "offset_counts = [{}]\ngain_error = [0, 0, 0.1, 0, 0, 0, 0, 0]\n",
         offsets.map(|o| o.to_string()).join(", ")
     );
     let moved = config(&text);
@@ -173,7 +185,7 @@ fn per_segment_offsets_and_gains_move_each_segments_counts() {
     let (rig, today) = (rig_sweep(&moved), todays_sweep(&base));
     let calibrations = base.bus.calibrations();
     for poll in 0..POLLS {
-        for k in [0, 1, 8] {
+        for k in [0, 1, 7] {
             let angle = |r: &[Vec<SegmentReading>]| {
                 calibrations[k].angle_rad(r[poll][k].result.unwrap().angle_counts())
             };
@@ -192,8 +204,8 @@ fn per_segment_offsets_and_gains_move_each_segments_counts() {
         assert_eq!(rig[poll][4], today[poll][4]);
     }
     // Drawn offsets: the bus's sensors carry sim-core's draw for the seed.
-    let drawn = config("[sim.sensors]\noffset_counts = 4.0\ngain_error = 0.01\nseed = 3\n");
-    let sensors = sim_core::Sensors::new(&drawn.sensor_settings(), 9).unwrap();
+    let drawn = config("offset_counts = 4.0\ngain_error = 0.01\nseed = 3\n");
+    let sensors = sim_core::Sensors::new(&drawn.sensor_settings(), 8).unwrap();
     let bus = sim_bus(&drawn).unwrap();
     for (k, segment) in bus.segments().iter().enumerate() {
         let errors = segment.hall_sensor().errors();
@@ -212,14 +224,14 @@ fn per_segment_offsets_and_gains_move_each_segments_counts() {
 fn a_touch_threshold_opens_the_switches_of_light_contacts() {
     let today = todays_sweep(&Config::default());
     // The default antenna is soft: its contacts press with millinewtons.
-    let light = rig_sweep(&config("[sim.sensors]\ntouch_threshold_n = 0.01\n"));
-    let firm = rig_sweep(&config("[sim.sensors]\ntouch_threshold_n = 1000.0\n"));
+    let light = rig_sweep(&config("touch_threshold_n = 0.01\n"));
+    let firm = rig_sweep(&config("touch_threshold_n = 1000.0\n"));
     let (all, some, none) = (touch_bits(&today), touch_bits(&light), touch_bits(&firm));
     assert!(all > 0);
     assert!(0 < some && some < all, "{some} of {all}");
     assert_eq!(none, 0);
     // The angles are the same: only the switches change.
-    for k in 0..9 {
+    for k in 0..8 {
         assert_eq!(counts(&firm, k), counts(&today, k));
     }
 }

@@ -10,12 +10,27 @@ use common::{run, stderr, stdout};
 use host_daemon::service::config::Config;
 use std::path::PathBuf;
 
+/// A scratch directory holding the rig's scene ([`SCENE`], which [`RIG`] names).
 fn dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("antenna-segments-{name}-{}", std::process::id()));
     std::fs::remove_dir_all(&dir).ok();
     std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("bench_scene.toml"), SCENE).unwrap();
     dir
 }
+
+/// The simulated rig's scene: an antenna of three flexible joints (four links), one per
+/// segment.
+const SCENE: &str = "\
+[antenna]
+links = 4
+link_length_m = 0.04
+base_angle_deg = 30.0
+[antenna.stiffness]
+profile = \"linear\"
+min_n_m_per_rad = 0.01
+max_n_m_per_rad = 0.05
+";
 
 /// A configuration of three simulated segments, with comments to keep.
 const RIG: &str = "\
@@ -37,8 +52,8 @@ address = 0x22
 zero_counts = 2048
 direction = \"ccw\"
 
-[sim.antenna]
-links = 3
+[sim]
+scene = \"bench_scene.toml\"
 ";
 
 fn json(out: &std::process::Output) -> serde_json::Value {
@@ -234,7 +249,7 @@ fn zero_measures_the_rig_at_rest_and_writes_a_commented_copy() {
         written.contains("# the bench rig") && written.contains("zero_counts = 1500 # placeholder"),
         "{written}"
     );
-    let zeroed = Config::from_toml_str(&written, "rig-zeroed.toml").unwrap();
+    let zeroed = Config::from_toml_str(&written, output_s).unwrap();
     let zeros: Vec<u16> = zeroed.bus.segments.iter().map(|s| s.zero_counts).collect();
     assert_eq!(zeros, vec![1500, 4088, 7]);
     // The input is untouched.

@@ -276,3 +276,42 @@ fn the_file_is_synced_at_its_interval_and_at_the_end() {
         std::fs::remove_file(&path).unwrap();
     }
 }
+
+/// The simulated rig's physics steps (`/sim/physics`, issue #46) read back exactly, and a
+/// trial without them (hardware, or recorded before) reads back with none.
+#[test]
+fn physics_steps_read_back_exactly_and_older_files_have_none() {
+    use antenna_data::record::{PhysicsStepKind, PhysicsStepMessage};
+    let path = temp_path("physics");
+    let mut recorder = TrialRecorder::create(&path, &synthetic_metadata("physics")).unwrap();
+    let steps: Vec<PhysicsStepMessage> = (0..300)
+        .map(|i| PhysicsStepMessage {
+            t_s: f64::from(i) * 0.02,
+            kind: if i == 0 {
+                PhysicsStepKind::Place
+            } else {
+                PhysicsStepKind::Step
+            },
+            stage_m: f64::from(i) * 1e-3 / 3.0,
+            base_x_m: f64::from(i) * 1e-3 / 3.0,
+            base_y_m: -0.1 / 7.0,
+            base_angle_rad: 30f64.to_radians(),
+            joint_angles_rad: vec![0.1 / f64::from(i + 1); 8],
+        })
+        .collect();
+    for step in &steps {
+        recorder.record_physics(step).unwrap();
+    }
+    assert_eq!(recorder.written().physics, 300);
+    recorder.finish().unwrap();
+    let trial = TrialReader::read(&path).unwrap();
+    assert_eq!(trial.physics, steps);
+    std::fs::remove_file(&path).unwrap();
+
+    let path = temp_path("no-physics");
+    let mut recorder = TrialRecorder::create(&path, &synthetic_metadata("none")).unwrap();
+    record(&mut recorder, 0..20);
+    recorder.finish().unwrap();
+    assert!(TrialReader::read(&path).unwrap().physics.is_empty());
+    std::fs::remove_file(&path).unwrap();
+}

@@ -27,14 +27,13 @@ fn connect_shows_the_daemon_the_chain_and_the_rig_geometry() {
     {
         let state = harness.state().live().unwrap().lock();
         let rig = state.rig.as_ref().unwrap();
-        // The rig object of hello: the simulated rig's [sim.antenna] and [sim.wall].
-        assert_eq!(rig.segment_count(), 9);
-        assert_eq!(rig.link_lengths_m, vec![0.04; 10]);
+        // The rig object of hello: the simulated rig's scene (the built-in 4.2.1 one).
+        assert_eq!(rig.segment_count(), 8);
+        assert_eq!(rig.link_lengths_m, vec![0.04; 9]);
         assert!((rig.base_mount_angle_rad - 30f64.to_radians()).abs() < 1e-12);
-        let wall = rig.wall.unwrap();
-        assert_eq!(wall.distance_m, 0.42);
-        assert_eq!(rig.stiffness.as_ref().unwrap().values_n_m_per_rad.len(), 9);
-        assert_eq!(state.segment_addresses, (0x20..=0x28).collect::<Vec<u8>>());
+        assert_eq!(rig.walls.len(), 1);
+        assert!(rig.scene.is_some());
+        assert_eq!(state.segment_addresses, (0x20..=0x27).collect::<Vec<u8>>());
         // Polls arrive at 1 kHz, in order, all healthy, every one held or counted as dropped;
         // a gap in `seq` is a deadline the daemon skipped, late on a loaded machine
         // (docs/stream-protocol.md): no more gaps than the daemon counts skipped deadlines
@@ -59,10 +58,10 @@ fn connect_shows_the_daemon_the_chain_and_the_rig_geometry() {
         assert!(last.segments.iter().all(|s| s.health == Health::Ok));
         // The chain at the newest sample starts at the stage, along the mounting angle.
         let frame = rig.frame_at(&state.history, n - 1).unwrap();
-        assert_eq!(frame.joints_m.len(), 11);
+        assert_eq!(frame.joints_m.len(), 10);
         assert_eq!(frame.base_m, [0.0, 0.0]);
     }
-    expect_label(&mut harness, "all 9 segments healthy");
+    expect_label(&mut harness, "all 8 segments healthy");
     // The prediction is drawn for the same pose: the difference line appears once solved.
     step_until(&mut harness, "the prediction", PATIENCE_S, |h| {
         h.query_by_label_contains("measured vs predicted").is_some()
@@ -136,7 +135,7 @@ fn zoom_then_export_the_visible_range() {
     let text = std::fs::read_to_string(&export.path).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     let header: Vec<&str> = lines[0].split(',').collect();
-    assert_eq!(header.len(), 4 + 9 * 3);
+    assert_eq!(header.len(), 4 + 8 * 3);
     assert_eq!(
         &header[..5],
         [
@@ -147,7 +146,7 @@ fn zoom_then_export_the_visible_range() {
             "s1_angle_rad"
         ]
     );
-    assert_eq!(header[30], "s9_health");
+    assert_eq!(header[27], "s8_health");
     let rows: Vec<Vec<&str>> = lines[1..].iter().map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), export.rows.unwrap());
     // Every poll of the visible 1.25 s at 1 kHz, and nothing outside it: the rows are the
@@ -174,7 +173,7 @@ fn zoom_then_export_the_visible_range() {
     assert_eq!(seqs, in_window, "the rows are the polls in the window");
     for row in &rows {
         assert_eq!(row.len(), header.len());
-        for k in 0..9 {
+        for k in 0..8 {
             let angle: f64 = row[4 + 3 * k].parse().unwrap();
             assert!(angle.abs() < 1.6);
             assert_eq!(row[6 + 3 * k], "ok");
@@ -190,7 +189,7 @@ fn zoom_then_export_the_visible_range() {
     let png = std::fs::read(&exports[exports.len() - 2].path).unwrap();
     assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000);
     let svg = std::fs::read_to_string(&exports[exports.len() - 1].path).unwrap();
-    assert!(svg.contains("<svg") && svg.contains("joint 9") && svg.contains("chain at t"));
+    assert!(svg.contains("<svg") && svg.contains("joint 8") && svg.contains("chain at t"));
     expect_label(&mut harness, "exported");
     daemon.shutdown().unwrap();
     std::fs::remove_dir_all(&dir).ok();
@@ -364,7 +363,7 @@ fn an_unhealthy_segment_is_shown_as_such() {
     let daemon = start_daemon(config);
     let mut harness = monitor(&daemon, "", dir.clone());
     wait_for_history(&mut harness, 0.2);
-    expect_label(&mut harness, "1 of 9 segments unhealthy");
+    expect_label(&mut harness, "1 of 8 segments unhealthy");
     {
         let state = harness.state().live().unwrap().lock();
         let rig = state.rig.as_ref().unwrap();

@@ -54,7 +54,7 @@ fn open_a_recorded_trial_play_and_scrub_it() {
         "{polls} polls, {} deadlines skipped",
         summary.skipped
     );
-    assert!(trial.rig.wall.is_some());
+    assert!(!trial.rig.walls.is_empty());
     let (start_s, end_s) = (
         trial.history.first_t_s(),
         trial.history.latest_t_s().unwrap(),
@@ -86,7 +86,8 @@ fn open_a_recorded_trial_play_and_scrub_it() {
     assert_eq!(harness.state().view().cursor_s(Some(end_s)), stopped);
     harness.get_by_label("Play");
 
-    // Scrub to the end: the stage has carried the tip against the wall.
+    // Scrub to the end: the stage has carried the antenna along the wall, its tip placed on it
+    // when the trial started (the built-in 4.2.1 scene).
     harness
         .get_by_role_and_label(Role::Slider, "scrub, s")
         .set_value_accesskit(end_s - 0.01);
@@ -98,18 +99,18 @@ fn open_a_recorded_trial_play_and_scrub_it() {
     let frame = trial.rig.frame_at(&trial.history, index).unwrap();
     let sample = trial.history.sample(index).unwrap();
     assert!(
-        frame.segments[8].touched(),
-        "the tip is not touching at {cursor} s"
+        frame.segments.iter().any(|s| s.touched()),
+        "nothing touches the wall at {cursor} s"
     );
     assert_eq!(frame.stage_position_m, sample.stage_position_m);
     assert!(sample.stage_position_m.unwrap() > 0.05);
-    // Scrub back to the start: the free, straight antenna.
+    // Scrub back to the start: the base at home.
     harness
         .get_by_role_and_label(Role::Slider, "scrub, s")
         .set_value_accesskit(0.0);
     harness.step();
     let trial = harness.state().trial().unwrap();
     let frame = trial.rig.frame_at(&trial.history, 0).unwrap();
-    assert!(frame.segments.iter().all(|s| !s.touched()));
+    assert!(frame.base_m[0].abs() < 1e-3, "{:?}", frame.base_m);
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -27,6 +27,7 @@
 pub mod bus_budget;
 pub mod geometry;
 mod locate;
+pub mod scene;
 mod schema;
 pub mod token;
 mod validate;
@@ -78,13 +79,17 @@ impl Config {
         Self::from_toml_str(&text, &name)
     }
 
-    /// Parses and checks `text`, naming it `path` in errors, and reads the control token
-    /// from `server.token_file` or `server.token_env` if one is set.
+    /// Parses and checks `text`, naming it `path` in errors, reads the scene of `[sim]
+    /// scene` (relative to `path`'s directory) and reads the control token from
+    /// `server.token_file` or `server.token_env` if one is set.
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, ConfigError> {
         let mut config: Config =
             toml::from_str(text).map_err(|e| locate::toml_error(text, path, &e))?;
+        let folder = Path::new(path).parent().unwrap_or_else(|| Path::new(""));
         config
-            .validate()
+            .refuse_old_sim_keys()
+            .and_then(|()| config.read_scene(folder))
+            .and_then(|()| config.validate())
             .and_then(|()| config.resolve_token())
             .map_err(|(key, message)| {
                 let (line, column) = locate::Spans::parse(text).locate(&key).unzip();
@@ -109,7 +114,7 @@ mod tests {
         let config = Config::from_toml_str("", "empty.toml").unwrap();
         assert_eq!(config, Config::default());
         assert!(config.bus.is_sim());
-        assert_eq!(config.bus.segments.len(), 9);
+        assert_eq!(config.bus.segments.len(), 8);
     }
 
     /// The recorded configuration reads back as the configuration in force, less the token.

@@ -4,13 +4,13 @@
 use super::geometry::{
     CalibrationError as PulseCalibrationError, GeometryError, PulseCalibration, StageGeometry,
 };
+use super::scene::RigScene;
 use super::token::ControlToken;
 use antenna_data::record::{ChunkCompression, RecorderOptions};
 use antenna_protocol::{Calibration, Direction};
 use serde::{Deserialize, Serialize};
-use sim_core::{CalibrationError, FIRMWARE_DEBOUNCE_SAMPLES, SensorSettings};
+use sim_core::{FIRMWARE_DEBOUNCE_SAMPLES, SensorSettings};
 use std::collections::BTreeMap;
-use std::fmt;
 use std::path::PathBuf;
 
 pub use super::geometry::HomingDirection;
@@ -94,8 +94,9 @@ impl Default for BusConfig {
             counter_check_every: 50,
             spin_us: 0,
             realtime_priority: 50,
-            // Each magnet is press-fit at its own angle: every segment has its own zero.
-            segments: (0..9u8)
+            // One segment per flexible joint of the built-in scene (8), each magnet press-fit
+            // at its own angle: every segment has its own zero.
+            segments: (0..8u8)
                 .map(|k| SegmentConfig {
                     address: 0x20 + k,
                     zero_counts: 1500 + 97 * u16::from(k),
@@ -218,7 +219,7 @@ impl Default for StageConfig {
             reply_timeout_ms: 2000,
             steps_per_mm: 80.0,
             min_mm: 0.0,
-            max_mm: 300.0,
+            max_mm: 600.0,
             max_speed_mm_per_s: 50.0,
             sample_hz: 50.0,
             homing_direction: HomingDirection::Negative,
@@ -376,25 +377,31 @@ pub struct TrialConfig {
 }
 
 impl Default for TrialConfig {
+    /// The built-in rig's trial: the thesis's 4.2.1 sweep, the base carried 500 mm along the
+    /// wall at 25 mm/s (the wall closes in by 70 mm: the point of bend moves toward the base),
+    /// a pause, and back at 50 mm/s.
     fn default() -> Self {
         Self {
             name: "wall-sweep".to_owned(),
             base_angle_deg: 0.0,
-            duration_s: 12.0,
+            duration_s: 32.0,
             moves: vec![
                 MoveConfig {
-                    distance_mm: 150.0,
-                    speed_mm_per_s: 30.0,
-                    pause_s: 0.5,
+                    distance_mm: 500.0,
+                    speed_mm_per_s: 25.0,
+                    pause_s: 1.0,
                 },
                 MoveConfig {
-                    distance_mm: -150.0,
-                    speed_mm_per_s: 30.0,
+                    distance_mm: -500.0,
+                    speed_mm_per_s: 50.0,
                     pause_s: 0.0,
                 },
             ],
             metadata: BTreeMap::from([
-                ("wall".to_owned(), "simulated flat wall".to_owned()),
+                (
+                    "wall".to_owned(),
+                    "thesis 4.2.1: smooth wall at 8 deg, mu 0.3".to_owned(),
+                ),
                 ("hairs".to_owned(), "none".to_owned()),
             ]),
         }
@@ -414,121 +421,32 @@ pub struct MoveConfig {
     pub pause_s: f64,
 }
 
-/// The simulated rig.
+/// The simulated rig (used when the bus is `sim`): the scene it runs and the faults injected
+/// into its segments. The scene's mapping onto the rig is [`super::scene`]'s.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimConfig {
-    /// The wall.
-    pub wall: WallConfig,
-    /// The simulated antenna.
-    pub antenna: AntennaConfig,
+    /// `scene`: the scene file the simulated rig runs (`docs/scene-format.md`), relative to
+    /// the configuration file's directory; left out, the built-in scene
+    /// ([`super::scene::BUILT_IN_SCENE`], the thesis's 4.2.1 rig). Resolved when read: the
+    /// path here is the file's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scene: Option<PathBuf>,
     /// Faults to inject into simulated segments (none by default), to see and test how the
     /// daemon copes.
     pub faults: Vec<SimFaultConfig>,
-    /// The segments' sensors as they are (ideal by default).
-    pub sensors: SimSensorsConfig,
-}
-
-/// `[sim.sensors]`: the simulated segments' sensors as they are (thesis 2.3.1; issue #18), with
-/// the keys and meaning of sim-core's [`SensorSettings`] (a scene's `[sensors]`), seeded so
-/// that one seed gives one run. Left out, the sensors are ideal and the simulated rig's words
-/// are exactly those of ideal sensors.
-///
-/// - Each segment's Hall sensor sees its joint angle turned by the joint's gain error and
-///   calibration offset, and each of the 16 ten-bit conversions of a sample gets its own
-///   Gaussian noise of `angle_noise_counts` ten-bit counts; the segment firmware's own
-///   oversampling turns that into `angle_noise_counts` twelve-bit counts
-///   ([`antenna_bus::hall_sensor`], which also says what the firmware's truncation and its ADC
-///   fault bit make of noisy conversions).
-/// - A touch switch closes for a contact whose force is at least `touch_threshold_n`.
-/// - Two settings of [`SensorSettings`] are the rig's own and are not taken here: the touch
-///   debounce is the segment firmware's, over [`FIRMWARE_DEBOUNCE_SAMPLES`] reads
-///   (`touch_debounce_samples` may only repeat it), and the sensors are sampled once per poll,
-///   at `bus.poll_hz` (`sample_rate_hz` is refused, naming `bus.poll_hz`).
-///   [`Config::sensor_settings`] gives all of them as in force.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SimSensorsConfig {
-    /// Standard deviation of the Hall angle noise of one sample, twelve-bit counts (`>= 0`).
-    pub angle_noise_counts: f64,
-    /// Calibration offset per segment, twelve-bit counts: a number (the spread each segment's
-    /// offset is drawn from with the seed, `>= 0`) or a list of one per segment, base to tip.
-    pub offset_counts: CalibrationErrorConfig,
-    /// Gain error per segment, a fraction (`0.01`: the angle reads 1 % large): a number (the
-    /// spread of a draw) or a list of one per segment, each above -1.
-    pub gain_error: CalibrationErrorConfig,
-    /// The force that closes a touch switch, newtons (`>= 0`; 0: any contact).
-    pub touch_threshold_n: f64,
-    /// Only [`FIRMWARE_DEBOUNCE_SAMPLES`], the firmware's, if given.
+    /// `[sim.antenna]`, gone: refused, naming the scene's `[antenna]` that replaces it.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub touch_debounce_samples: Option<u32>,
-    /// Refused if given: the sensors are sampled at `bus.poll_hz`.
+    pub antenna: Option<toml::Value>,
+    /// `[sim.wall]`, gone: refused, naming the scene's `[[walls]]`.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub sample_rate_hz: Option<f64>,
-    /// The seed of the noise and of the drawn calibration errors.
-    pub seed: u64,
-}
-
-impl Default for SimSensorsConfig {
-    fn default() -> Self {
-        let ideal = SensorSettings::IDEAL;
-        Self {
-            angle_noise_counts: ideal.angle_noise_counts,
-            offset_counts: CalibrationErrorConfig(ideal.offset_counts),
-            gain_error: CalibrationErrorConfig(ideal.gain_error),
-            touch_threshold_n: ideal.touch_threshold_n,
-            touch_debounce_samples: None,
-            sample_rate_hz: None,
-            seed: ideal.seed,
-        }
-    }
-}
-
-/// `offset_counts` and `gain_error` of `[sim.sensors]`: a number (the spread each segment's
-/// value is drawn from) or a list (one value per segment).
-#[derive(Debug, Clone, PartialEq)]
-pub struct CalibrationErrorConfig(pub CalibrationError);
-
-impl Serialize for CalibrationErrorConfig {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        match &self.0 {
-            CalibrationError::Spread(sd) => serializer.serialize_f64(*sd),
-            CalibrationError::PerJoint(values) => values.serialize(serializer),
-        }
-    }
-}
-
-impl<'de> Deserialize<'de> for CalibrationErrorConfig {
-    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        use serde::de::{self, SeqAccess, Visitor};
-        struct CalibrationVisitor;
-        impl<'de> Visitor<'de> for CalibrationVisitor {
-            type Value = CalibrationErrorConfig;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str(
-                    "a number (the spread each segment's value is drawn from) or a list of one \
-                     number per segment",
-                )
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
-                Ok(CalibrationErrorConfig(CalibrationError::Spread(v)))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
-                Ok(CalibrationErrorConfig(CalibrationError::Spread(v as f64)))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
-                Ok(CalibrationErrorConfig(CalibrationError::Spread(v as f64)))
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
-                let mut values = Vec::new();
-                while let Some(v) = seq.next_element::<f64>()? {
-                    values.push(v);
-                }
-                Ok(CalibrationErrorConfig(CalibrationError::PerJoint(values)))
-            }
-        }
-        deserializer.deserialize_any(CalibrationVisitor)
-    }
+    pub wall: Option<toml::Value>,
+    /// `[sim.sensors]`, gone: refused, naming the scene's `[sensors]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensors: Option<toml::Value>,
+    /// The scene as read (the built-in one until [`Config::from_toml_str`] reads `scene`).
+    #[serde(skip)]
+    pub rig: RigScene,
 }
 
 /// What an injected fault does to a simulated segment.
@@ -560,76 +478,6 @@ pub struct SimFaultConfig {
     pub until_s: f64,
 }
 
-/// A flat wall: a line `distance_m` from the stage's track (at the track's origin), tilted
-/// `angle_deg` toward the track as the stage moves forward.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct WallConfig {
-    /// Distance from the base track at the track's origin, metres.
-    pub distance_m: f64,
-    /// Angle between the wall and the track, degrees (positive: the wall comes closer as the
-    /// stage moves forward).
-    pub angle_deg: f64,
-    /// Coulomb friction coefficient of the wall against the antenna.
-    pub mu: f64,
-    /// Penalty stiffness of the wall, newtons per metre of penetration: the tip-only
-    /// stand-in's, before the rig used sim-core's contact solver (which keeps the antenna out
-    /// of the wall exactly). Still accepted and sent in `hello`; the physics ignores it.
-    pub stiffness_n_per_m: f64,
-}
-
-impl Default for WallConfig {
-    fn default() -> Self {
-        Self {
-            distance_m: 0.42,
-            angle_deg: 30.0,
-            mu: 0.3,
-            stiffness_n_per_m: 200.0,
-        }
-    }
-}
-
-/// The simulated antenna: one link per segment after the base link.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct AntennaConfig {
-    /// Flexible links; must equal the number of segments on the bus.
-    pub links: usize,
-    /// Length of every link (the base link too), metres.
-    pub link_length_m: f64,
-    /// Stiffness profile name (`constant`, `linear`, `slow-exponential`, `fast-exponential`,
-    /// `logarithmic`, `slow-reciprocal`, `fast-reciprocal`, `cockroach`).
-    pub stiffness_profile: String,
-    /// Smallest joint stiffness, N m/rad.
-    pub k_min_n_m_per_rad: f64,
-    /// Largest joint stiffness, N m/rad.
-    pub k_max_n_m_per_rad: f64,
-    /// Mounting angle of the base link from the track, degrees (the servo adds to it).
-    pub base_angle_deg: f64,
-}
-
-impl Default for AntennaConfig {
-    fn default() -> Self {
-        Self {
-            links: 9,
-            link_length_m: 0.04,
-            stiffness_profile: "linear".to_owned(),
-            k_min_n_m_per_rad: 0.01,
-            k_max_n_m_per_rad: 0.05,
-            base_angle_deg: 30.0,
-        }
-    }
-}
-
-impl AntennaConfig {
-    /// The named stiffness profile, or `None` if the name is unknown.
-    pub fn profile(&self) -> Option<sim_core::StiffnessProfile> {
-        sim_core::StiffnessProfile::NAMED
-            .into_iter()
-            .find(|p| p.name() == self.stiffness_profile)
-    }
-}
-
 impl Config {
     /// The configuration as TOML, without the control token: what a recording keeps. Every
     /// key is written, defaults included, so the file says exactly what was in force (the
@@ -649,21 +497,17 @@ impl Config {
         (a.min(b), a.max(b))
     }
 
-    /// The simulated segments' sensors as in force: `[sim.sensors]`, with the segment
+    /// The simulated segments' sensors as in force: the scene's `[sensors]` (noise,
+    /// calibration offsets and gain errors, touch threshold, seed), with the segment
     /// firmware's touch debounce ([`FIRMWARE_DEBOUNCE_SAMPLES`]) and a sample at every poll
     /// (`sample_rate_hz` = `bus.poll_hz`).
     pub fn sensor_settings(&self) -> SensorSettings {
-        let sensors = &self.sim.sensors;
         SensorSettings {
-            angle_noise_counts: sensors.angle_noise_counts,
-            offset_counts: sensors.offset_counts.0.clone(),
-            gain_error: sensors.gain_error.0.clone(),
-            touch_threshold_n: sensors.touch_threshold_n,
             touch_debounce_samples: FIRMWARE_DEBOUNCE_SAMPLES,
             sample_rate_hz: Some(self.bus.poll_hz),
-            seed: sensors.seed,
             // The daemon reports words; where a hair's touch is placed is the host's estimate.
             hair_tip_points: false,
+            ..self.sim.rig.scene.sensors.clone()
         }
     }
 

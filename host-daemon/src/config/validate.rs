@@ -1,13 +1,15 @@
 //! What serde cannot check: ranges, the pieces that must fit one another (the bus budget, the
-//! stage's geometry, the servo's calibration, `[sim.sensors]` against the bus), and where the
-//! control token comes from. Each failure is the dotted key and why; [`super::locate`] finds
+//! stage's geometry, the servo's calibration, the scene's joints and `[sensors]` against the
+//! bus), the old `[sim.*]` tables that a scene replaces, and where the control token comes
+//! from. Each failure is the dotted key and why; [`super::locate`] finds
 //! where the key is written.
 
 use super::Config;
 use super::bus_budget::BusBudget;
 use super::geometry::GeometryError;
+use super::scene::RigScene;
 use super::token::ControlToken;
-use sim_core::{FIRMWARE_DEBOUNCE_SAMPLES, SensorError, SensorField};
+use sim_core::{SensorError, SensorField};
 use std::path::Path;
 
 impl Config {
@@ -224,22 +226,6 @@ impl Config {
                 }
             }
         }
-        let wall = &self.sim.wall;
-        if !positive(wall.distance_m) {
-            return fail("sim.wall.distance_m", "must be positive".to_owned());
-        }
-        if !(wall.angle_deg.is_finite() && wall.angle_deg.abs() < 80.0) {
-            return fail(
-                "sim.wall.angle_deg",
-                "must be within (-80, 80) degrees".to_owned(),
-            );
-        }
-        if !(wall.mu.is_finite() && wall.mu >= 0.0) {
-            return fail("sim.wall.mu", "must be finite and >= 0".to_owned());
-        }
-        if !positive(wall.stiffness_n_per_m) {
-            return fail("sim.wall.stiffness_n_per_m", "must be positive".to_owned());
-        }
         for (i, fault) in self.sim.faults.iter().enumerate() {
             if !bus.segments.iter().any(|s| s.address == fault.address) {
                 return fail(
@@ -261,50 +247,19 @@ impl Config {
                 );
             }
         }
-        let antenna = &self.sim.antenna;
-        if bus.is_sim() && antenna.links != bus.segments.len() {
+        let joints = self.sim.rig.joints();
+        if bus.is_sim() && joints != bus.segments.len() {
             return fail(
-                "sim.antenna.links",
+                "bus.segments",
                 format!(
-                    "must equal the number of segments on the bus ({}), got {}",
-                    bus.segments.len(),
-                    antenna.links
+                    "the simulated rig has one segment per flexible joint of its scene: {} has \
+                     links = {} (the base link and {joints} flexible joints), so {joints} \
+                     [[bus.segments]] are needed, not {}",
+                    self.sim.rig.source,
+                    joints + 1,
+                    bus.segments.len()
                 ),
             );
-        }
-        if !positive(antenna.link_length_m) {
-            return fail("sim.antenna.link_length_m", "must be positive".to_owned());
-        }
-        if antenna.profile().is_none() {
-            let names: Vec<&str> = sim_core::StiffnessProfile::NAMED
-                .iter()
-                .map(|p| p.name())
-                .collect();
-            return fail(
-                "sim.antenna.stiffness_profile",
-                format!(
-                    "unknown profile {:?}; one of {}",
-                    antenna.stiffness_profile,
-                    names.join(", ")
-                ),
-            );
-        }
-        if !(positive(antenna.k_min_n_m_per_rad) && antenna.k_min_n_m_per_rad.is_finite()) {
-            return fail(
-                "sim.antenna.k_min_n_m_per_rad",
-                "must be positive".to_owned(),
-            );
-        }
-        if !(antenna.k_max_n_m_per_rad.is_finite()
-            && antenna.k_max_n_m_per_rad >= antenna.k_min_n_m_per_rad)
-        {
-            return fail(
-                "sim.antenna.k_max_n_m_per_rad",
-                "must be finite and >= k_min_n_m_per_rad".to_owned(),
-            );
-        }
-        if !antenna.base_angle_deg.is_finite() {
-            return fail("sim.antenna.base_angle_deg", "must be finite".to_owned());
         }
         self.validate_sensors()
     }
@@ -341,32 +296,66 @@ impl Config {
         Ok(())
     }
 
-    /// Checks `[sim.sensors]`: the failing key (dotted) and why.
+    /// `[sim.antenna]`, `[sim.wall]` and `[sim.sensors]` are gone: the first one given and
+    /// what replaces it.
+    pub(super) fn refuse_old_sim_keys(&self) -> Result<(), (String, String)> {
+        let sim = &self.sim;
+        for (table, value, replaced_by) in [
+            (
+                "antenna",
+                &sim.antenna,
+                "the scene's [antenna] and [antenna.stiffness] (its `links` counts the base \
+                 link: one more than the segments; `min_n_m_per_rad`, `max_n_m_per_rad`, \
+                 `profile`)",
+            ),
+            (
+                "wall",
+                &sim.wall,
+                "the scene's [[walls]] (a line, polyline, sinusoid or digitized wall, with its \
+                 `mu` and zones)",
+            ),
+            (
+                "sensors",
+                &sim.sensors,
+                "the scene's [sensors] (the same keys; `sample_rate_hz` and the debounce are \
+                 the rig's own)",
+            ),
+        ] {
+            if value.is_none() {
+                continue;
+            }
+            return Err((
+                format!("sim.{table}"),
+                format!(
+                    "[sim.{table}] is gone: the simulated rig runs a scene file, \
+                     `[sim] scene = \"FILE.toml\"` (relative to this file), and {replaced_by} \
+                     replace it"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Reads the scene of `[sim] scene` (relative to `folder`), keeping the resolved path.
+    pub(super) fn read_scene(&mut self, folder: &Path) -> Result<(), (String, String)> {
+        let Some(file) = &self.sim.scene else {
+            return Ok(());
+        };
+        let path = folder.join(file);
+        self.sim.rig =
+            RigScene::read(&path).map_err(|message| ("sim.scene".to_owned(), message))?;
+        self.sim.scene = Some(path);
+        Ok(())
+    }
+
+    /// Checks the scene's `[sensors]` against the bus: the failing key (dotted) and why.
     fn validate_sensors(&self) -> Result<(), (String, String)> {
-        let sensors = &self.sim.sensors;
-        let key = |name: &str| format!("sim.sensors.{name}");
-        if let Some(samples) = sensors.touch_debounce_samples
-            && samples != FIRMWARE_DEBOUNCE_SAMPLES
-        {
-            return Err((
-                key("touch_debounce_samples"),
-                format!(
-                    "must be {FIRMWARE_DEBOUNCE_SAMPLES} (or left out), got {samples}: the \
-                     simulated segments run the segment firmware, which debounces its touch \
-                     switches over {FIRMWARE_DEBOUNCE_SAMPLES} consecutive reads"
-                ),
-            ));
-        }
-        if let Some(rate_hz) = sensors.sample_rate_hz {
-            return Err((
-                key("sample_rate_hz"),
-                format!(
-                    "not taken here (got {rate_hz}): the simulated segments sample once per \
-                     poll, so the sample rate is bus.poll_hz (now {} Hz); set that instead",
-                    self.bus.poll_hz
-                ),
-            ));
-        }
+        let key = |name: &str| {
+            (
+                "sim.scene".to_owned(),
+                format!("{}: [sensors] {name}", self.sim.rig.source),
+            )
+        };
         let segments = self.bus.segments.len();
         self.sensor_settings()
             .validate(segments)
@@ -387,20 +376,24 @@ impl Config {
                     } else {
                         format!("{expected}{spread}, got {value}")
                     };
-                    (key(field.key()), message)
+                    let (k, at) = key(field.key());
+                    (k, format!("{at} {message}"))
                 }
                 SensorError::WrongLength {
                     field,
                     expected,
                     actual,
-                } => (
-                    key(field.key()),
-                    format!(
-                        "has {actual} entries; a list needs one per segment on the bus, base \
-                         to tip ({expected}), or give a number, the spread each segment's \
-                         value is drawn from"
-                    ),
-                ),
+                } => {
+                    let (k, at) = key(field.key());
+                    (
+                        k,
+                        format!(
+                            "{at} has {actual} entries; a list needs one per segment on the \
+                             bus, base to tip ({expected}), or give a number, the spread each \
+                             segment's value is drawn from"
+                        ),
+                    )
+                }
             })
     }
 }

@@ -118,6 +118,13 @@ pub enum AcquisitionEvent {
         /// What the read found.
         reading: FirmwareReading,
     },
+    /// One placement or step of the simulated rig's physics (recorded on `/sim/physics`).
+    Physics {
+        /// Nanoseconds since the trial started: when the step was made.
+        t_ns: u64,
+        /// The step: its base pose and the joint angles it gave.
+        step: Box<crate::sim::rig::PhysicsStep>,
+    },
     /// Something the trial did or refused (a move started, a move beyond the soft limits).
     Note {
         /// Nanoseconds since the trial started.

@@ -215,10 +215,10 @@ mod tests {
         );
         let mut fewer = running.clone();
         fewer.bus.segments.pop();
-        fewer.sim.antenna.links = 8;
+        fewer.sim.scene = Some(PathBuf::from("other.toml"));
         assert_eq!(
             changed_keys(&running, &fewer),
-            ["bus.segments", "sim.antenna.links"]
+            ["bus.segments", "sim.scene"]
         );
         let mut listed = running.clone();
         listed.server.token_env = Some("ANTENNAD_TOKEN".to_owned());

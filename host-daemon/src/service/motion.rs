@@ -114,6 +114,11 @@ impl Notes<'_> {
         {
             return;
         }
+        self.send_always(now, text);
+    }
+
+    /// Sends `text` even if it repeats the last note (what a command did: each is said).
+    pub(crate) fn send_always(&mut self, now: Duration, text: String) {
         self.last = Some((text.clone(), now));
         self.events.send(AcquisitionEvent::Note {
             t_ns: nanos(now),
@@ -236,6 +241,7 @@ fn motion_loop(
                     }
                     check_availability(&rig, status, &mut m, now);
                     m.check_stage(&mut rig, now);
+                    send_physics_steps(&mut rig, events);
                     continue;
                 }
                 Err(RecvTimeoutError::Timeout) => {
@@ -299,12 +305,24 @@ fn motion_loop(
             }
         }
         check_availability(&rig, status, &mut m, now);
+        send_physics_steps(&mut rig, events);
     }
     if let Err(e) = rig.stop(clock.elapsed()) {
         m.notes
             .send(clock.elapsed(), format!("stopping the stage failed: {e}"));
     }
     MotionReport { moves: m.moves }
+}
+
+/// The simulated antenna's placements and steps since the last call, as events (each
+/// recorded during a trial).
+fn send_physics_steps(rig: &mut DaemonRig, events: &EventSender) {
+    for (at, step) in rig.take_physics_steps() {
+        events.send(AcquisitionEvent::Physics {
+            t_ns: nanos(at),
+            step: Box::new(step),
+        });
+    }
 }
 
 /// A command that was queued ahead of a `stop_all`: a move or a base angle is cancelled
@@ -347,7 +365,8 @@ fn stop_all(rig: &mut DaemonRig, now: Duration, m: &mut Motion<'_>) -> Result<St
         Err(e) => Err(format!("stopping the stage failed: {e}")),
     };
     let (Ok(text) | Err(text)) = &stopped;
-    m.notes.send(now, format!("stop_all: {text}"));
+    // Every stop_all is said, however soon after the last.
+    m.notes.send_always(now, format!("stop_all: {text}"));
     stopped
 }
 

@@ -26,7 +26,7 @@ use crate::hardware::vxm::{MAX_SPEED_STEPS_PER_S, VxmKill};
 use crate::hardware::vxm_device::VxmDevice;
 use crate::service::acquisition::Shared;
 use crate::sim::devices::{SimServo, SimStage};
-use crate::sim::rig::{SimState, SimWorld};
+use crate::sim::rig::{PhysicsStep, SimState, SimWorld};
 use crate::{FakeServo, FakeStage};
 use std::time::{Duration, Instant};
 
@@ -205,10 +205,38 @@ impl DaemonRig {
         }
         if let Some(world) = &mut self.world {
             world
-                .move_to(self.last_stage_mm * 1e-3, self.last_base_rad)
+                .move_to(self.last_stage_mm * 1e-3, self.last_base_rad, now)
                 .map_err(RigError::Simulation)?;
         }
         Ok(())
+    }
+
+    /// Whether the rig has a simulated antenna.
+    pub fn is_simulated(&self) -> bool {
+        self.world.is_some()
+    }
+
+    /// Places the simulated antenna as its scene's `[start]` says, with the stage and the
+    /// servo where they are now (a trial starting, after homing); what the placement did, in
+    /// words, or `None` without a simulated antenna (on hardware a placement means nothing).
+    pub fn place_antenna(&mut self, now: Duration) -> Result<Option<String>, RigError> {
+        self.advance(now)?;
+        let Some(world) = &mut self.world else {
+            return Ok(None);
+        };
+        world
+            .place(self.last_stage_mm * 1e-3, self.last_base_rad, now)
+            .map_err(RigError::Simulation)?;
+        Ok(Some(world.placement_note().to_owned()))
+    }
+
+    /// The simulated antenna's placements and steps since the last call, each with its
+    /// time on the daemon's clock (none without a simulated antenna).
+    pub fn take_physics_steps(&mut self) -> Vec<(Duration, PhysicsStep)> {
+        self.world
+            .as_mut()
+            .map(SimWorld::take_steps)
+            .unwrap_or_default()
     }
 
     /// Starts a relative stage move at `speed_mm_per_s`; one ending beyond the soft limits is

@@ -1,9 +1,11 @@
-//! A trial's script as the motion thread runs it: the stage moves one after another, each
-//! followed by its pause, waiting (not failing) while the stage is being homed or has briefly
+//! A trial's script as the motion thread runs it: on the simulated rig the scene's `[start]`
+//! placement once the stage is homed, then the stage moves one after another, each followed
+//! by its pause, waiting (not failing) while the stage is being homed or has briefly
 //! vanished; and how a script's end is told to whoever waits for it ([`ScriptEnds`]).
 
 use crate::config::TrialConfig;
 use crate::hardware::device::DeviceError;
+use crate::hardware::homing::HomingState;
 use crate::service::motion::Notes;
 use crate::service::rig::{DaemonRig, RigError};
 use std::sync::Mutex;
@@ -20,6 +22,8 @@ pub(crate) struct Script {
     pub(crate) trial: Box<TrialConfig>,
     next_move: usize,
     step: Step,
+    /// Whether the simulated antenna has been placed (or there is none to place).
+    placed: bool,
 }
 
 enum Step {
@@ -43,6 +47,7 @@ impl Script {
             trial,
             next_move: 0,
             step: Step::Idle,
+            placed: false,
         }
     }
 
@@ -75,6 +80,26 @@ impl Script {
             },
             Step::Pausing(until) if now < until => Step::Pausing(until),
             Step::Done => Step::Done,
+            Step::Idle if !self.placed => {
+                match rig.homing_state() {
+                    HomingState::Homed => {}
+                    HomingState::Failed(why) => {
+                        return Err(format!("the stage could not be homed: {why}"));
+                    }
+                    // Placed once the stage is homed.
+                    HomingState::Unhomed | HomingState::Homing => {
+                        self.step = Step::Idle;
+                        return Ok(());
+                    }
+                }
+                match rig.place_antenna(now) {
+                    Ok(Some(note)) => notes.send(now, format!("antenna placed: {note}")),
+                    Ok(None) => {}
+                    Err(e) => return Err(format!("placing the simulated antenna failed: {e}")),
+                }
+                self.placed = true;
+                Step::Idle
+            }
             Step::Pausing(_) | Step::Idle => match self.trial.moves.get(self.next_move).copied() {
                 Some(m) => {
                     let j = self.next_move;

@@ -1,79 +1,68 @@
 //! The simulated rig, used when no hardware is configured: a virtual I2C bus ([`SimBus`])
 //! whose segments run `firmware-segment`'s own logic, and one simulated world ([`SimWorld`]):
-//! joint angles from sim-core's equilibrium solver as the stage (simulated,
-//! [`crate::sim::devices::SimStage`], or real) carries the antenna along a configured wall.
+//! the scene of `[sim] scene` ([`crate::config::scene`], the mapping from a scene to the rig)
+//! as the stage (simulated, [`crate::sim::devices::SimStage`], or real) carries its base along
+//! the scene's direction of motion and the servo turns its base link.
 //!
 //! # Contact
 //! The physics is `antenna-sim-physics`' [`SimPhysics`] (shared with `antenna-monitor`'s
-//! prediction): sim-core's quasi-static contact solver, every link and joint kept out of the
-//! wall, Coulomb friction that sticks and slips (`mu` of `[sim.wall]`), snaps followed
-//! downhill, a segment's touch switches closing where its link touches the wall.
+//! prediction): sim-core's quasi-static contact solver on the scene's chain (hairs included)
+//! and walls (any shape, their zones and friction), every link and joint kept out of the
+//! walls, Coulomb friction that sticks and slips, snaps followed downhill, a segment's touch
+//! switches closing where its link touches a wall. The scene's `[start]` placement is done
+//! when a trial starts, after homing ([`SimWorld::place`]). Every placement and step is kept
+//! ([`SimWorld::take_steps`]) and recorded in the trial, so that a trial can be replayed
+//! through sim-core's stepper.
 //!
 //! # Sensors
-//! The segments' sensors are ideal unless `[sim.sensors]` says otherwise
-//! ([`crate::config::SimSensorsConfig`]): each segment's Hall sensor then has its
-//! joint's calibration offset and gain error and seeded noise on each of its ten-bit
-//! conversions, which the firmware's own oversampling turns into the twelve-bit reading
-//! ([`sim_bus`]), and a touch switch closes only for a contact pressing at least
-//! `touch_threshold_n` ([`sim_physics`]). The touch debounce is the firmware's own, and the
-//! sensors are sampled once per poll (`bus.poll_hz`).
+//! The segments' sensors are the scene's `[sensors]` (ideal when it has none): each segment's
+//! Hall sensor then has its joint's calibration offset and gain error and seeded noise on
+//! each of its ten-bit conversions, which the firmware's own oversampling turns into the
+//! twelve-bit reading ([`sim_bus`]), and a touch switch closes only for a contact pressing at
+//! least `touch_threshold_n` ([`sim_physics`]). The touch debounce is the firmware's own, and
+//! the sensors are sampled once per poll (`bus.poll_hz`).
 
 use crate::config::{Config, SimFaultKind};
 use crate::sim::bus::{SegmentFault, SimBus, SimSegment};
 use antenna_bus::{HallErrors, HallSensor};
-pub use antenna_sim_physics::{AntennaSpec, FlatWallSpec, SimPhysics, SimState};
+pub use antenna_sim_physics::{PhysicsStep, SimPhysics, SimState, StepKind};
 use anyhow::{Context, Result};
 use sim_core::Sensors;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-/// The physics of `config`'s simulated antenna (`[sim.antenna]`) against its wall
-/// (`[sim.wall]`), its touch switches closed by contacts of at least
-/// `sim.sensors.touch_threshold_n`.
+/// The physics of `config`'s scene (`[sim] scene`), placed with the stage and the servo at 0,
+/// its touch switches closed by contacts of at least the scene's `[sensors]
+/// touch_threshold_n`.
+///
+/// # Errors
+/// When the scene's placement fails with the stage at 0.
 pub fn sim_physics(config: &Config) -> Result<SimPhysics> {
-    let mut physics = SimPhysics::new(&antenna_spec(config), &wall_spec(config))?;
+    let rig = &config.sim.rig;
+    let scene = rig
+        .sweep_scene()
+        .with_context(|| format!("the scene {}", rig.source))?;
+    let mut physics =
+        SimPhysics::new(scene).with_context(|| format!("the scene {}", rig.source))?;
     physics
-        .set_touch_threshold_n(config.sim.sensors.touch_threshold_n)
-        .context("`sim.sensors.touch_threshold_n`")?;
+        .set_touch_threshold_n(config.sensor_settings().touch_threshold_n)
+        .with_context(|| format!("the scene {}: [sensors] touch_threshold_n", rig.source))?;
     Ok(physics)
 }
 
-/// `[sim.antenna]` as the physics takes it.
-pub fn antenna_spec(config: &Config) -> AntennaSpec {
-    let antenna = &config.sim.antenna;
-    AntennaSpec {
-        links: antenna.links,
-        link_length_m: antenna.link_length_m,
-        stiffness_profile: antenna.stiffness_profile.clone(),
-        k_min_n_m_per_rad: antenna.k_min_n_m_per_rad,
-        k_max_n_m_per_rad: antenna.k_max_n_m_per_rad,
-        base_angle_deg: antenna.base_angle_deg,
-    }
-}
-
-/// `[sim.wall]` as the physics takes it.
-pub fn wall_spec(config: &Config) -> FlatWallSpec {
-    let wall = &config.sim.wall;
-    FlatWallSpec {
-        distance_m: wall.distance_m,
-        angle_deg: wall.angle_deg,
-        mu: wall.mu,
-    }
-}
-
 /// The virtual bus of `config.bus`: one simulated segment per configured segment, each with
-/// its own calibration and its Hall sensor as `[sim.sensors]` says: segment `k` (base to tip)
+/// its own calibration and its Hall sensor as the scene's `[sensors]` says: segment `k` (base to tip)
 /// senses joint `k + 1`, with that joint's calibration offset and gain error (given, or drawn
 /// from the seed by sim-core's [`Sensors`]) and its own noise stream of the seed, `k + 1`
 /// (stream 0 is the calibration draw's), so that its noise does not depend on the others'.
 ///
 /// # Errors
-/// When `[sim.sensors]` does not fit the bus (a configuration that passed
+/// When the scene's `[sensors]` does not fit the bus (a configuration that passed
 /// [`Config::from_toml_str`] always does).
 pub fn sim_bus(config: &Config) -> Result<SimBus> {
     let settings = config.sensor_settings();
     let segments = &config.bus.segments;
-    let sensors = Sensors::new(&settings, segments.len()).context("`sim.sensors`")?;
+    let sensors = Sensors::new(&settings, segments.len()).context("the scene's [sensors]")?;
     let (offsets_counts, gain_errors) = (sensors.offset_counts(), sensors.gain_error());
     segments
         .iter()
@@ -85,7 +74,7 @@ pub fn sim_bus(config: &Config) -> Result<SimBus> {
                 gain_error: gain_errors.get(k + 1).copied().unwrap_or_default(),
             };
             let hall = HallSensor::new(errors, settings.seed, k as u64 + 1)
-                .with_context(|| format!("`sim.sensors` for bus.segments[{k}]"))?;
+                .with_context(|| format!("the scene's [sensors] for bus.segments[{k}]"))?;
             Ok(SimSegment::new(s.address, s.calibration()).with_hall_sensor(hall))
         })
         .collect::<Result<Vec<_>>>()
@@ -159,58 +148,119 @@ pub fn sense_with_faults(
 
 /// The one simulated world: the antenna's physics, moved by the stage and the base servo
 /// (simulated or real, whichever the rig has), its state shared with the polling thread's
-/// [`sense`] hook. Solved again only when the stage or the base has moved.
+/// [`sense`] hook. Solved again only when the stage or the base has moved; every placement
+/// and step is kept with the time it was made ([`Self::take_steps`]).
 #[derive(Debug)]
 pub struct SimWorld {
     physics: SimPhysics,
     state: Arc<Mutex<SimState>>,
-    /// The antenna's mount angle on the base, radians (`sim.antenna.base_angle_deg`).
-    mount_rad: f64,
     solved_for: Option<(f64, f64)>,
+    steps: Vec<(Duration, PhysicsStep)>,
 }
 
 impl SimWorld {
-    /// The world of `config`'s `[sim]`, publishing its state to `state`.
+    /// The world of `config`'s scene, publishing its state to `state`.
     ///
     /// # Errors
-    /// When the physics does not accept `[sim]` (a configuration that passed
-    /// [`Config::from_toml_str`] always does).
+    /// When the physics does not accept the scene (its placement fails with the stage at 0).
     pub fn new(config: &Config, state: Arc<Mutex<SimState>>) -> Result<Self> {
-        Ok(Self {
-            physics: sim_physics(config)?,
+        let mut physics = sim_physics(config)?;
+        physics.record_steps(true);
+        let world = Self {
+            physics,
             state,
-            mount_rad: config.sim.antenna.base_angle_deg.to_radians(),
             solved_for: None,
-        })
+            steps: Vec::new(),
+        };
+        world.publish(world.physics.state().clone());
+        Ok(world)
     }
 
-    /// The stage at `stage_m` and the base servo at `base_rad`: the antenna settles there
-    /// (if either moved since the last call) and the segments sense it from now on.
+    /// What the last placement did, in words.
+    pub fn placement_note(&self) -> &str {
+        self.physics.placement_note()
+    }
+
+    /// The stage at `stage_m` and the base servo at `servo_rad`, at `now`: the antenna
+    /// settles there (if either moved since the last call) and the segments sense it from
+    /// now on.
     ///
     /// # Errors
     /// When the contact solver fails.
-    pub fn move_to(&mut self, stage_m: f64, base_rad: f64) -> Result<()> {
-        let key = (stage_m, self.mount_rad + base_rad);
+    pub fn move_to(&mut self, stage_m: f64, servo_rad: f64, now: Duration) -> Result<()> {
+        let key = (stage_m, servo_rad);
         if self.solved_for != Some(key) {
-            let solved = self.physics.update(key.0, key.1)?;
+            let solved = self.physics.update(stage_m, servo_rad)?;
             self.solved_for = Some(key);
-            if let Ok(mut shared) = self.state.lock() {
-                *shared = solved;
-            }
+            self.keep_steps(now);
+            self.publish(solved);
         }
         Ok(())
     }
+
+    /// The scene's placement, done afresh with the stage at `stage_m` and the servo at
+    /// `servo_rad`, at `now` (a trial starting).
+    ///
+    /// # Errors
+    /// When the placement fails there (the antenna stays as it was).
+    pub fn place(&mut self, stage_m: f64, servo_rad: f64, now: Duration) -> Result<()> {
+        let placed = self.physics.place(stage_m, servo_rad)?;
+        self.solved_for = Some((stage_m, servo_rad));
+        self.keep_steps(now);
+        self.publish(placed);
+        Ok(())
+    }
+
+    /// The placements and steps made since the last call, each with its time, oldest first.
+    pub fn take_steps(&mut self) -> Vec<(Duration, PhysicsStep)> {
+        std::mem::take(&mut self.steps)
+    }
+
+    fn keep_steps(&mut self, now: Duration) {
+        // Bounded: nobody taking them (a test driving the rig by hand) keeps the newest.
+        if self.steps.len() >= MAX_KEPT_STEPS {
+            self.steps.drain(..MAX_KEPT_STEPS / 2);
+        }
+        self.steps
+            .extend(self.physics.take_steps().into_iter().map(|s| (now, s)));
+    }
+
+    fn publish(&self, state: SimState) {
+        if let Ok(mut shared) = self.state.lock() {
+            *shared = state;
+        }
+    }
 }
+
+/// Steps kept for [`SimWorld::take_steps`] at most (the motion thread takes them after every
+/// rig call).
+const MAX_KEPT_STEPS: usize = 100_000;
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn the_default_configuration_is_the_default_physics() {
-        let config = Config::default();
-        assert_eq!(antenna_spec(&config), AntennaSpec::default());
-        assert_eq!(wall_spec(&config), FlatWallSpec::default());
+    fn the_default_configuration_places_the_thesis_antenna_on_its_wall() {
+        let state = Arc::new(Mutex::new(SimState::default()));
+        let mut world = SimWorld::new(&Config::default(), Arc::clone(&state)).unwrap();
+        assert!(world.placement_note().starts_with("tip placed on wall 0"));
+        let placed = state.lock().unwrap().clone();
+        assert_eq!(placed.joint_angles_rad.len(), 8);
+        assert!(placed.tip_force_n > 0.0);
+        world.move_to(0.01, 0.0, Duration::from_millis(5)).unwrap();
+        world.move_to(0.01, 0.0, Duration::from_millis(6)).unwrap();
+        world.place(0.01, 0.0, Duration::from_millis(7)).unwrap();
+        let steps = world.take_steps();
+        let kinds: Vec<(Duration, StepKind)> = steps.iter().map(|(t, s)| (*t, s.kind)).collect();
+        assert_eq!(
+            kinds,
+            [
+                (Duration::from_millis(5), StepKind::Step),
+                (Duration::from_millis(7), StepKind::Place)
+            ]
+        );
+        assert_eq!(steps[0].1.stage_m, 0.01);
     }
 
     #[test]
@@ -238,7 +288,7 @@ mod tests {
                 .map(|k| bus.segment_mut(k).map(|s| s.fault()))
                 .collect::<Vec<_>>()
         };
-        let none = vec![Some(SegmentFault::None); 9];
+        let none = vec![Some(SegmentFault::None); 8];
         assert_eq!(faults(&mut bus, 0.5), none);
         let mut nack = none.clone();
         nack[2] = Some(SegmentFault::Nack);

@@ -65,6 +65,41 @@ pub struct ServoMessage {
     pub base_angle_rad: f64,
 }
 
+/// What a [`PhysicsStepMessage`] was.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PhysicsStepKind {
+    /// The scene's placement, done afresh with the base at the message's pose (a trial
+    /// starting).
+    Place,
+    /// One quasi-static step from the previous posture to the message's pose.
+    Step,
+}
+
+/// One placement or step of the simulated rig's physics (`/sim/physics`): the base pose it
+/// was for and the joint angles it gave, so a trial can be replayed through sim-core's
+/// stepper from its scene (the metadata's `rig.scene_toml`). Recorded only by the simulated
+/// rig; files from before it existed have none.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PhysicsStepMessage {
+    /// Monotonic time since the trial started, s (the same clock as the segments): when the
+    /// step was made.
+    pub t_s: f64,
+    /// A placement or a step.
+    pub kind: PhysicsStepKind,
+    /// The stage position it was for, m (fractional: where the stage was at that instant).
+    pub stage_m: f64,
+    /// The base pivot, ground frame, m.
+    pub base_x_m: f64,
+    /// See [`Self::base_x_m`].
+    pub base_y_m: f64,
+    /// The base link's angle from the ground x-axis, rad (the scene's base angle plus the
+    /// servo angle).
+    pub base_angle_rad: f64,
+    /// The joint angles `theta_1..theta_n` the physics gave, rad.
+    pub joint_angles_rad: Vec<f64>,
+}
+
 /// Something the daemon said during the trial (`/trial/log`): a stage or servo device
 /// vanishing or coming back, a move refused, a segment's counter stopping, ...
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -9,6 +9,7 @@
 //! | `/antenna/segments` | [`SegmentsMessage`]: `t_s` and per segment address, angle counts, `angle_rad`, touch bits, ok/nack/pec/bus/stale flags | every poll |
 //! | `/antenna/stage` | [`StageMessage`]: `t_s`, `position_m` | the stage's rate |
 //! | `/antenna/servo` | [`ServoMessage`]: `t_s`, `base_angle_rad` | the servo's rate |
+//! | `/sim/physics` | [`PhysicsStepMessage`]: `t_s`, `kind` (`place`/`step`), `stage_m`, the base pose (`base_x_m`, `base_y_m`, `base_angle_rad`) and the `joint_angles_rad` it gave (simulated rig only; added with issue #46, older files have none) | every physics step |
 //! | `/trial/log` | [`LogMessage`]: `t_s`, `text` (a device vanished or came back, a move refused, a counter stopped) | when it happens |
 //!
 //! Segment polls carry `seq`, the poll's number on the daemon's clock (+1 per poll deadline),
@@ -66,7 +67,8 @@ mod writer;
 
 pub use error::RecordError;
 pub use messages::{
-    LogMessage, SegmentSample, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+    LogMessage, PhysicsStepKind, PhysicsStepMessage, SegmentSample, SegmentsMessage, ServoMessage,
+    StageMessage, TrialMetadata,
 };
 pub use reader::{Trial, TrialReader};
 pub use synthetic::{

@@ -7,8 +7,12 @@ use mcap::read::Options;
 use serde::de::DeserializeOwned;
 
 use super::error::RecordError;
-use super::messages::{LogMessage, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
-use super::schema::{LOG_TOPIC, METADATA_TOPIC, SEGMENTS_TOPIC, SERVO_TOPIC, STAGE_TOPIC};
+use super::messages::{
+    LogMessage, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+};
+use super::schema::{
+    LOG_TOPIC, METADATA_TOPIC, PHYSICS_TOPIC, SEGMENTS_TOPIC, SERVO_TOPIC, STAGE_TOPIC,
+};
 
 /// A trial read back from its MCAP file.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -23,6 +27,9 @@ pub struct Trial {
     pub servo: Vec<ServoMessage>,
     /// Every `/trial/log` message, in recording order (none in files from before it existed).
     pub log: Vec<LogMessage>,
+    /// Every `/sim/physics` message, in recording order (the simulated rig's; none in files
+    /// from hardware or from before it existed).
+    pub physics: Vec<PhysicsStepMessage>,
     /// `None` for a complete file; otherwise why reading stopped early (a file cut by a crash
     /// ends in a partial record after its last flush). Everything before that point is
     /// returned, CRC-checked.
@@ -96,6 +103,7 @@ impl TrialReader {
                 STAGE_TOPIC => trial.stage.push(decode(path, topic, data)?),
                 SERVO_TOPIC => trial.servo.push(decode(path, topic, data)?),
                 LOG_TOPIC => trial.log.push(decode(path, topic, data)?),
+                PHYSICS_TOPIC => trial.physics.push(decode(path, topic, data)?),
                 METADATA_TOPIC => trial.metadata = Some(decode(path, topic, data)?),
                 _ => {}
             }

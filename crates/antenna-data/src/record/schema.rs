@@ -9,6 +9,8 @@ pub const SEGMENTS_TOPIC: &str = "/antenna/segments";
 pub const STAGE_TOPIC: &str = "/antenna/stage";
 /// Topic of [`super::ServoMessage`].
 pub const SERVO_TOPIC: &str = "/antenna/servo";
+/// Topic of [`super::PhysicsStepMessage`] (the simulated rig only).
+pub const PHYSICS_TOPIC: &str = "/sim/physics";
 /// Topic of [`super::LogMessage`].
 pub const LOG_TOPIC: &str = "/trial/log";
 /// Topic of [`super::TrialMetadata`].
@@ -79,6 +81,33 @@ pub fn servo_schema() -> Value {
             "base_angle_rad": { "type": "number", "description": "base angle, rad" }
         },
         "required": ["t_s", "base_angle_rad"]
+    })
+}
+
+/// The schema of `/sim/physics` (name `antenna.PhysicsStep`).
+pub fn physics_schema() -> Value {
+    json!({
+        "title": "antenna.PhysicsStep",
+        "description": "One placement or step of the simulated rig's physics: the base pose it was for and the joint angles it gave",
+        "type": "object",
+        "properties": {
+            "t_s": { "type": "number", "description": "monotonic time since trial start, s" },
+            "kind": {
+                "type": "string",
+                "enum": ["place", "step"],
+                "description": "place: the scene's placement done afresh at this pose; step: one quasi-static step from the previous posture"
+            },
+            "stage_m": { "type": "number", "description": "stage position, m (fractional, as the physics took it)" },
+            "base_x_m": { "type": "number", "description": "base pivot x, ground frame, m" },
+            "base_y_m": { "type": "number", "description": "base pivot y, ground frame, m" },
+            "base_angle_rad": { "type": "number", "description": "base link angle from the ground x-axis, rad" },
+            "joint_angles_rad": {
+                "type": "array",
+                "items": { "type": "number" },
+                "description": "joint angles theta_1..theta_n it gave, rad"
+            }
+        },
+        "required": ["t_s", "kind", "stage_m", "base_x_m", "base_y_m", "base_angle_rad", "joint_angles_rad"]
     })
 }
 

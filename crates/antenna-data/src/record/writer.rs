@@ -10,10 +10,13 @@ use serde::Serialize;
 use serde_json::Value;
 
 use super::error::RecordError;
-use super::messages::{LogMessage, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
+use super::messages::{
+    LogMessage, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+};
 use super::schema::{
-    LOG_TOPIC, MESSAGE_ENCODING, METADATA_TOPIC, SCHEMA_ENCODING, SEGMENTS_TOPIC, SERVO_TOPIC,
-    STAGE_TOPIC, log_schema, metadata_schema, segments_schema, servo_schema, stage_schema,
+    LOG_TOPIC, MESSAGE_ENCODING, METADATA_TOPIC, PHYSICS_TOPIC, SCHEMA_ENCODING, SEGMENTS_TOPIC,
+    SERVO_TOPIC, STAGE_TOPIC, log_schema, metadata_schema, physics_schema, segments_schema,
+    servo_schema, stage_schema,
 };
 use super::sealed_file::SealedFile;
 
@@ -71,6 +74,8 @@ pub struct RecordCounts {
     pub servo: u64,
     /// `/trial/log` messages.
     pub log: u64,
+    /// `/sim/physics` messages.
+    pub physics: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -109,6 +114,8 @@ pub struct TrialRecorder {
     servo: Channel,
     /// Added with the first log line, so a trial with none has no `/trial/log` channel.
     log: Option<Channel>,
+    /// Added with the first physics step (the simulated rig's).
+    physics: Option<Channel>,
     flush_interval_s: f64,
     sync_interval_s: f64,
     last_flush_t_s: f64,
@@ -220,6 +227,7 @@ impl TrialRecorder {
             stage,
             servo,
             log: None,
+            physics: None,
             flush_interval_s: FLUSH_INTERVAL_S,
             sync_interval_s,
             last_flush_t_s: 0.0,
@@ -324,6 +332,27 @@ impl TrialRecorder {
         self.write(LOG_TOPIC, &mut channel, message.t_s, message)?;
         self.log = Some(channel);
         self.written.log += 1;
+        self.flush_if_due(message.t_s)
+    }
+
+    /// Records one step of the simulated rig's physics.
+    pub fn record_physics(&mut self, message: &PhysicsStepMessage) -> Result<(), RecordError> {
+        let mut channel = match self.physics {
+            Some(channel) => channel,
+            None => {
+                let path = self.path.clone();
+                add_channel(
+                    self.writer()?,
+                    &path,
+                    PHYSICS_TOPIC,
+                    "antenna.PhysicsStep",
+                    &physics_schema(),
+                )?
+            }
+        };
+        self.write(PHYSICS_TOPIC, &mut channel, message.t_s, message)?;
+        self.physics = Some(channel);
+        self.written.physics += 1;
         self.flush_if_due(message.t_s)
     }
 

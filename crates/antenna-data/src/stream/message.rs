@@ -62,48 +62,40 @@ pub enum StreamMessage {
     Reply(ControlReply),
 }
 
-/// The rig's geometry as configured (`[sim.antenna]`, `[sim.wall]`, `[stage]`, `bus.poll_hz`),
-/// sent in [`StreamMessage::Hello`]. On the simulated rig it is exactly what the segments
-/// sense; with hardware it is the model of the antenna and wall a client predicts with.
+/// The rig as configured, sent in [`StreamMessage::Hello`] and kept in every recording's
+/// metadata: the scene the simulated rig runs (on hardware, the model of the antenna and the
+/// walls a client predicts with), the stage's soft limits and the poll rate.
+///
+/// Lines and recordings from daemons before the scene (issue #46) carry no `scene_toml` but
+/// the antenna's links and mounting angle (read here) and a flat `wall` with its stiffness
+/// profile (ignored): a client draws their chain and predicts nothing.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RigInfo {
     /// Polls per second (`bus.poll_hz`).
     pub poll_hz: f64,
-    /// Every rigid link, the base link first: one more entry than there are segments, metres.
-    pub link_lengths_m: Vec<f64>,
-    /// The base link's angle from the stage's track with the servo at 0, degrees
-    /// (counter-clockwise); the chain's base angle is this plus `base_angle_deg` of each
-    /// sample.
-    pub base_mount_angle_deg: f64,
-    /// The stiffness profile's name (`sim.antenna.stiffness_profile`).
-    pub stiffness_profile: String,
-    /// The profile's smallest joint stiffness, N m/rad.
-    pub k_min_n_m_per_rad: f64,
-    /// The profile's largest joint stiffness, N m/rad.
-    pub k_max_n_m_per_rad: f64,
-    /// Each flexible joint's stiffness, base to tip (one per segment), N m/rad; empty if the
-    /// profile could not be evaluated.
-    pub stiffness_n_m_per_rad: Vec<f64>,
-    /// The flat wall beside the stage's track.
-    pub wall: RigWall,
     /// The stage's soft limits, metres from home.
     pub stage_min_m: f64,
     /// See [`RigInfo::stage_min_m`].
     pub stage_max_m: f64,
-}
-
-/// A flat wall as a line in the track frame (x along the stage's track, origin at home, y
-/// towards the wall): the points `p` with `(p - (0, distance_m)) . (sin a, cos a) = 0`,
-/// `a = angle_deg`; the solid side is where that product is positive.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RigWall {
-    /// Distance from the track at its origin, metres.
-    pub distance_m: f64,
-    /// Angle to the track, degrees (positive: the wall comes closer as the stage moves
-    /// forward).
-    pub angle_deg: f64,
-    /// Penalty stiffness of the simulated contact, N/m.
-    pub stiffness_n_per_m: f64,
+    /// The scene's TOML text (`docs/scene-format.md`), every wall's `points_file` written in
+    /// as its `vertices_m`, so a client rebuilds the same physics without any other file
+    /// (antenna-scene reads it; stage position `s` puts the base at the scene's base position
+    /// plus `s` along its direction of motion, the servo angle adds to its base angle).
+    /// `None` from daemons before it existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene_toml: Option<String>,
+    /// Where the scene came from (its file, as antennad read it), for messages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene_source: Option<String>,
+    /// Every rigid link, the base link first: one more entry than there are segments, metres
+    /// (also in the scene: here for clients that only draw the chain).
+    #[serde(default)]
+    pub link_lengths_m: Vec<f64>,
+    /// The base link's angle from the stage's track with the servo at 0, degrees
+    /// (counter-clockwise; the scene's `base_angle_deg`); the chain's base angle is this
+    /// plus `base_angle_deg` of each sample.
+    #[serde(default)]
+    pub base_mount_angle_deg: f64,
 }
 
 /// One segment in one poll. A failed read has `error` set and no angle, contact or touch bits.
@@ -255,32 +247,51 @@ mod tests {
         assert_eq!(serde_json::from_str::<StreamMessage>(&text).unwrap(), m);
     }
 
-    /// The two `hello` examples in docs/stream-protocol.md, byte for byte: without `rig` (as
-    /// older daemons send it, read as `None`) and with it.
+    /// The `hello` examples in docs/stream-protocol.md: each reads, and one with the rig's
+    /// scene goes back byte for byte.
     #[test]
-    fn documented_hello_lines_with_and_without_rig() {
+    fn documented_hello_lines_read() {
         let doc = include_str!("../../../../docs/stream-protocol.md");
         let lines: Vec<&str> = doc
             .lines()
             .filter(|l| l.starts_with(r#"{"type":"hello""#))
             .collect();
-        assert_eq!(lines.len(), 2, "{lines:?}");
+        assert!(!lines.is_empty());
         for line in &lines {
             let message: StreamMessage = serde_json::from_str(line).unwrap();
-            assert_eq!(serde_json::to_string(&message).unwrap(), *line);
+            if line.contains("scene_toml") || !line.contains("\"rig\"") {
+                assert_eq!(serde_json::to_string(&message).unwrap(), *line);
+            }
         }
-        let rigs: Vec<Option<RigInfo>> = lines
-            .iter()
-            .map(|l| match serde_json::from_str(l).unwrap() {
-                StreamMessage::Hello { rig, .. } => rig,
-                other => panic!("not hello: {other:?}"),
-            })
-            .collect();
-        assert!(rigs[0].is_none());
-        let rig = rigs[1].as_ref().unwrap();
-        assert_eq!(rig.link_lengths_m.len(), 4);
-        assert_eq!(rig.stiffness_n_m_per_rad.len(), 3);
-        assert_eq!(rig.wall.angle_deg, 30.0);
+    }
+
+    /// A `hello` without `rig` (the oldest daemons) and one with the rig as daemons sent it
+    /// before the scene (issue #46: links, a flat wall, a stiffness profile) still read: the
+    /// links and the mounting angle are kept, the rest is ignored, no scene.
+    #[test]
+    fn hello_lines_of_older_daemons_still_read() {
+        let bare = r#"{"type":"hello","protocol_version":1,"daemon":"antennad 0.1.0","segment_count":3,"segment_addresses":[33,34,35]}"#;
+        let StreamMessage::Hello { rig, .. } = serde_json::from_str(bare).unwrap() else {
+            panic!("not hello");
+        };
+        assert!(rig.is_none());
+        let old = r#"{"type":"hello","protocol_version":1,"daemon":"antennad 0.1.0","segment_count":3,"segment_addresses":[33,34,35],"rig":{"poll_hz":1000.0,"link_lengths_m":[0.04,0.04,0.04,0.04],"base_mount_angle_deg":30.0,"stiffness_profile":"linear","k_min_n_m_per_rad":0.01,"k_max_n_m_per_rad":0.05,"stiffness_n_m_per_rad":[0.05,0.03,0.01],"wall":{"distance_m":0.42,"angle_deg":30.0,"stiffness_n_per_m":200.0},"stage_min_m":0.0,"stage_max_m":0.3}}"#;
+        let StreamMessage::Hello { rig, .. } = serde_json::from_str(old).unwrap() else {
+            panic!("not hello");
+        };
+        let rig = rig.unwrap();
+        assert_eq!(rig.link_lengths_m, vec![0.04; 4]);
+        assert_eq!(rig.base_mount_angle_deg, 30.0);
+        assert_eq!((rig.stage_min_m, rig.stage_max_m), (0.0, 0.3));
+        assert_eq!(rig.scene_toml, None);
+        // A new one goes back as it came.
+        let new = RigInfo {
+            scene_toml: Some("[antenna]\nlinks = 4\n".to_owned()),
+            scene_source: Some("rig.toml".to_owned()),
+            ..rig
+        };
+        let line = serde_json::to_string(&new).unwrap();
+        assert_eq!(serde_json::from_str::<RigInfo>(&line).unwrap(), new);
     }
 
     /// The `samples` example in docs/stream-protocol.md, byte for byte; a line from a daemon

@@ -23,7 +23,7 @@ mod request;
 
 pub use framing::{LineRead, MAX_LINE_BYTES, encode_line, read_line_capped};
 pub use message::{
-    ControlReply, ErrorCode, PROTOCOL_VERSION, PollingStatus, RigInfo, RigWall, SegmentSample,
+    ControlReply, ErrorCode, PROTOCOL_VERSION, PollingStatus, RigInfo, SegmentSample,
     SegmentStatus, StreamMessage,
 };
 pub use request::{

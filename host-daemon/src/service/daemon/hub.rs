@@ -17,9 +17,10 @@ use crate::service::motion::{MotionCommand, RigStatus};
 use crate::service::samples::{record_sample, stream_sample};
 use crate::service::trial_script::ScriptEnds;
 use crate::service::watchdog::{PollWatchdog, WatchdogEvent};
-use crate::sim::rig::SimState;
+use crate::sim::rig::{SimState, StepKind};
 use antenna_data::record::{
-    LogMessage, SegmentsMessage, ServoMessage, StageMessage, TrialRecorder,
+    LogMessage, PhysicsStepKind, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage,
+    TrialRecorder,
 };
 use antenna_data::stream::{PollingStatus, SegmentStatus, StreamMessage};
 use antenna_protocol::{Calibration, FIRMWARE_VERSION, StatusFlags};
@@ -252,6 +253,22 @@ impl Hub {
                     r.record_servo(&ServoMessage {
                         t_s,
                         base_angle_rad,
+                    })
+                });
+            }
+            AcquisitionEvent::Physics { t_ns, step } => {
+                self.record(*t_ns, |r, t_s| {
+                    r.record_physics(&PhysicsStepMessage {
+                        t_s,
+                        kind: match step.kind {
+                            StepKind::Place => PhysicsStepKind::Place,
+                            StepKind::Step => PhysicsStepKind::Step,
+                        },
+                        stage_m: step.stage_m,
+                        base_x_m: step.pose.base_m.x,
+                        base_y_m: step.pose.base_m.y,
+                        base_angle_rad: step.pose.base_angle_rad,
+                        joint_angles_rad: step.joint_angles_rad.clone(),
                     })
                 });
             }

@@ -1,76 +1,49 @@
-//! The rig's geometry for the stream's `hello`.
+//! The rig for the stream's `hello` and the recordings' metadata.
 
 use crate::config::Config;
-use antenna_data::stream::{RigInfo, RigWall};
+use antenna_data::stream::RigInfo;
 
-/// The rig's geometry for the stream's `hello` (docs/stream-protocol.md): the antenna and
-/// wall of `[sim.antenna]` and `[sim.wall]`, the stage's soft limits and the poll rate.
+/// The rig for the stream's `hello` (docs/stream-protocol.md) and every recording: the
+/// scene of `[sim] scene` as text (its points files written in, [`crate::config::scene`]), so
+/// a client rebuilds the same physics, with the links and mounting angle for clients that only
+/// draw, the stage's soft limits and the poll rate.
 pub fn rig_info(config: &Config) -> RigInfo {
-    let antenna = &config.sim.antenna;
-    let link_lengths_m = vec![antenna.link_length_m; antenna.links + 1];
-    let stiffness_n_m_per_rad = antenna
-        .profile()
-        .and_then(|p| {
-            p.stiffness_n_m_per_rad(
-                &link_lengths_m,
-                antenna.k_min_n_m_per_rad,
-                antenna.k_max_n_m_per_rad,
-            )
-            .ok()
-        })
-        .unwrap_or_default();
+    let rig = &config.sim.rig;
+    let chain = &rig.scene.chain;
     RigInfo {
         poll_hz: config.bus.poll_hz,
-        link_lengths_m,
-        base_mount_angle_deg: antenna.base_angle_deg,
-        stiffness_profile: antenna.stiffness_profile.clone(),
-        k_min_n_m_per_rad: antenna.k_min_n_m_per_rad,
-        k_max_n_m_per_rad: antenna.k_max_n_m_per_rad,
-        stiffness_n_m_per_rad,
-        wall: RigWall {
-            distance_m: config.sim.wall.distance_m,
-            angle_deg: config.sim.wall.angle_deg,
-            stiffness_n_per_m: config.sim.wall.stiffness_n_per_m,
-        },
         stage_min_m: config.stage.min_mm * 1e-3,
         stage_max_m: config.stage.max_mm * 1e-3,
+        scene_toml: Some(rig.text.clone()),
+        scene_source: Some(rig.source.clone()),
+        link_lengths_m: chain.link_lengths_m().to_vec(),
+        base_mount_angle_deg: chain.base_angle_rad().to_degrees(),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use antenna_scene::Scene;
 
     #[test]
-    fn the_hello_describes_the_configured_antenna_wall_and_stage() {
+    fn the_hello_carries_the_scene_and_the_stage() {
         let mut config = Config::default();
         config.stage.min_mm = 5.0;
         config.stage.max_mm = 250.0;
         let info = rig_info(&config);
-        let antenna = &config.sim.antenna;
         assert_eq!(info.poll_hz, config.bus.poll_hz);
-        assert_eq!(info.link_lengths_m.len(), antenna.links + 1);
-        assert!(
-            info.link_lengths_m
-                .iter()
-                .all(|&l| l == antenna.link_length_m)
-        );
-        assert_eq!(info.base_mount_angle_deg, antenna.base_angle_deg);
-        assert_eq!(info.stiffness_profile, antenna.stiffness_profile);
-        // A known profile gives one stiffness per joint, within the configured range.
-        assert!(!info.stiffness_n_m_per_rad.is_empty());
-        assert!(info.stiffness_n_m_per_rad.iter().all(|&k| {
-            (antenna.k_min_n_m_per_rad - 1e-12..=antenna.k_max_n_m_per_rad + 1e-12).contains(&k)
-        }));
-        assert_eq!(info.wall.distance_m, config.sim.wall.distance_m);
-        assert_eq!(info.wall.angle_deg, config.sim.wall.angle_deg);
         assert_eq!((info.stage_min_m, info.stage_max_m), (5e-3, 0.25));
-    }
-
-    #[test]
-    fn an_unknown_stiffness_profile_leaves_the_stiffness_out() {
-        let mut config = Config::default();
-        config.sim.antenna.stiffness_profile = "rubber".to_owned();
-        assert!(rig_info(&config).stiffness_n_m_per_rad.is_empty());
+        assert_eq!(info.link_lengths_m, vec![0.04; 9]);
+        assert!((info.base_mount_angle_deg - 30.0).abs() < 1e-12);
+        // The text is the scene in force.
+        let scene = Scene::parse(info.scene_toml.as_deref().unwrap(), "hello").unwrap();
+        assert_eq!(
+            scene,
+            Scene {
+                locations: scene.locations.clone(),
+                ..config.sim.rig.scene.clone()
+            }
+        );
     }
 }

@@ -198,6 +198,22 @@ impl Daemon {
         if let Some(addr) = local_addr {
             log.line(watch_line(&config, token_generated, addr));
         }
+        if config.bus.is_sim() {
+            log.line(format!(
+                "antennad: simulated rig: the scene {} ({} segments, one per flexible joint); \
+                 the stage carries the base along its direction of motion, its [start] \
+                 placement is applied when a trial starts",
+                config.sim.rig.source,
+                config.sim.rig.joints()
+            ));
+        }
+        for (warning, text) in config.sim.rig.ignored(config.bus.poll_hz) {
+            if warning {
+                log.warn(format!("antennad: {text}"));
+            } else {
+                log.line(format!("antennad: {text}"));
+            }
+        }
 
         let stop = Arc::new(AtomicBool::new(false));
         let mut hub = Hub {
@@ -456,13 +472,13 @@ mod tests {
         let mut config = Config::default();
         assert_eq!(
             polling_summary(&config),
-            "9 segments at 0x20..=0x28, polling at 1000 Hz (virtual bus: no bit-time limit)"
+            "8 segments at 0x20..=0x27, polling at 1000 Hz (virtual bus: no bit-time limit)"
         );
         config.bus.device = "/dev/i2c-1".to_owned();
         config.bus.speed_hz = Some(1_000_000);
         assert_eq!(
             bus_load(&config),
-            "399 bit times a poll, 40 % of the period at bus.speed_hz = 1000000"
+            "361 bit times a poll, 36 % of the period at bus.speed_hz = 1000000"
         );
     }
 
