@@ -10,7 +10,7 @@ mod net_support;
 use antenna_data::record::TrialReader;
 use antenna_data::stream::StreamMessage;
 use host_daemon::service::config::{Config, MoveConfig};
-use host_daemon::service::daemon::{Daemon, DaemonOptions};
+use host_daemon::service::daemon::{Daemon, DaemonHandle, DaemonOptions};
 use host_daemon::sim::emulator::{MaestroEmulator, VxmEmulator, VxmFault};
 use net_support::{Client, TOKEN};
 use serialport::{SerialPort, TTYPort};
@@ -58,6 +58,19 @@ fn wait_for(what: &str, timeout: Duration, mut ok: impl FnMut() -> bool) {
     let deadline = Instant::now() + timeout;
     while !ok() {
         assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// [`wait_for`] something `daemon` does, at most [`PATIENCE`]; a failure shows its log.
+fn wait_logged(daemon: &DaemonHandle, what: &str, mut ok: impl FnMut() -> bool) {
+    let deadline = Instant::now() + PATIENCE;
+    while !ok() {
+        assert!(
+            Instant::now() < deadline,
+            "timed out waiting for {what}; the daemon's log:\n{}",
+            daemon.log_lines().join("\n")
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
 }
@@ -168,7 +181,9 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
     let vxm = VxmEmulator::spawn(vxm_master);
     let _maestro = MaestroEmulator::spawn(maestro_master);
     let mut config = config(&dir, link.to_str().unwrap(), &maestro_path);
-    config.trials[0].duration_s = 6.0;
+    // Longer than any run of this test: the test ends the trial (`stop_trial`) once the
+    // stage is back, however long the outage took on this machine.
+    config.trials[0].duration_s = 3600.0;
     config.trials[0].moves = vec![MoveConfig {
         distance_mm: 10.0,
         speed_mm_per_s: 20.0,
@@ -181,13 +196,13 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
     let daemon = Daemon::start(config, options).unwrap();
     let mut client = Client::connect(daemon.local_addr().unwrap());
     let log_has = |text: &str| -> bool { daemon.log_lines().iter().any(|l| l.contains(text)) };
-    wait_for("the move to end", PATIENCE, || vxm.position_steps() == 800);
+    wait_logged(&daemon, "the move to end", || vxm.position_steps() == 800);
     std::thread::sleep(Duration::from_millis(300));
 
     // The device vanishes: the emulator's end closes and the path disappears.
     vxm.close();
     std::fs::remove_file(&link).unwrap();
-    wait_for("the stage to be reported unavailable", PATIENCE, || {
+    wait_logged(&daemon, "the stage to be reported unavailable", || {
         log_has("stage unavailable")
     });
     // The stream says so: samples with a null stage, a status naming it.
@@ -196,7 +211,8 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
     while !(null_stage && status_note) {
         assert!(
             Instant::now() < deadline,
-            "null {null_stage}, status {status_note}"
+            "null {null_stage}, status {status_note}; the daemon's log:\n{}",
+            daemon.log_lines().join("\n")
         );
         match client.next_message() {
             StreamMessage::Samples {
@@ -219,15 +235,16 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
     let (vxm_master, vxm_path) = pty();
     let vxm = VxmEmulator::spawn_at(vxm_master, 800);
     std::os::unix::fs::symlink(&vxm_path, &link).unwrap();
-    wait_for("the stage to come back", PATIENCE, || log_has("stage back"));
+    wait_logged(&daemon, "the stage to come back", || log_has("stage back"));
     // The daemon put the VXM on line again (the emulator reads its bytes on its own thread).
-    wait_for("the VXM on line again", PATIENCE, || vxm.is_online());
+    wait_logged(&daemon, "the VXM on line again", || vxm.is_online());
     let mut back = false;
     let deadline = Instant::now() + PATIENCE;
     while !back {
         assert!(
             Instant::now() < deadline,
-            "no stage sample after the return"
+            "no stage sample after the return; the daemon's log:\n{}",
+            daemon.log_lines().join("\n")
         );
         if let StreamMessage::Samples {
             stage_position_m: Some(m),
@@ -238,8 +255,13 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
             back = true;
         }
     }
+    client.send_line(&format!(
+        r#"{{"id":1,"token":"{TOKEN}","cmd":"stop_trial"}}"#
+    ));
+    let reply = client.next_reply();
+    assert!(reply.ok, "{reply:?}");
     drop(client);
-    wait_for("the trial to end", PATIENCE, || daemon.trial().is_none());
+    wait_logged(&daemon, "the trial to end", || daemon.trial().is_none());
     let summary = daemon.shutdown().unwrap();
     assert_eq!(summary.dropped, 0);
     let trial = TrialReader::read(summary.trials[0].path.as_ref().unwrap()).unwrap();
@@ -253,13 +275,6 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
         gaps <= summary.skipped,
         "{gaps} gaps, {} skipped",
         summary.skipped
-    );
-    // The 6 s trial at 500 Hz: every deadline of it polled or counted skipped (however busy
-    // the machine, the poller skips deadlines rather than falling behind).
-    assert!(
-        trial.segments.len() as u64 + gaps > 2000,
-        "{} polls, {gaps} skipped",
-        trial.segments.len()
     );
     assert!(
         trial
@@ -280,6 +295,9 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
     };
     let (gone, back) = (said("stage unavailable"), said("stage back"));
     assert!(gone < back, "{gone} {back}");
+    // The segments were polled all along: before, during and after the outage.
+    let polled = |from: f64, to: f64| trial.segments.iter().any(|m| m.t_s > from && m.t_s < to);
+    assert!(polled(f64::MIN, gone) && polled(gone, back) && polled(back, f64::MAX));
     let times: Vec<f64> = trial.stage.iter().map(|s| s.t_s).collect();
     assert!(
         times.iter().all(|&t| t <= gone || t >= back),
@@ -361,7 +379,7 @@ fn a_missing_serial_port_names_the_key_and_the_path() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-fn log_has(daemon: &host_daemon::service::daemon::DaemonHandle, text: &str) -> bool {
+fn log_has(daemon: &DaemonHandle, text: &str) -> bool {
     daemon.log_lines().iter().any(|l| l.contains(text))
 }
 
@@ -514,65 +532,79 @@ fn a_trial_whose_stage_loses_power_or_vanishes_ends_with_the_reason_recorded() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A `stop_all` does not wait behind a query the VXM never answers: its `K` reaches the VXM
-/// before that query times out (and before the reply, which the motion thread sends once the
-/// query has timed out). How soon it arrives is a benchmark figure (printed here), not
-/// asserted.
+/// A `stop_all` does not wait behind a query the VXM never answers: its `K` goes out on the
+/// VXM's kill line from the client's thread and stops the motor while the motion thread still
+/// waits for that query's answer. Here the query hangs for as long as the test wants: its
+/// timeout is [`PATIENCE`] (only a hang takes that long), and the emulator answers it once the
+/// `K` is in. The daemon's log then shows each stop with no query timed out before it,
+/// however late any thread ran; a `K` that waited behind the query would come only after
+/// the query's timeout, which the log would show. How soon the `K` came is a benchmark
+/// figure (printed here), not asserted.
 #[test]
 fn stop_all_reaches_the_vxm_while_a_query_to_it_hangs() {
     let dir = temp_dir("serial-stall");
     let (vxm_master, vxm_path) = pty();
     let vxm = VxmEmulator::spawn(vxm_master);
     let mut config = config(&dir, &vxm_path, "sim");
-    // The reply timeout: a stop behind a query would wait this long (the robot's; the reply
-    // to the stop comes after it, within the daemon's 5 s for answering a command).
-    const QUERY_TIMEOUT: Duration = Duration::from_secs(2);
-    config.stage.reply_timeout_ms = QUERY_TIMEOUT.as_millis() as u64;
+    config.stage.reply_timeout_ms = PATIENCE.as_millis() as u64;
     let daemon = Daemon::start(config, DaemonOptions::default()).unwrap();
-    wait_for("the VXM homed", PATIENCE, || {
-        log_has(&daemon, "stage homed")
-    });
-    // From now on the VXM never answers a query: the motion thread sits in `X` (sampled at
-    // 50 Hz) for its timeout, over and over.
-    vxm.set_fault(VxmFault::Stall);
+    wait_logged(&daemon, "the VXM homed", || log_has(&daemon, "stage homed"));
     let mut client = Client::connect(daemon.local_addr().unwrap());
+    let stops = || {
+        daemon
+            .log_lines()
+            .iter()
+            .filter(|l| l.contains("stop_all: stage stopped"))
+            .count()
+    };
     let mut latencies = Vec::new();
     for id in 0..3 {
-        // A fresh query: sent after the received bytes were cleared, so it is at most as old
-        // as the moment it is seen here, and cannot time out before `asked + QUERY_TIMEOUT`.
-        // (A K from the previous stop's motion thread may still come before it.)
-        vxm.clear_received();
-        wait_for("a query", PATIENCE, || vxm.received().contains(&b'X'));
-        let asked = Instant::now();
-        let query_at = vxm.received().iter().position(|&b| b == b'X').unwrap();
-        client.send_line(&format!(r#"{{"id":{id},"cmd":"stop_all"}}"#));
-        // Polled finely: how soon it came is the benchmark figure printed below.
-        while !vxm.received()[query_at..].contains(&b'K') {
-            assert!(asked.elapsed() < PATIENCE, "no K");
-            std::thread::sleep(Duration::from_micros(200));
-        }
-        let killed = asked.elapsed();
-        latencies.push(killed);
-        let received = vxm.received();
-        let after_query = &received[query_at..];
-        let k = after_query.iter().position(|&b| b == b'K').unwrap();
-        assert_eq!(
-            after_query[..k].iter().filter(|&&b| b == b'X').count(),
-            1,
-            "the K came {killed:?} after the query, after a second query: {:?}\n{}",
-            String::from_utf8_lossy(&received),
-            daemon.log_lines().join("\n")
-        );
-        assert!(
-            killed < QUERY_TIMEOUT,
-            "the K came {killed:?} after the query, whose timeout is {QUERY_TIMEOUT:?}"
-        );
-        // The answer comes when the motion thread's query has timed out.
+        // A slow move (5 mm/s toward 50 mm), to be killed while the VXM hangs on a query.
+        client.send_line(&format!(
+            r#"{{"id":{id},"token":"{TOKEN}","cmd":"move_stage","position_m":0.05,"speed_m_per_s":0.005}}"#
+        ));
         let reply = client.next_reply();
         assert!(reply.ok, "{reply:?}");
+        wait_logged(&daemon, "the move to start", || vxm.is_busy());
+        // The VXM stops answering queries: the motion thread sits in its next one (`X`, the
+        // stage sampled at 50 Hz).
+        vxm.set_fault(VxmFault::Stall);
+        wait_logged(&daemon, "a query to hang", || vxm.stalled_queries() > 0);
+        let asked = Instant::now();
+        // Every byte the daemon wrote before the hanging query (the previous stops' `K`s
+        // among them) was received before it.
+        let query_at = vxm.received().len();
+        client.send_line(&format!(r#"{{"id":{},"cmd":"stop_all"}}"#, 100 + id));
+        // Polled finely: how soon it came is the benchmark figure printed below.
+        while !vxm.received()[query_at..].contains(&b'K') {
+            assert!(
+                asked.elapsed() < 2 * PATIENCE,
+                "no K; the daemon's log:\n{}",
+                daemon.log_lines().join("\n")
+            );
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        latencies.push(asked.elapsed());
+        assert!(!vxm.is_busy(), "the K stopped the move");
+        // The VXM answers at last: the motion thread takes the stop, kills again through
+        // the driver, and answers.
+        vxm.answer_stalled();
+        wait_logged(&daemon, "the stop in the log", || stops() == id + 1);
+        // The motion thread's notes are logged in its order: had its query timed out, the
+        // timeout would be in the log before the stop.
+        let log = daemon.log_lines().join("\n");
+        assert!(
+            !log.contains("no position from the VXM"),
+            "a query timed out before the K reached the VXM:\n{log}"
+        );
+        let reply = client.next_reply();
+        assert!(
+            reply.ok && reply.message.contains("stage stopped"),
+            "{reply:?}\n{log}"
+        );
     }
     latencies.sort();
-    eprintln!("stop_all to K at the VXM (from the query seen), sorted: {latencies:?}");
+    eprintln!("stop_all to K at the VXM (from the hanging query seen), sorted: {latencies:?}");
     daemon.shutdown().unwrap();
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -18,8 +18,8 @@ pub enum VxmFault {
     NeverFinish,
     /// `V` and `X` are answered with noise.
     Garbage,
-    /// `V` and `X` are never answered (the controller hangs on a query); every other
-    /// command, `K` too, still works.
+    /// `V` and `X` are not answered (the controller hangs on a query) until
+    /// [`VxmEmulator::answer_stalled`]; every other command, `K` too, still works.
     Stall,
 }
 
@@ -72,6 +72,10 @@ struct VxmModel {
     running: bool,
     motion: Option<Motion>,
     unknown_bytes: usize,
+    /// The queries (`V`, `X`) left unanswered while stalled, oldest first.
+    stalled: Vec<u8>,
+    /// Answers to send from outside the emulator's thread (at its next tick).
+    outbox: Vec<u8>,
 }
 
 impl VxmModel {
@@ -92,6 +96,19 @@ impl VxmModel {
         self.motion = None;
         self.queue.clear();
         self.running = false;
+    }
+
+    /// The answer to the query `V` or `X`, now.
+    fn answer(&self, query: u8, out: &mut Vec<u8>) {
+        match (query, self.fault) {
+            (b'V', VxmFault::Garbage) => out.push(b'?'),
+            (b'V', _) => out.push(if self.running { b'B' } else { b'R' }),
+            (_, VxmFault::Garbage) => out.extend_from_slice(b"?!#\r"),
+            _ => {
+                let position = self.position_now().round() as i64;
+                out.extend_from_slice(format!("{position:+08}\r").as_bytes());
+            }
+        }
     }
 
     /// Parses one command from the front of `pending`: `Some(consumed)` or `None` to wait
@@ -127,23 +144,11 @@ impl VxmModel {
                 }
                 return Some(1);
             }
-            b'V' => {
-                if self.fault != VxmFault::Stall {
-                    out.push(match (self.fault, self.running) {
-                        (VxmFault::Garbage, _) => b'?',
-                        (_, true) => b'B',
-                        (_, false) => b'R',
-                    });
-                }
-                return Some(1);
-            }
-            b'X' => {
+            b'V' | b'X' => {
                 if self.fault == VxmFault::Stall {
-                } else if self.fault == VxmFault::Garbage {
-                    out.extend_from_slice(b"?!#\r");
+                    self.stalled.push(first);
                 } else {
-                    let position = self.position_now().round() as i64;
-                    out.extend_from_slice(format!("{position:+08}\r").as_bytes());
+                    self.answer(first, out);
                 }
                 return Some(1);
             }
@@ -207,6 +212,7 @@ impl Device for VxmModel {
     }
 
     fn tick(&mut self, out: &mut Vec<u8>) {
+        out.append(&mut self.outbox);
         if let Some(motion) = self.motion {
             let (position, done) = motion.position(Instant::now());
             if !done {
@@ -289,6 +295,8 @@ impl VxmEmulator {
             running: false,
             motion: None,
             unknown_bytes: 0,
+            stalled: Vec::new(),
+            outbox: Vec::new(),
         };
         Self {
             runner: Runner::spawn(port, model),
@@ -327,6 +335,23 @@ impl VxmEmulator {
     /// Makes the emulator misbehave from now on.
     pub fn set_fault(&self, fault: VxmFault) {
         self.model().fault = fault;
+    }
+
+    /// The queries left unanswered so far while [`VxmFault::Stall`] was on.
+    pub fn stalled_queries(&self) -> usize {
+        self.model().stalled.len()
+    }
+
+    /// Stops stalling ([`VxmFault::None`] from now on) and answers the queries left
+    /// unanswered, in order, as if they had just been asked.
+    pub fn answer_stalled(&self) {
+        let mut model = self.model();
+        model.fault = VxmFault::None;
+        let mut answers = Vec::new();
+        for query in std::mem::take(&mut model.stalled) {
+            model.answer(query, &mut answers);
+        }
+        model.outbox.append(&mut answers);
     }
 
     /// Every byte received so far.
