@@ -1,5 +1,5 @@
 //! Writes `examples/walls/trapezoid_10k.csv`, the digitized wall of
-//! `examples/wall_digitized.toml`: the trapezoid of `examples/wall_polyline.toml` (seed
+//! `examples/wall_digitized.toml`: the trapezoid of `examples/wall_polyline.toml` (thesis
 //! 4.2.2) sampled at 10,000 points along its arclength with 0.1 mm of Gaussian noise normal
 //! to it, from a fixed seed ([`antenna_cli::digitize::TRAPEZOID_10K`]).
 //!

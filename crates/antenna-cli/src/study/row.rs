@@ -1,5 +1,5 @@
 //! One result row per grid point of a study, as CSV (a header, then one line per row, written
-//! with the csv crate) or as JSON lines (one object per row). The columns are documented in the README and on
+//! with the csv crate) or as JSON lines (one object per row). The columns are documented in `docs/sweeps.md` and on
 //! [`StudyRow`]'s fields; an empty CSV field is a JSON `null`.
 
 use serde::{Deserialize, Serialize};

@@ -1,6 +1,6 @@
 //! The lines `antenna sweep --jsonl` prints, one JSON object each, told apart by `type`: a
 //! `placement` line first, then one `step` line per step (step 0, the placed posture, first),
-//! then a `summary` line. Every field is documented in the README.
+//! then a `summary` line. Every field is documented in `docs/sweeps.md`.
 
 use serde::{Deserialize, Serialize};
 use sim_core::contact::{Contact, EquilibriumCheck, Feature, Slip};

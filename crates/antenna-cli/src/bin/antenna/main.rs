@@ -1,8 +1,8 @@
 //! `antenna`: solve scene files, sweep them along their walls, run studies of many sweeps,
 //! search the stiffness profile that maximizes a task metric,
 //! design Nitinol wires for a stiffness profile, identify joint stiffness from a
-//! free-oscillation recording, export recorded trials, commission the robot's segments. See the README section "Scene files
-//! and the `antenna` command" and `docs/scene-format.md`.
+//! free-oscillation recording, export recorded trials, commission the robot's segments. See
+//! the guide's chapters `docs/scenes.md` and `docs/sweeps.md`, and `docs/scene-format.md`.
 //!
 //! Exit status: 0 success; 1 the solver did not converge (`solve`; the JSON is still printed
 //! for a scene without walls), a sweep step failed (`sweep`), a study run failed (`study`;
