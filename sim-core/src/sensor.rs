@@ -23,7 +23,7 @@
 //!   segment firmware uses three, [`FIRMWARE_DEBOUNCE_SAMPLES`]).
 //! - **Sampling**: with `sample_rate_hz`, the robot reads its sensors at `t = k / rate` (a
 //!   sweep step is sampled when it is the first at or after the next sample time); without it,
-//!   at every step. Moving faster at one rate leaves fewer points per metre of wall (seed
+//!   at every step. Moving faster at one rate leaves fewer points per metre of wall (thesis
 //!   Figure 4.16).
 //!
 //! With [`SensorSettings::IDEAL`] every function here returns exactly what the ideal functions

@@ -532,12 +532,24 @@ fn the_thesis_is_cited_as_the_thesis() {
     let files = repository_files(&root);
     let mut problems = Vec::new();
     for (file, text) in text_files(&root, &files) {
-        for (index, line) in text.lines().enumerate() {
-            let lower = line.to_lowercase();
+        let lines: Vec<&str> = text.lines().collect();
+        for (index, line) in lines.iter().enumerate() {
+            // A citation may wrap: the line is read with the start of the next one, its
+            // comment markers left out.
+            let next = lines.get(index + 1).map_or("", |n| {
+                n.trim_start()
+                    .trim_start_matches(['/', '!', '#', '*', '-'])
+                    .trim_start()
+            });
+            let own = line.to_lowercase();
+            let lower = format!("{own} {}", next.to_lowercase());
             let mut from = 0;
             while let Some(found) = lower[from..].find("seed ") {
                 let at = from + found;
                 from = at + 5;
+                if at >= own.len() {
+                    break;
+                }
                 if lower[..at]
                     .chars()
                     .next_back()
