@@ -214,7 +214,18 @@ fn number_or_range(s: &str) -> Option<(Vec<String>, &str)> {
 /// and lists `N, M`.
 fn citations(text: &str) -> Vec<Citation> {
     let mut out = Vec::new();
-    for (index, line) in text.lines().enumerate() {
+    let lines: Vec<&str> = text.lines().collect();
+    for (index, line) in lines.iter().enumerate() {
+        // A citation may wrap after the page: its section is then read from the start of the
+        // next line, comment markers left out.
+        let wrapped = lines.get(index + 1).map(|n| {
+            format!(
+                " {}",
+                n.trim_start()
+                    .trim_start_matches(['/', '!', '#', '*'])
+                    .trim_start()
+            )
+        });
         let mut from = 0;
         while let Some(found) = line[from..].find("docs/") {
             let start = from + found;
@@ -238,6 +249,10 @@ fn citations(text: &str) -> Vec<Citation> {
                 continue;
             }
             let page = format!("{}.md", &tail[..len]);
+            let after = match (after.is_empty(), &wrapped) {
+                (true, Some(next)) => next.as_str(),
+                _ => after,
+            };
             let mut sections = Vec::new();
             let mut rest = after
                 .strip_prefix(" section ")
@@ -287,6 +302,10 @@ fn the_citation_parser_reads_numbers_ranges_and_lists() {
     assert_eq!(
         parsed(&format!("`{page}`: the 8051, a/{page} 3, {page} 2.5 mm")),
         [(model(), vec![]), (model(), vec![])]
+    );
+    assert_eq!(
+        parsed(&format!("/// the law of {page}\n/// 5 (`k = ...`)")),
+        [(model(), strings(&["5"]))]
     );
     assert_eq!(
         slug("Monitor (`antenna-monitor`)"),
