@@ -138,26 +138,6 @@ const NOT_DESCRIPTIONS: &[(&str, &str)] = &[
     ("crates/antenna-cli/src/bin/antenna/main.rs", "DesignArgs"),
 ];
 
-/// The rig's own descriptions, allowed only while they last (no error once they are gone).
-const GOING: &[(&str, &str)] = &[
-    // removed by #46's rig work
-    ("host-daemon/src/config/schema.rs", "AntennaConfig"),
-    // removed by #46's rig work
-    ("host-daemon/src/config/schema.rs", "WallConfig"),
-    // removed by #46's rig work
-    ("crates/antenna-sim-physics/src/spec.rs", "AntennaSpec"),
-    // removed by #46's rig work
-    ("crates/antenna-sim-physics/src/spec.rs", "FlatWallSpec"),
-    // removed by #46's rig work
-    ("crates/antenna-data/src/stream/message.rs", "RigWall"),
-    // removed by #46's rig work (built from the scene)
-    ("crates/antenna-data/src/stream/message.rs", "RigInfo"),
-    // removed by #46's rig work (the monitor's geometry of the rig, from the scene)
-    ("gui/src/rig.rs", "RigGeometry"),
-    // removed by #46's rig work
-    ("gui/src/rig.rs", "WallLine"),
-];
-
 /// Every struct in `text` with its fields' names (fields at the struct's top level; comments
 /// and attributes skipped).
 fn structs_with_fields(text: &str) -> Vec<(String, Vec<String>)> {
@@ -296,7 +276,6 @@ fn no_crate_but_antenna_scene_describes_an_antenna_or_a_wall() {
                 scanned += 1;
                 let allowed = NOT_DESCRIPTIONS
                     .iter()
-                    .chain(GOING)
                     .any(|&(f, n)| shown == f && name == n);
                 if !allowed && (describes_an_antenna(&fields) || describes_a_wall(&fields)) {
                     offenders.push(format!(
