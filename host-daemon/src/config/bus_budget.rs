@@ -34,8 +34,9 @@ pub const WORD_READ_BIT_TIMES: u64 = 38;
 pub const REGISTER_READ_BIT_TIMES: u64 = 57;
 /// The share of the poll period the bus may be busy with a poll's transfers.
 pub const MAX_BUS_SHARE: f64 = 0.8;
-/// `bus.speed_hz` of a real device when the configuration leaves it out: standard-mode I2C.
-pub const DEFAULT_HARDWARE_SPEED_HZ: u32 = 100_000;
+/// `bus.speed_hz` of a real device when the configuration leaves it out: standard-mode I2C
+/// (antenna-bus's, whose `[bus]` table the configuration reads).
+pub use antenna_bus::config::DEFAULT_HARDWARE_SPEED_HZ;
 
 /// A poll's transfers against the bus speed and the poll period.
 #[derive(Debug, Clone, Copy, PartialEq)]

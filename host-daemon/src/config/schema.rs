@@ -7,7 +7,6 @@ use super::geometry::{
 use super::scene::RigScene;
 use super::token::ControlToken;
 use antenna_data::record::{ChunkCompression, RecorderOptions};
-use antenna_protocol::{Calibration, Direction};
 use serde::{Deserialize, Serialize};
 use sim_core::{FIRMWARE_DEBOUNCE_SAMPLES, SensorSettings};
 use std::collections::BTreeMap;
@@ -52,133 +51,16 @@ impl Default for Config {
     }
 }
 
-/// The I2C bus.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct BusConfig {
-    /// `sim` for the simulated rig, or a Linux I2C device such as `/dev/i2c-1`.
-    pub device: String,
-    /// Poll rate, hertz (every segment read once per period).
-    pub poll_hz: f64,
-    /// The bus clock, hertz, as the board sets it (the device tree; antennad does not change
-    /// it): a poll rate the bus cannot carry is refused, with the arithmetic
-    /// ([`super::bus_budget`]). Left out: 100 kHz (standard mode) for a real device; the
-    /// simulated bus moves no bits and is treated as unlimited unless this is given (then it
-    /// is checked as a real bus would be, to try a hardware configuration on the simulator).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub speed_hz: Option<u32>,
-    /// Read each segment's sample counter every this many polls (a counter that has not
-    /// moved since the last check marks the segment stale). The counters are read one per
-    /// poll, round-robin, so a cycle is never shorter than one poll more than there are
-    /// segments.
-    pub counter_check_every: u32,
-    /// Busy-wait this many microseconds before each poll deadline instead of sleeping
-    /// (0: sleep only). Cuts wake-up lateness to about a microsecond at the cost of CPU.
-    pub spin_us: u64,
-    /// Run the polling thread under `SCHED_FIFO` at this priority (1..=99) when the system
-    /// permits it (root, `CAP_SYS_NICE` or an `RLIMIT_RTPRIO` allowance); refused, antennad
-    /// says so once and polls on normal scheduling. 0: normal scheduling. Default 50: on a
-    /// busy machine it is what keeps the p99 poll jitter in the tens of microseconds
-    /// (BENCHMARKS.md, "Host daemon").
-    pub realtime_priority: u8,
-    /// The segments, base to tip.
-    pub segments: Vec<SegmentConfig>,
-}
-
-impl Default for BusConfig {
-    fn default() -> Self {
-        Self {
-            device: "sim".to_owned(),
-            poll_hz: 1000.0,
-            speed_hz: None,
-            counter_check_every: 50,
-            spin_us: 0,
-            realtime_priority: 50,
-            // One segment per flexible joint of the built-in scene (8), each magnet press-fit
-            // at its own angle: every segment has its own zero.
-            segments: (0..8u8)
-                .map(|k| SegmentConfig {
-                    address: 0x20 + k,
-                    zero_counts: 1500 + 97 * u16::from(k),
-                    direction: if k % 2 == 0 {
-                        DirectionName::Ccw
-                    } else {
-                        DirectionName::Cw
-                    },
-                })
-                .collect(),
-        }
-    }
-}
+/// The `[bus]` table: antenna-bus's, which `antenna segments` reads too (the device, the
+/// poll rate, the bus clock, the counter checks, the scheduling and the segments, base to
+/// tip; the built-in rig's 8 simulated segments by default).
+pub use antenna_bus::config::{BusConfig, DirectionName, SegmentConfig};
 
 impl Config {
     /// Whether any hardware is configured (the bus, the stage or the servo is not `sim`):
     /// then no trial starts by itself.
     pub fn has_hardware(&self) -> bool {
         !self.bus.is_sim() || self.stage.port != "sim" || self.servo.port != "sim"
-    }
-}
-
-impl BusConfig {
-    /// Whether the bus is the simulated one.
-    pub fn is_sim(&self) -> bool {
-        self.device == "sim"
-    }
-
-    /// The segment addresses, base to tip.
-    pub fn addresses(&self) -> Vec<u8> {
-        self.segments.iter().map(|s| s.address).collect()
-    }
-
-    /// The bus clock the poll rate is checked against: `bus.speed_hz`, or 100 kHz for a real
-    /// device; `None` for the simulated bus without `bus.speed_hz` (unlimited).
-    pub fn checked_speed_hz(&self) -> Option<u32> {
-        match self.speed_hz {
-            Some(speed_hz) => Some(speed_hz),
-            None if self.is_sim() => None,
-            None => Some(super::bus_budget::DEFAULT_HARDWARE_SPEED_HZ),
-        }
-    }
-
-    /// The segment calibrations, base to tip.
-    pub fn calibrations(&self) -> Vec<Calibration> {
-        self.segments
-            .iter()
-            .map(SegmentConfig::calibration)
-            .collect()
-    }
-}
-
-/// Which way the magnet turns for a positive joint angle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DirectionName {
-    /// Counter-clockwise.
-    Ccw,
-    /// Clockwise.
-    Cw,
-}
-
-/// One segment on the bus.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SegmentConfig {
-    /// Its 7-bit address (0x08..=0x77).
-    pub address: u8,
-    /// The count the Hall sensor reads at joint angle zero (0..=4095).
-    pub zero_counts: u16,
-    /// `ccw` or `cw`.
-    pub direction: DirectionName,
-}
-
-impl SegmentConfig {
-    /// The calibration the counts are converted with.
-    pub fn calibration(&self) -> Calibration {
-        let direction = match self.direction {
-            DirectionName::Ccw => Direction::CounterClockwise,
-            DirectionName::Cw => Direction::Clockwise,
-        };
-        Calibration::new(self.zero_counts, direction)
     }
 }
 

@@ -9,6 +9,7 @@ use super::bus_budget::BusBudget;
 use super::geometry::GeometryError;
 use super::scene::RigScene;
 use super::token::ControlToken;
+use antenna_bus::config::SegmentsError;
 use sim_core::{SensorError, SensorField};
 use std::path::Path;
 
@@ -66,28 +67,21 @@ impl Config {
         if bus.segments.is_empty() {
             return fail("bus.segments", "needs at least one segment".to_owned());
         }
-        for (i, segment) in bus.segments.iter().enumerate() {
-            if !antenna_protocol::is_assignable_address(segment.address) {
-                return fail(
-                    &format!("bus.segments[{i}].address"),
-                    format!("{:#04x} is outside 0x08..=0x77", segment.address),
-                );
-            }
-            if bus.segments[..i]
-                .iter()
-                .any(|s| s.address == segment.address)
-            {
-                return fail(
-                    &format!("bus.segments[{i}].address"),
-                    format!("{:#04x} is used twice", segment.address),
-                );
-            }
-            if segment.zero_counts > 4095 {
-                return fail(
-                    &format!("bus.segments[{i}].zero_counts"),
-                    format!("must be 0..=4095, got {}", segment.zero_counts),
-                );
-            }
+        if let Err(e) = bus.check_segments() {
+            let key = match e {
+                SegmentsError::Address { index, .. } | SegmentsError::Duplicate { index, .. } => {
+                    format!("bus.segments[{index}].address")
+                }
+                SegmentsError::ZeroCounts { index, .. } => {
+                    format!("bus.segments[{index}].zero_counts")
+                }
+            };
+            let message = e.to_string();
+            let message = message
+                .split_once(": ")
+                .map_or(message.as_str(), |(_, why)| why)
+                .to_owned();
+            return fail(&key, message);
         }
         if let Err(e) = self.stage_geometry() {
             let key = match e {
