@@ -62,10 +62,11 @@ fn wait_for(what: &str, timeout: Duration, mut ok: impl FnMut() -> bool) {
     }
 }
 
-/// The daemon's answer to a motion command, unless it answered that its motion thread did
-/// not answer within the daemon's own deadline for a command's answer (5 s): on a loaded
-/// machine the motion thread can wait its turn that long, and the command is carried out all
-/// the same (what the tests check then is what the devices were told).
+/// The daemon's answer to a command, unless it answered that the thread carrying it out (the
+/// motion thread, the hub) did not answer within the daemon's own deadline for a command's
+/// answer (5 s): on a loaded machine a thread can wait its turn that long, and the command is
+/// carried out all the same (what the tests check then is what the devices were told and
+/// what the daemon did).
 fn in_time(reply: ControlReply) -> Option<ControlReply> {
     (reply.message != "the daemon did not answer in time").then_some(reply)
 }
@@ -285,8 +286,9 @@ fn the_stage_vanishing_and_returning_mid_trial_loses_no_segment_sample() {
     client.send_line(&format!(
         r#"{{"id":1,"token":"{TOKEN}","cmd":"stop_trial"}}"#
     ));
-    let reply = client.next_reply();
-    assert!(reply.ok, "{reply:?}\n{}", daemon.log_lines().join("\n"));
+    if let Some(reply) = in_time(client.next_reply()) {
+        assert!(reply.ok, "{reply:?}\n{}", daemon.log_lines().join("\n"));
+    }
     drop(client);
     wait_logged(&daemon, "the trial to end", || daemon.trial().is_none());
     let summary = daemon.shutdown().unwrap();
@@ -494,8 +496,9 @@ fn a_trial_whose_stage_loses_power_or_vanishes_ends_with_the_reason_recorded() {
         client.send_line(&format!(
             r#"{{"id":{id},"token":"{TOKEN}","cmd":"start_trial","name":"{name}"}}"#
         ));
-        let reply = client.next_reply();
-        assert!(reply.ok, "{reply:?}");
+        if let Some(reply) = in_time(client.next_reply()) {
+            assert!(reply.ok, "{reply:?}");
+        }
     };
 
     // A power cycle mid-move (the trial's, not the homing's: homed first, however long that
