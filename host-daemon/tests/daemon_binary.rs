@@ -218,7 +218,7 @@ fn a_configuration_the_simulated_rig_cannot_run_is_refused_before_the_daemon_sta
         ),
     );
     assert!(
-        stderr.contains("`bus.segments`: the simulated rig has one segment per flexible joint"),
+        stderr.contains("`bus.segments`: the rig has one segment per flexible joint"),
         "{stderr}"
     );
     assert!(!stderr.contains("watch it with"), "{stderr}");

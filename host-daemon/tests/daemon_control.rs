@@ -279,11 +279,15 @@ fn moves_and_angles_work_between_trials_and_never_pass_the_soft_limits() {
         }
     })
     .stage;
-    for &s in stage.iter().skip(30) {
-        // Stopped where it was: no more motion after the kill.
-        assert!(last.is_none_or(|l| l == s), "{stage:?}");
+    // Stopped where it was: the kill came before the reply, so after it the stream's stage
+    // position changes at most once (from the last sample taken before the kill to the
+    // first after it, however late the motion thread is on a loaded machine), then holds.
+    let mut changes = 0;
+    for &s in &stage {
+        changes += usize::from(last.is_some_and(|l| l != s));
         last = Some(s);
     }
+    assert!(changes <= 1, "{stage:?}");
     assert!(last.unwrap() > 0.0);
     daemon.shutdown().unwrap();
     std::fs::remove_dir_all(&dir).ok();

@@ -127,7 +127,10 @@ mod tests {
             "token_env = \"ANTENNAD_TOKEN\"",
             "token = \"SECRET-TOKEN-12345\"",
         );
-        let config = Config::from_toml_str(&text, "robot.toml").unwrap();
+        // Its scene is read relative to the file.
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/config/robot.toml");
+        let config = Config::from_toml_str(&text, path).unwrap();
+        assert_eq!(config.sim.rig.joints(), config.bus.segments.len());
         assert!(config.server.token.is_some());
         let recorded = config.to_recorded_toml();
         assert!(!recorded.contains("SECRET"), "{recorded}");

@@ -4,8 +4,9 @@
 //! The mapping from a scene to the rig:
 //!
 //! - the bus has one segment per flexible joint: the scene's `links - 1` (the scene's
-//!   `links` counts the base link; 4.2.1's `links = 9` is 8 segments); on the simulated rig a
-//!   different number of `[[bus.segments]]` is an error;
+//!   `links` counts the base link; 4.2.1's `links = 9` is 8 segments); a different number of
+//!   `[[bus.segments]]` is an error (on hardware too: there the scene is the model the
+//!   monitor predicts the measured chain with);
 //! - stage position `s` puts the base pivot at the scene's `[base] position_m` plus `s` along
 //!   the scene's direction of motion (`[sweep] velocity_m_per_s`, its direction only);
 //! - the servo turns the base link: its angle is the scene's `base_angle_deg` plus the servo

@@ -242,11 +242,11 @@ impl Config {
             }
         }
         let joints = self.sim.rig.joints();
-        if bus.is_sim() && joints != bus.segments.len() {
+        if joints != bus.segments.len() {
             return fail(
                 "bus.segments",
                 format!(
-                    "the simulated rig has one segment per flexible joint of its scene: {} has \
+                    "the rig has one segment per flexible joint of its scene: {} has \
                      links = {} (the base link and {joints} flexible joints), so {joints} \
                      [[bus.segments]] are needed, not {}",
                     self.sim.rig.source,
