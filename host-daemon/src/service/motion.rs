@@ -294,11 +294,12 @@ fn motion_loop(
             }
         }
         m.check_stage(&mut rig, now);
+        let mut script_done = None;
         if let Some(s) = &mut m.script {
             match s.step(&mut rig, now, &mut m.notes, &mut m.moves) {
                 Ok(()) => {
                     if s.is_done() {
-                        m.script_ends.set_done(s.id);
+                        script_done = Some(s.id);
                     }
                 }
                 Err(why) => m.fail_script(&mut rig, now, why),
@@ -306,6 +307,12 @@ fn motion_loop(
         }
         check_availability(&rig, status, &mut m, now);
         send_physics_steps(&mut rig, events);
+        // Done only once this tick's samples and physics steps are sent: the hub, seeing the
+        // script done, drains the channel once more before it ends the trial, so the trial
+        // holds the last stage sample.
+        if let Some(id) = script_done {
+            m.script_ends.set_done(id);
+        }
     }
     if let Err(e) = rig.stop(clock.elapsed()) {
         m.notes

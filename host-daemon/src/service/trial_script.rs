@@ -150,8 +150,10 @@ pub struct ScriptEnds {
 
 impl ScriptEnds {
     /// Script `id` made (or had refused) every move.
+    /// Everything the motion thread sent before this call (its last stage sample) is in the
+    /// event channel by the time [`ScriptEnds::is_done`] says so (release, acquire).
     pub fn set_done(&self, id: u64) {
-        self.done.store(id, Ordering::Relaxed);
+        self.done.store(id, Ordering::Release);
     }
 
     /// Script `id` cannot go on, because `why`.
@@ -163,7 +165,7 @@ impl ScriptEnds {
 
     /// Whether script `id` is done.
     pub fn is_done(&self, id: u64) -> bool {
-        self.done.load(Ordering::Relaxed) == id
+        self.done.load(Ordering::Acquire) == id
     }
 
     /// Why script `id` could not go on, if it could not.

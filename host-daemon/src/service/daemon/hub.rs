@@ -112,6 +112,11 @@ impl Hub {
                 self.on_request(request);
             }
             self.check_watchdog();
+            // A script that ended sent its last samples first: take them into the trial
+            // before it ends (they may have come after the drain above).
+            if self.trial_script_ended() {
+                self.drain(receiver);
+            }
             self.check_trial_end();
             if Instant::now() >= self.status_due {
                 self.publish_status();
@@ -190,6 +195,13 @@ impl Hub {
             self.max_lateness_seen,
             health,
         )
+    }
+
+    /// Whether the running trial's script is done or failed.
+    fn trial_script_ended(&self) -> bool {
+        self.trial.as_ref().is_some_and(|t| {
+            self.script_ends.is_done(t.id) || self.script_ends.failure(t.id).is_some()
+        })
     }
 
     pub(super) fn drain(&mut self, receiver: &Receiver<AcquisitionEvent>) {
