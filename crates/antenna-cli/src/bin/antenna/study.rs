@@ -14,7 +14,7 @@ use crate::Failure;
 /// distances, hair layouts, surfaces), one result row per grid point.
 ///
 /// The grid is the product of the study file's axes, the last varying fastest; each row
-/// carries its grid index, its axis values and the sweep's metrics (see the README for the
+/// carries its grid index, its axis values and the sweep's metrics (see docs/sweeps.md for the
 /// file format and the columns). Sweeps run in parallel; rows come out in grid order.
 ///
 /// Exit status: 0 every sweep ran (some may have jammed: the antenna jammed against a wall,
@@ -28,7 +28,7 @@ use crate::Failure;
   antenna study examples/studies/profiles.toml --format jsonl --jobs 2 -o rows.jsonl
   antenna study examples/studies/profiles.toml --shard 3/8 -o rows-3.csv    # array job 3 of 8")]
 pub(crate) struct StudyArgs {
-    /// The study file (TOML: `[study]` scene and `[axes]`; see the README).
+    /// The study file (TOML: `[study]` scene and `[axes]`; see docs/sweeps.md).
     study: PathBuf,
     /// Run only shard I of N (1-based; the grid points whose index is I - 1 modulo N): the N
     /// shards together run the grid, each point once.

@@ -43,7 +43,7 @@ const FLUSH_EVERY: Duration = Duration::from_millis(200);
   antenna sweep examples/hairs_distal.toml --plot hairs.svg
   antenna sweep examples/wall_sinusoid.toml --duration-s 5 --plot sinusoid.png --plot-every 50")]
 pub(crate) struct SweepArgs {
-    /// The scene file (TOML, with `[[walls]]`, `[sweep]` and `[start]`; see the README).
+    /// The scene file (TOML, with `[[walls]]`, `[sweep]` and `[start]`; see docs/scene-format.md).
     scene: PathBuf,
     /// Print one JSON object per line on stdout: a "placement" line, one "step" line per
     /// step (step 0 the placed posture), a "summary" line.
