@@ -81,8 +81,11 @@ impl QuasiStaticPredictor {
                 "the source gives no scene (no wall to predict against)".to_owned(),
             )
         })?;
-        let physics =
+        let mut physics =
             SimPhysics::new(scene).map_err(|e| MonitorError::Prediction(e.to_string()))?;
+        physics
+            .set_touch_threshold_n(rig.touch_threshold_n)
+            .map_err(|e| MonitorError::Prediction(e.to_string()))?;
         Ok(Self { physics })
     }
 }
@@ -298,6 +301,41 @@ mod tests {
             .zip(&rough)
             .fold(0f64, |m, (a, b)| m.max((a - b).abs()));
         assert!(difference.to_degrees() > 1.0, "{slippery:?} {rough:?}");
+    }
+
+    /// The scene's `[sensors] touch_threshold_n` is the prediction's, as it is the rig's
+    /// segments': a threshold above every contact force leaves the bent antenna's switches
+    /// open.
+    #[test]
+    fn the_prediction_uses_the_scene_s_touch_threshold() {
+        let touched = |threshold: Option<f64>| {
+            let mut info = RigInfo {
+                poll_hz: 1000.0,
+                stage_min_m: 0.0,
+                stage_max_m: 0.6,
+                scene_toml: Some(host_daemon::service::config::scene::BUILT_IN_SCENE.to_owned()),
+                scene_source: None,
+                link_lengths_m: vec![0.04; 9],
+                base_mount_angle_deg: 30.0,
+            };
+            if let (Some(text), Some(threshold_n)) = (&mut info.scene_toml, threshold) {
+                text.push_str(&format!("[sensors]\ntouch_threshold_n = {threshold_n:?}\n"));
+            }
+            let rig = RigGeometry::from_rig_info(&info, "test").unwrap();
+            assert_eq!(rig.touch_threshold_n, threshold.unwrap_or(0.0));
+            let mut predictor = predictor_for(&rig).unwrap();
+            let p = predictor
+                .predict(BasePose {
+                    stage_position_m: 0.05,
+                    servo_angle_rad: 0.0,
+                })
+                .unwrap();
+            assert!(p.joint_angles_rad.iter().any(|a| a.abs() > 0.3));
+            p.touch_bits.iter().filter(|&&b| b != 0).count()
+        };
+        assert!(touched(None) > 0);
+        assert!(touched(Some(0.0)) > 0);
+        assert_eq!(touched(Some(100.0)), 0);
     }
 
     #[test]

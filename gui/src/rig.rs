@@ -36,6 +36,10 @@ pub struct RigGeometry {
     pub poll_hz: f64,
     /// Where this geometry came from, for the status line.
     pub source: String,
+    /// The force that closes a touch switch in the prediction, newtons: the scene's
+    /// `[sensors] touch_threshold_n`, as the simulated rig's segments apply it (0: any
+    /// contact).
+    pub touch_threshold_n: f64,
     /// Where the base pivot is with the stage at 0, and the unit direction the stage carries
     /// it along (the scene's; the track's x-axis without one).
     base_start_m: Vector2<f64>,
@@ -57,9 +61,13 @@ impl RigGeometry {
             Some(text) => {
                 let name = rig.scene_source.as_deref().unwrap_or("the rig's scene");
                 let scene = Scene::parse_in(text, name, std::path::Path::new(""))
-                    .and_then(|scene| scene.sweep_scene())
                     .map_err(|e| MonitorError::Geometry(e.to_string()))?;
-                Self::from_scene(scene, source)
+                let sweep = scene
+                    .sweep_scene()
+                    .map_err(|e| MonitorError::Geometry(e.to_string()))?;
+                let mut geometry = Self::from_scene(sweep, source);
+                geometry.touch_threshold_n = scene.sensors.touch_threshold_n;
+                geometry
             }
             None => {
                 if rig.link_lengths_m.is_empty() {
@@ -94,6 +102,7 @@ impl RigGeometry {
             stage_range_m: None,
             poll_hz: 1000.0,
             source: source.into(),
+            touch_threshold_n: 0.0,
             base_start_m: scene.base_start_m,
             direction,
             chain: scene.chain.clone(),
@@ -138,6 +147,7 @@ impl RigGeometry {
             stage_range_m: None,
             poll_hz: 1000.0,
             source: source.into(),
+            touch_threshold_n: 0.0,
             base_start_m: Vector2::zeros(),
             direction: Vector2::new(1.0, 0.0),
             chain,
