@@ -316,44 +316,49 @@ impl TrialRecorder {
 
     /// Records a log line.
     pub fn record_log(&mut self, message: &LogMessage) -> Result<(), RecordError> {
-        let mut channel = match self.log {
-            Some(channel) => channel,
-            None => {
-                let path = self.path.clone();
-                add_channel(
-                    self.writer()?,
-                    &path,
-                    LOG_TOPIC,
-                    "antenna.Log",
-                    &log_schema(),
-                )?
-            }
-        };
-        self.write(LOG_TOPIC, &mut channel, message.t_s, message)?;
-        self.log = Some(channel);
+        let log = self.log;
+        self.log = Some(self.write_lazy(
+            log,
+            (LOG_TOPIC, "antenna.Log", log_schema),
+            message.t_s,
+            message,
+        )?);
         self.written.log += 1;
         self.flush_if_due(message.t_s)
     }
 
     /// Records one step of the simulated rig's physics.
     pub fn record_physics(&mut self, message: &PhysicsStepMessage) -> Result<(), RecordError> {
-        let mut channel = match self.physics {
+        let physics = self.physics;
+        self.physics = Some(self.write_lazy(
+            physics,
+            (PHYSICS_TOPIC, "antenna.PhysicsStep", physics_schema),
+            message.t_s,
+            message,
+        )?);
+        self.written.physics += 1;
+        self.flush_if_due(message.t_s)
+    }
+
+    /// Writes `message` on `channel`, or on a new channel `(topic, schema name, schema)` when
+    /// this is the topic's first message (channels a trial may never use are added only when
+    /// used); returns the channel to keep.
+    fn write_lazy<T: Serialize>(
+        &mut self,
+        channel: Option<Channel>,
+        (topic, name, schema): (&str, &str, fn() -> Value),
+        t_s: f64,
+        message: &T,
+    ) -> Result<Channel, RecordError> {
+        let mut channel = match channel {
             Some(channel) => channel,
             None => {
                 let path = self.path.clone();
-                add_channel(
-                    self.writer()?,
-                    &path,
-                    PHYSICS_TOPIC,
-                    "antenna.PhysicsStep",
-                    &physics_schema(),
-                )?
+                add_channel(self.writer()?, &path, topic, name, &schema())?
             }
         };
-        self.write(PHYSICS_TOPIC, &mut channel, message.t_s, message)?;
-        self.physics = Some(channel);
-        self.written.physics += 1;
-        self.flush_if_due(message.t_s)
+        self.write(topic, &mut channel, t_s, message)?;
+        Ok(channel)
     }
 
     /// Flushes if `now_t_s` (trial time, s) is at least the flush interval after the last
