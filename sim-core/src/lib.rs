@@ -44,6 +44,8 @@
 //! - [`metrics`]: point of bend, point of contact, preview distance, flip detection and
 //!   correlations (docs/model.md 8); [`mapping`]: wall contact points estimated from 12-bit joint
 //!   angles and touch bits, and their error against the true wall (thesis 4.2.2).
+//! - [`follow`]: closed-loop wall following (a robot, its controller, the antenna as its only
+//!   sensor).
 //! - [`beam`]: chains that stand for a beam (the first-order equal-links and the second-order
 //!   Hencky layouts) and Richardson extrapolation over the number of links.
 //!
@@ -99,6 +101,7 @@ pub mod elastica;
 pub mod energy;
 pub mod equilibrium;
 pub mod error;
+pub mod follow;
 pub mod frame;
 pub mod hair;
 pub mod identify;

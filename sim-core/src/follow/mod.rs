@@ -1,0 +1,31 @@
+//! Closed-loop wall following: a robot running along walls, turned by a controller that
+//! knows the wall only through its antenna (Cowan, Lee and Full 2006, "Task-level control
+//! of rapid wall following in the American cockroach", J Exp Biol 209:1617; thesis 4.2.1).
+//!
+//! # Frames and signs
+//! - **Ground frame**: the scene's frame; `heading_rad` is the body's heading in it,
+//!   counter-clockwise.
+//! - **Body frame**: origin at the point of rotation (POR), x ahead, y toward the wall.
+//! - `theta` (the body's angle to the wall), the turning rate `omega` and the moment `u`
+//!   are positive turning **away** from the wall. A run with the wall on the right
+//!   ([`WallSide::Right`]) is solved as the mirror image of a left-wall run and reported
+//!   back in the scene's frame.
+//!
+//! # What is where
+//! - [`config`]: the robot, the controller and the run ([`FollowConfig`]).
+//! - [`body`]: the template body and the wheeled robot, integrated by RK4.
+//! - [`theory`]: the template's linearization about the setpoint and its stability boundary.
+//! - [`footprint`]: the body's rectangle against the walls (collisions).
+//! - [`error`]: [`FollowError`].
+
+pub mod body;
+pub mod config;
+pub mod error;
+pub mod footprint;
+pub mod theory;
+
+pub use config::{
+    BodyModel, Controller, ESTIMATOR_NAMES, Estimator, FollowConfig, FollowSettings, Robot,
+    WallSide,
+};
+pub use error::FollowError;
