@@ -3,7 +3,7 @@
 use nalgebra::Vector2;
 
 use super::error::{WallError, finite};
-use super::{SegmentContact, SolidSide, WallPoint};
+use super::{SegmentContact, SolidSide, WallPoint, ray_is_valid};
 
 /// An infinite straight wall through `point_m` with tangent `(cos angle, sin angle)`.
 /// Arclength is measured from `point_m` along the tangent.
@@ -84,6 +84,47 @@ impl Line {
                 point_m: *a_m,
                 wall: at_a,
             }
+        }
+    }
+
+    /// The first point of the ray `origin + t direction`, `t` in `[0, max_m]`, on the line:
+    /// the closed form `t = -gap(origin) / (normal . direction)` (`0` when the origin is on
+    /// the line). `None` for a ray parallel to the line (off it), pointing away from it,
+    /// ending short of it, or not a ray (a non-unit or non-finite direction, a non-finite
+    /// origin, a negative or NaN `max_m`).
+    pub fn ray_hit_m(
+        &self,
+        origin_m: &Vector2<f64>,
+        direction: &Vector2<f64>,
+        max_m: f64,
+    ) -> Option<f64> {
+        if !ray_is_valid(origin_m, direction, max_m) {
+            return None;
+        }
+        let gap_m = self.normal.dot(&(origin_m - self.point_m));
+        if gap_m == 0.0 {
+            return Some(0.0);
+        }
+        let closing = self.normal.dot(direction);
+        if closing == 0.0 {
+            return None;
+        }
+        let t_m = -gap_m / closing;
+        (t_m >= 0.0 && t_m <= max_m).then_some(t_m)
+    }
+
+    /// The line reflected `y -> -y` (ground frame), solid on the other side of its reflected
+    /// tangent so that the reflected points of the solid are solid (a reflection flips the
+    /// orientation); arclength is kept: a point's mirror image has its arclength.
+    pub fn mirrored_about_x_axis(&self) -> Line {
+        let tangent = Vector2::new(self.tangent.x, -self.tangent.y);
+        let solid = self.solid.swapped();
+        Line {
+            point_m: Vector2::new(self.point_m.x, -self.point_m.y),
+            angle_rad: -self.angle_rad,
+            tangent,
+            normal: solid.free_normal(&tangent),
+            solid,
         }
     }
 

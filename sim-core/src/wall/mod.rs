@@ -45,6 +45,8 @@
 mod error;
 mod line;
 mod polyline;
+#[cfg(test)]
+mod ray_tests;
 mod sinusoid;
 mod surface;
 
@@ -72,6 +74,14 @@ impl SolidSide {
         match self {
             SolidSide::Left => Vector2::new(tangent.y, -tangent.x),
             SolidSide::Right => Vector2::new(-tangent.y, tangent.x),
+        }
+    }
+
+    /// The other side.
+    pub fn swapped(self) -> SolidSide {
+        match self {
+            SolidSide::Left => SolidSide::Right,
+            SolidSide::Right => SolidSide::Left,
         }
     }
 
@@ -403,6 +413,31 @@ impl WallShape {
         }
     }
 
+    /// The first point of the ray `origin + t direction` on the curve (see
+    /// [`Wall::ray_hit_m`]).
+    pub fn ray_hit_m(
+        &self,
+        origin_m: &Vector2<f64>,
+        direction: &Vector2<f64>,
+        max_m: f64,
+    ) -> Option<f64> {
+        match self {
+            WallShape::Line(w) => w.ray_hit_m(origin_m, direction, max_m),
+            WallShape::Polyline(w) => w.ray_hit_m(origin_m, direction, max_m),
+            WallShape::Sinusoid(w) => w.ray_hit_m(origin_m, direction, max_m),
+        }
+    }
+
+    /// The curve reflected `y -> -y`, solid side swapped so that the reflected points of
+    /// the solid are solid, arclength kept (see each shape's `mirrored_about_x_axis`).
+    pub fn mirrored_about_x_axis(&self) -> WallShape {
+        match self {
+            WallShape::Line(w) => WallShape::Line(w.mirrored_about_x_axis()),
+            WallShape::Polyline(w) => WallShape::Polyline(w.mirrored_about_x_axis()),
+            WallShape::Sinusoid(w) => WallShape::Sinusoid(w.mirrored_about_x_axis()),
+        }
+    }
+
     /// Moves the curve by `offset_m`, in place.
     pub fn translate(&mut self, offset_m: Vector2<f64>) {
         match self {
@@ -505,6 +540,66 @@ impl Wall {
         moved.translate(offset_m);
         moved
     }
+
+    /// The ray query: the smallest `t` in `[0, max_m]` with `origin + t direction` on the
+    /// wall's curve (from either side), or `None` when the ray meets it nowhere within
+    /// `max_m`. `direction` must be a unit vector (within `1e-9`) and everything finite
+    /// (`max_m` may be `+inf`); otherwise `None`, no panic. Closed forms for a line and a
+    /// polyline's edges and end rays; a sinusoid's crossings bracketed between the
+    /// stationary points of the ray's offset from it and refined to `1e-12` m
+    /// ([`Sinusoid::ray_hit_m`]). No allocation.
+    pub fn ray_hit_m(
+        &self,
+        origin_m: &Vector2<f64>,
+        direction: &Vector2<f64>,
+        max_m: f64,
+    ) -> Option<f64> {
+        self.shape.ray_hit_m(origin_m, direction, max_m)
+    }
+
+    /// The wall reflected `y -> -y` in the ground frame (a right-wall run solved as a
+    /// left-wall one): the reflected points of the solid are solid (the curve's solid side
+    /// is swapped, since a reflection flips the orientation), and the surface of a point's
+    /// mirror image is the point's (world-x zones keep their x, arclength zones their
+    /// arclength, which the reflected curve keeps).
+    pub fn mirrored_about_x_axis(&self) -> Wall {
+        Wall {
+            shape: self.shape.mirrored_about_x_axis(),
+            surfaces: self.surfaces.clone(),
+        }
+    }
+}
+
+/// The first wall the ray `origin + t direction` meets within `max_m`: its index in `walls`
+/// and the distance `t` (see [`Wall::ray_hit_m`]; ties go to the lower index). `None` when
+/// it meets none, or is not a ray.
+pub fn first_ray_hit(
+    walls: &[Wall],
+    origin_m: &Vector2<f64>,
+    direction: &Vector2<f64>,
+    max_m: f64,
+) -> Option<(usize, f64)> {
+    let mut best: Option<(usize, f64)> = None;
+    for (index, wall) in walls.iter().enumerate() {
+        let reach_m = best.map_or(max_m, |(_, t)| t);
+        if let Some(t) = wall.ray_hit_m(origin_m, direction, reach_m)
+            && best.is_none_or(|(_, b)| t < b)
+        {
+            best = Some((index, t));
+        }
+    }
+    best
+}
+
+/// Whether `origin + t direction`, `t` in `[0, max_m]`, is a ray the queries answer: a
+/// finite origin, a finite unit direction (within `1e-9`), `max_m >= 0` (`+inf` allowed).
+pub(crate) fn ray_is_valid(origin_m: &Vector2<f64>, direction: &Vector2<f64>, max_m: f64) -> bool {
+    origin_m.x.is_finite()
+        && origin_m.y.is_finite()
+        && direction.x.is_finite()
+        && direction.y.is_finite()
+        && (direction.norm() - 1.0).abs() <= 1e-9
+        && max_m >= 0.0
 }
 
 /// The point of `a -> b` at parameter `s`.

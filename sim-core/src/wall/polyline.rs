@@ -12,7 +12,9 @@
 use nalgebra::Vector2;
 
 use super::error::{WallError, finite};
-use super::{ConvexFeature, FeatureContact, SegmentContact, SolidSide, WallPoint, better, lerp};
+use super::{
+    ConvexFeature, FeatureContact, SegmentContact, SolidSide, WallPoint, better, lerp, ray_is_valid,
+};
 
 /// A piece of a polyline cut at its concave corners
 /// ([`Polyline::split_at_concave_corners_with_cuts`]).
@@ -1004,6 +1006,89 @@ impl Polyline {
             let (lo, hi) = self.range_m(edge);
             (0.0..=1.0).contains(&s) && u >= lo && u <= hi
         })
+    }
+
+    /// The first point of the ray `origin + t direction`, `t` in `[0, max_m]`, on the
+    /// polyline: every edge and both end rays intersected in closed form (an edge accepts a
+    /// crossing within `1e-12` m beyond its ends, so that a ray through a vertex is not lost
+    /// to rounding between its two edges; a ray running along an edge meets it where it
+    /// enters it), the smallest `t`. `None` if the ray meets none, or is not a ray (see
+    /// [`super::Wall::ray_hit_m`]). `O(edges)`, no allocation.
+    pub fn ray_hit_m(
+        &self,
+        origin_m: &Vector2<f64>,
+        direction: &Vector2<f64>,
+        max_m: f64,
+    ) -> Option<f64> {
+        if !ray_is_valid(origin_m, direction, max_m) {
+            return None;
+        }
+        const SLACK_M: f64 = 1e-12;
+        let mut best: Option<f64> = None;
+        for edge in 0..self.tangents.len() {
+            let t = self.tangents[edge];
+            let r = self.vertices_m[edge] - origin_m;
+            let (lo, hi) = self.range_m(edge);
+            let denom = cross(direction, &t);
+            let hit = if denom.abs() <= 1e-15 {
+                // Parallel: a hit only if the ray runs along the edge's line.
+                if cross(&r, &t).abs() > SLACK_M {
+                    continue;
+                }
+                // The ray's parameter at the edge's points: d . r + u (d . t), d . t = +-1.
+                let along = direction.dot(&t);
+                let ends = [
+                    direction.dot(&r) + along * lo,
+                    direction.dot(&r) + along * hi,
+                ];
+                let (first, last) = (ends[0].min(ends[1]), ends[0].max(ends[1]));
+                if last < 0.0 {
+                    continue;
+                }
+                first.max(0.0)
+            } else {
+                let ray_t = cross(&r, &t) / denom;
+                let u = cross(&r, direction) / denom;
+                if !(u >= lo - SLACK_M && u <= hi + SLACK_M) || ray_t < 0.0 {
+                    continue;
+                }
+                ray_t
+            };
+            if hit <= max_m && best.is_none_or(|b| hit < b) {
+                best = Some(hit);
+            }
+        }
+        best
+    }
+
+    /// The polyline reflected `y -> -y` (ground frame), its vertices in the same order and
+    /// solid on the other side of its reflected tangent, so that the reflected points of the
+    /// solid are solid (a reflection flips the orientation); arclength is kept: a point's
+    /// mirror image has its arclength.
+    pub fn mirrored_about_x_axis(&self) -> Polyline {
+        let flip = |p: &Vector2<f64>| Vector2::new(p.x, -p.y);
+        let solid = self.solid.swapped();
+        let tangents: Vec<Vector2<f64>> = self.tangents.iter().map(flip).collect();
+        let normals = tangents.iter().map(|t| solid.free_normal(t)).collect();
+        let chunks = self
+            .chunks
+            .iter()
+            .map(|c| EdgeChunk {
+                first_edge: c.first_edge,
+                end_edge: c.end_edge,
+                min_m: Vector2::new(c.min_m.x, -c.max_m.y),
+                max_m: Vector2::new(c.max_m.x, -c.min_m.y),
+            })
+            .collect();
+        Polyline {
+            vertices_m: self.vertices_m.iter().map(flip).collect(),
+            tangents,
+            normals,
+            lengths_m: self.lengths_m.clone(),
+            arclengths_m: self.arclengths_m.clone(),
+            solid,
+            chunks,
+        }
     }
 
     /// Moves the polyline by `offset_m`, without allocating.
