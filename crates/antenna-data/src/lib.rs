@@ -1,4 +1,5 @@
-//! What `antennad` (and `antenna follow`) write for others to read, with no dependency on the daemon itself:
+//! What `antennad` (and `antenna follow`) write for others to read, with no dependency on the
+//! daemon itself:
 //!
 //! - [`follow`]: the JSON lines of `antenna follow` (a simulated closed-loop run), which the
 //!   monitor plays back,
