@@ -47,6 +47,11 @@ pub(crate) struct Antenna {
 }
 
 impl RawAntenna {
+    /// Where `base_angle_deg` is written, if it is (a follow scene refuses it).
+    pub(crate) fn base_angle_span(&self) -> Option<Range<usize>> {
+        self.base_angle_deg.as_ref().map(Spanned::span)
+    }
+
     pub(crate) fn validate(
         self,
         source: &Source<'_>,

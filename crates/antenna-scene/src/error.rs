@@ -96,6 +96,13 @@ pub enum SceneErrorKind {
         /// What is wrong, in words.
         reason: String,
     },
+    /// A run of the scene (a follow scene's closed loop) could not start or go on for a
+    /// reason no one key is to blame for (a step the antenna's solver refused, ...).
+    #[error("{message}")]
+    Run {
+        /// What went wrong, in words.
+        message: String,
+    },
 }
 
 /// An error in a scene file: the file, where in it (when known) and what.

@@ -1,10 +1,22 @@
 //! The keys each table of a scene file allows: the fixed core of docs/scene-format.md and our own
-//! tables (hairs, walls, the sweep, the start, the contact solver, the sensors).
+//! tables (hairs, walls, the sweep, the start, the contact solver, the sensors, and a follow
+//! scene's robot, controller and run).
 
 /// Keys allowed at the top level of a scene file.
 pub const TOP_LEVEL_KEYS: &[&str] = &[
-    "antenna", "base", "tip_load", "tip_pin", "solver", "walls", "sweep", "start", "contact",
+    "antenna",
+    "base",
+    "tip_load",
+    "tip_pin",
+    "solver",
+    "walls",
+    "sweep",
+    "start",
+    "contact",
     "sensors",
+    "robot",
+    "controller",
+    "follow",
 ];
 /// Keys allowed in `[antenna]`.
 pub const ANTENNA_KEYS: &[&str] = &[
@@ -97,6 +109,45 @@ pub const SENSORS_KEYS: &[&str] = &[
     "seed",
     "hair_tip_points",
 ];
+/// Keys allowed in `[robot]` (a follow scene; which body keys apply depends on `body`).
+pub const ROBOT_KEYS: &[&str] = &[
+    "speed_m_per_s",
+    "body",
+    "inertia_kg_m2",
+    "damping_n_m_s_per_rad",
+    "max_turn_rate_deg_per_s",
+    "max_turn_accel_deg_per_s2",
+    "footprint_m",
+    "mount_m",
+    "mount_angle_deg",
+    "wall_side",
+    "antenna_loads_body",
+];
+/// Keys allowed in `[controller]` (a follow scene; which apply depends on `estimator` and
+/// on `[robot] body`).
+pub const CONTROLLER_KEYS: &[&str] = &[
+    "estimator",
+    "window_s",
+    "preview_m",
+    "setpoint_m",
+    "kp_n",
+    "kd_n_s",
+    "kp_rad_per_s_per_m",
+    "kd_rad_per_m",
+    "delay_s",
+    "search_turn_rate_deg_per_s",
+];
+/// Keys allowed in `[follow]` (a follow scene).
+pub const FOLLOW_KEYS: &[&str] = &[
+    "duration_s",
+    "step_s",
+    "pose_m",
+    "heading_deg",
+    "lost_after_s",
+    "settling_window_m",
+    "settling_band_m",
+    "antenna_step_m",
+];
 
 /// Every table with its allowed keys, for naming the table of an unknown key.
 pub(crate) const TABLES: &[(&str, &[&str])] = &[
@@ -114,6 +165,9 @@ pub(crate) const TABLES: &[(&str, &[&str])] = &[
     ("[start]", START_KEYS),
     ("[contact]", CONTACT_KEYS),
     ("[sensors]", SENSORS_KEYS),
+    ("[robot]", ROBOT_KEYS),
+    ("[controller]", CONTROLLER_KEYS),
+    ("[follow]", FOLLOW_KEYS),
 ];
 
 /// The keys the parser itself requires (every other key is optional or checked after

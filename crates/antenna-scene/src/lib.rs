@@ -88,13 +88,16 @@
 
 mod antenna;
 pub mod contact;
+pub mod controller;
 pub mod csv_lines;
 pub mod error;
 pub mod failure;
+pub mod follow;
 pub mod hairs;
 pub mod keys;
 pub mod motion;
 pub mod points_file;
+pub mod robot;
 pub mod sensors;
 mod solver;
 pub mod source;
@@ -114,11 +117,15 @@ use toml::Spanned;
 
 use antenna::RawAntenna;
 use contact::RawContact;
+use controller::RawController;
 pub use error::{Location, SceneError, SceneErrorKind};
 pub use failure::SweepFailure;
+pub use follow::{FollowLocations, FollowScene};
+use follow::{RawFollow, RawFollowTables};
 pub use hairs::HairSpec;
 pub use keys::*;
 use motion::RawSweep;
+use robot::RawRobot;
 use sensors::RawSensors;
 use solver::RawSolver;
 use source::{Source, point};
@@ -209,6 +216,13 @@ pub struct Scene {
     pub sensors: SensorSettings,
     /// Where some keys are in the file, for errors found only when solving.
     pub locations: SceneLocations,
+    /// A follow scene's closed-loop run (`[robot]`, `[controller]`, `[follow]`; issue #47),
+    /// `None` for a scene with none of the three tables. In a follow scene the chain's base
+    /// angle is `[robot] mount_angle_deg`, `base_position_m` is where the mount starts in the
+    /// ground frame ([`FollowScene::mount_start_m`]), `motion` is the run without the
+    /// controller ([`FollowScene::open_loop_motion`]) and `placement` without `[start]` is
+    /// [`follow::default_placement`].
+    pub follow: Option<FollowScene>,
 }
 
 /// Where keys whose trouble shows only when solving sit in the file.
@@ -283,15 +297,18 @@ impl Scene {
 #[serde(deny_unknown_fields)]
 struct RawScene {
     antenna: Spanned<RawAntenna>,
-    base: Option<RawBase>,
+    base: Option<Spanned<RawBase>>,
     tip_load: Option<RawTipLoad>,
     tip_pin: Option<Spanned<RawTipPin>>,
     solver: Option<Spanned<RawSolver>>,
     walls: Option<Vec<Spanned<RawWall>>>,
-    sweep: Option<RawSweep>,
+    sweep: Option<Spanned<RawSweep>>,
     start: Option<Spanned<RawStart>>,
     contact: Option<RawContact>,
     sensors: Option<Spanned<RawSensors>>,
+    robot: Option<Spanned<RawRobot>>,
+    controller: Option<Spanned<RawController>>,
+    follow: Option<Spanned<RawFollow>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -314,11 +331,24 @@ struct RawTipPin {
 
 impl RawScene {
     fn validate(self, source: &Source<'_>, folder: &Path) -> Result<Scene, SceneError> {
+        let follow_tables = RawFollowTables {
+            robot: self.robot.as_ref(),
+            controller: self.controller.as_ref(),
+            follow: self.follow.as_ref(),
+        };
+        let follow_span = follow_tables.first_span();
+        if follow_span.is_some() {
+            self.refuse_in_follow_scene(source)?;
+        }
         let antenna_span = self.antenna.span();
         let antenna = self.antenna.into_inner().validate(source, antenna_span)?;
         let chain = antenna.chain;
 
-        let base_position_m = match self.base.as_ref().and_then(|b| b.position_m.as_ref()) {
+        let base_position_m = match self
+            .base
+            .as_ref()
+            .and_then(|b| b.get_ref().position_m.as_ref())
+        {
             Some(p) => point(source, "[base]", "position_m", p)?,
             None => Vector2::zeros(),
         };
@@ -333,6 +363,46 @@ impl RawScene {
             .enumerate()
             .map(|(i, w)| w.get_ref().validate(source, i, w.span(), folder))
             .collect::<Result<Vec<Wall>, SceneError>>()?;
+
+        let start_span = self
+            .start
+            .as_ref()
+            .map(|s| s.get_ref().placement_span().unwrap_or_else(|| s.span()));
+        let follow = match follow_span {
+            Some(span) => {
+                if walls.is_empty() {
+                    return Err(source.invalid(
+                        span,
+                        "the top level",
+                        "walls",
+                        "a follow scene ([robot], [controller], [follow]) needs at least one \
+                         [[walls]] table: the wall the robot follows",
+                    ));
+                }
+                Some(follow_tables.validate(
+                    source,
+                    start_span.clone(),
+                    self.sensors.as_ref().map(Spanned::span),
+                )?)
+            }
+            None => None,
+        };
+        // In a follow scene the base link is at the mount angle from the body axis.
+        let chain = match &follow {
+            Some(f) => chain
+                .with_base_angle_rad(f.config.robot.mount_angle_rad)
+                .map_err(|e| {
+                    f.locate(&sim_core::follow::FollowError::Invalid {
+                        table: "robot",
+                        key: "mount_angle_deg",
+                        reason: e.to_string(),
+                    })
+                })?,
+            None => chain,
+        };
+        let base_position_m = follow
+            .as_ref()
+            .map_or(base_position_m, FollowScene::mount_start_m);
 
         let tip_pin_m = match &self.tip_pin {
             Some(pin) => {
@@ -372,15 +442,17 @@ impl RawScene {
             },
         };
 
-        let motion = match &self.sweep {
-            Some(raw) => raw.validate(source)?,
-            None => Motion::default(),
+        let motion = match (&self.sweep, &follow) {
+            (Some(raw), _) => raw.get_ref().validate(source)?,
+            (None, Some(f)) => f.open_loop_motion(),
+            (None, None) => Motion::default(),
         };
-        let placement = match &self.start {
-            Some(raw) => raw
+        let placement = match (&self.start, &follow) {
+            (Some(raw), _) => raw
                 .get_ref()
                 .validate(source, raw.span(), &chain, walls.len())?,
-            None => Placement::Rest,
+            (None, Some(f)) => follow::default_placement(&chain, &f.config.settings),
+            (None, None) => Placement::Rest,
         };
         let contact = match &self.contact {
             Some(raw) => raw.validate(source)?,
@@ -408,11 +480,7 @@ impl RawScene {
                 .flatten()
                 .map(|w| source.at(w.span()))
                 .collect(),
-            start_placement: self.start.as_ref().and_then(|s| {
-                s.get_ref()
-                    .placement_span()
-                    .map_or_else(|| source.at(s.span()), |p| source.at(p))
-            }),
+            start_placement: start_span.and_then(|s| source.at(s)),
         };
         Ok(Scene {
             chain,
@@ -428,7 +496,56 @@ impl RawScene {
             contact,
             sensors,
             locations,
+            follow,
         })
+    }
+
+    /// A follow scene's tables that would contradict the body carrying the antenna: the
+    /// first of them in the file is an error saying why.
+    fn refuse_in_follow_scene(&self, source: &Source<'_>) -> Result<(), SceneError> {
+        const TOP: &str = "the top level";
+        let refused = [
+            (
+                self.antenna.get_ref().base_angle_span(),
+                "[antenna]",
+                "base_angle_deg",
+                "[robot] mount_angle_deg sets the base angle in a follow scene (the body \
+                 carries the antenna's base, and the sensors see the mount angle)",
+            ),
+            (
+                self.base.as_ref().map(Spanned::span),
+                TOP,
+                "base",
+                "the body carries the antenna's base in a follow scene: [robot] mount_m puts \
+                 it on the body and [follow] pose_m places the robot",
+            ),
+            (
+                self.sweep.as_ref().map(Spanned::span),
+                TOP,
+                "sweep",
+                "a follow scene's robot moves by itself: [robot] speed_m_per_s and the \
+                 controller drive it, [follow] duration_s and step_s time the run",
+            ),
+            (
+                self.tip_pin.as_ref().map(Spanned::span),
+                TOP,
+                "tip_pin",
+                "the body carries the antenna in a follow scene and nothing pins its tip",
+            ),
+        ];
+        match refused
+            .into_iter()
+            .filter_map(|(span, table, key, why)| span.map(|s| (s, table, key, why)))
+            .min_by_key(|(span, ..)| span.start)
+        {
+            Some((span, table, key, why)) => Err(source.invalid(
+                span,
+                table,
+                key,
+                format!("refused in a follow scene ([robot], [controller], [follow]): {why}"),
+            )),
+            None => Ok(()),
+        }
     }
 }
 
@@ -472,7 +589,7 @@ max_n_m_per_rad = 0.082
         assert!(e.starts_with("s.toml:12:1: unknown key `foo` in [solver]; allowed: tolerance, max_iterations, initial"), "{e}");
         let e = err(&format!("{GOOD}[wals]\n"));
         assert!(
-            e.contains("unknown key `wals` in the top level; allowed: antenna, base, tip_load, tip_pin, solver, walls, sweep, start, contact, sensors"),
+            e.contains("unknown key `wals` in the top level; allowed: antenna, base, tip_load, tip_pin, solver, walls, sweep, start, contact, sensors, robot, controller, follow"),
             "{e}"
         );
         let e = err(&GOOD.replace("profile =", "colour = 1\nprofile ="));

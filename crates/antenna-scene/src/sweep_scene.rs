@@ -1,6 +1,8 @@
 //! [`Scene::sweep_scene`]: a scene as sim-core's [`SweepScene`], what `antenna sweep`, the
 //! solve of a scene with walls, `antenna study` and the GUI's sweep animation run.
 
+use sim_core::SensorSettings;
+use sim_core::follow::FollowConfig;
 use sim_core::sweep::SweepScene;
 
 use super::Scene;
@@ -60,5 +62,47 @@ impl Scene {
             tip_force_n: self.tip_force_n,
             settings: self.contact,
         })
+    }
+
+    /// What a follow scene's closed-loop run takes: the sweep scene (the chain at the mount
+    /// angle, the walls, the base at the mount's start, the placement, the contact solver;
+    /// see [`Scene::follow`]), the robot, controller and run ([`FollowConfig`], validated),
+    /// and the sensors. Errors the run finds when it starts are put at their keys by
+    /// [`crate::FollowScene::locate`].
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use antenna_scene::Scene;
+    ///
+    /// let scene = Scene::parse(
+    ///     "[antenna]\nlinks = 9\nlink_length_m = 0.04\n\
+    ///      [antenna.stiffness]\nprofile = \"fast-exponential\"\n\
+    ///      min_n_m_per_rad = 0.004\nmax_n_m_per_rad = 0.082\n\
+    ///      [[walls]]\nshape = \"line\"\npoint_m = [0.0, 0.2]\nsolid = \"left\"\n\
+    ///      [robot]\nspeed_m_per_s = 0.5\n",
+    ///     "follow.toml",
+    /// )?;
+    /// let (sweep, config, sensors) = scene.follow_parts()?;
+    /// assert_eq!(config.robot.speed_m_per_s, 0.5);
+    /// assert_eq!(sweep.chain.base_angle_rad(), config.robot.mount_angle_rad);
+    /// assert_eq!(sensors, sim_core::SensorSettings::IDEAL);
+    /// # Ok(())
+    /// # }
+    /// ```
+    ///
+    /// # Errors
+    /// A [`SceneError`] (`no [follow] table: not a follow scene`) for a scene without
+    /// `[robot]`, `[controller]` and `[follow]`.
+    pub fn follow_parts(&self) -> Result<(SweepScene, FollowConfig, SensorSettings), SceneError> {
+        let Some(follow) = &self.follow else {
+            return Err(SceneError {
+                path: self.locations.path.clone(),
+                location: None,
+                kind: Box::new(SceneErrorKind::Run {
+                    message: "no [follow] table: not a follow scene".to_string(),
+                }),
+            });
+        };
+        Ok((self.sweep_scene()?, follow.config, self.sensors.clone()))
     }
 }
