@@ -9,6 +9,15 @@
 //! sim-core's [`SweepScene`](sim_core::sweep::SweepScene); a sweep's failure is worded with the
 //! scene's file and keys by [`SweepFailure`].
 //!
+//! A scene with any of `[robot]`, `[controller]` and `[follow]` is a follow scene (issue #47:
+//! a robot following the walls with the antenna as its only sensor): the three tables fill
+//! sim-core's [`FollowConfig`](sim_core::follow::FollowConfig) (defaults for what they leave
+//! out), [`Scene::follow`] holds it with the place of every key ([`FollowScene`]), and
+//! [`Scene::follow_parts`] gives what the closed loop runs: the sweep scene, the configuration
+//! and the sensors. An error the run finds when it starts is put at its key by
+//! [`FollowScene::locate`]. The body carries the antenna: `[base]`, `[sweep]`, `[tip_pin]` and
+//! `[antenna] base_angle_deg` are refused there, and `[start]` defaults to an approach.
+//!
 //! Every error names the file, the key and, where the parser knows it, the line and column;
 //! see [`SceneError`]. Unknown keys are errors that list the keys allowed in their table.
 //! Other TOML files that describe runs of scenes (studies, optimizations) give their errors
@@ -18,8 +27,10 @@
 //! `[antenna.stiffness]`), [`hairs`], [`walls`] with [`surface`] and [`points_file`] (a
 //! digitized wall's CSV file of points, read by [`csv_lines`]), [`motion`] (`[sweep]`),
 //! [`start`], [`contact`], [`sensors`] (with [`sensors::CalibrationValue`], the "number or
-//! list" calibration value), `solver.rs` (`[solver]`), `sweep_scene.rs` (the conversion),
-//! [`source`] and [`error`] (located errors) and [`failure`] (a sweep's failure).
+//! list" calibration value), `solver.rs` (`[solver]`), [`robot`], [`controller`] and
+//! [`follow`] (`[follow]` and the follow scene as a whole), `sweep_scene.rs` (the
+//! conversions), [`source`] and [`error`] (located errors) and [`failure`] (a sweep's
+//! failure).
 //!
 //! ```
 //! use antenna_scene::{Scene, Start};
@@ -84,6 +95,50 @@
 //! assert_eq!(sweep.walls.len(), 1);
 //! assert_eq!(sweep.motion.steps(), 10);
 //! assert!(matches!(sweep.placement, Placement::TipOnWall { wall: 0, .. }));
+//! ```
+//!
+//! A follow scene, the issue's robot along a straight wall (`examples/follow/straight_wall.toml`
+//! has every key):
+//!
+//! ```
+//! use antenna_scene::Scene;
+//! use sim_core::follow::FollowError;
+//!
+//! let text = r#"
+//! [antenna]
+//! links = 9
+//! link_length_m = 0.04
+//! [antenna.stiffness]
+//! profile = "fast-exponential"
+//! min_n_m_per_rad = 0.004
+//! max_n_m_per_rad = 0.082
+//!
+//! [[walls]]
+//! shape = "line"
+//! point_m = [0.0, 0.2]
+//! solid = "left"
+//!
+//! [robot]
+//! speed_m_per_s = 0.3
+//! mount_angle_deg = 30.0
+//! [controller]
+//! estimator = "contact-line"
+//! setpoint_m = 0.10
+//! [follow]
+//! pose_m = [0.0, 0.12]
+//! "#;
+//! let scene = Scene::parse(text, "follow.toml").unwrap();
+//! let (sweep, config, _sensors) = scene.follow_parts().unwrap();
+//! assert_eq!(config.controller.setpoint_m, 0.10);
+//! assert_eq!(sweep.chain.base_angle_rad(), 30f64.to_radians());
+//!
+//! // The run finds the footprint in a wall: the error is put at [follow] pose_m.
+//! let follow = scene.follow.as_ref().unwrap();
+//! let error = follow.locate(&FollowError::StartsInWall { wall: 0, depth_m: 0.01 });
+//! assert!(error.to_string().starts_with("follow.toml:22:10: `pose_m` in [follow]:"));
+//!
+//! let error = Scene::parse(&text.replace("0.3", "-0.3"), "follow.toml").unwrap_err();
+//! assert_eq!(error.to_string(), "follow.toml:16:17: `speed_m_per_s` in [robot]: -0.3 must be > 0");
 //! ```
 
 mod antenna;
