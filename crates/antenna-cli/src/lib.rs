@@ -13,6 +13,7 @@
 pub mod design;
 pub mod digitize;
 pub mod export;
+pub mod follow;
 pub mod identify;
 pub mod optimize;
 pub mod progress;

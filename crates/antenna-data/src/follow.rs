@@ -26,7 +26,8 @@ pub enum FollowLine {
 pub struct FollowStart {
     /// The scene file as given.
     pub scene: String,
-    /// The scene's text (points files written in), so a reader can redraw the walls.
+    /// The scene file's text as read (a points file it names is relative to `scene`), so a
+    /// reader can redraw the walls.
     pub scene_toml: String,
     /// What the antenna's placement did, in words.
     pub note: String,

@@ -16,16 +16,28 @@
 //! - [`body`]: the template body and the wheeled robot, integrated by RK4.
 //! - [`theory`]: the template's linearization about the setpoint and its stability boundary.
 //! - [`footprint`]: the body's rectangle against the walls (collisions).
-//! - [`error`]: [`FollowError`].
+//! - [`estimate`]: the estimators (contact line, bend, ideal preview) and odometry.
+//! - [`control`]: the PD controller, its delay and the search turn.
+//! - [`run`]: the loop ([`Follow`], a [`FollowStep`] per step).
+//! - [`summary`]: how a run went ([`FollowSummary`], [`FollowStatus`]).
+//! - [`error`]: why a run could not start or go on ([`FollowError`]).
 
 pub mod body;
 pub mod config;
+pub mod control;
 pub mod error;
+pub mod estimate;
 pub mod footprint;
+pub mod run;
+pub mod summary;
 pub mod theory;
 
 pub use config::{
     BodyModel, Controller, ESTIMATOR_NAMES, Estimator, FollowConfig, FollowSettings, Robot,
     WallSide,
 };
+pub use control::Command;
 pub use error::FollowError;
+pub use estimate::{BendTable, Estimate, NoEstimate};
+pub use run::{Follow, FollowStep, calibrate_bend};
+pub use summary::{FollowStatus, FollowSummary, STATUS_NAMES};

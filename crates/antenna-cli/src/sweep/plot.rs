@@ -536,7 +536,7 @@ type MetricChart<'a, DB> = ChartContext<
 >;
 
 /// A tick label with `decimals` decimals, never `-0`.
-fn tick(value: f64, decimals: usize) -> String {
+pub(crate) fn tick(value: f64, decimals: usize) -> String {
     let text = format!("{value:.decimals$}");
     if text.starts_with('-') && text[1..].chars().all(|c| c == '0' || c == '.') {
         text[1..].to_string()
@@ -579,7 +579,12 @@ fn runs(samples: &[Sample], value: impl Fn(&Sample) -> Option<f64>) -> Vec<Vec<(
 }
 
 /// Points along a wall's curve covering a view of size `diagonal` around its centre.
-fn wall_points(wall: &Wall, x: &Range<f64>, y: &Range<f64>, diagonal: f64) -> Vec<Vector2<f64>> {
+pub(crate) fn wall_points(
+    wall: &Wall,
+    x: &Range<f64>,
+    y: &Range<f64>,
+    diagonal: f64,
+) -> Vec<Vector2<f64>> {
     let centre = Vector2::new(0.5 * (x.start + x.end), 0.5 * (y.start + y.end));
     let samples = 600.0;
     let along = |p0: Vector2<f64>, t: Vector2<f64>| {
@@ -631,7 +636,7 @@ fn wall_points(wall: &Wall, x: &Range<f64>, y: &Range<f64>, diagonal: f64) -> Ve
 }
 
 /// The runs of consecutive points inside the view.
-fn inside_runs<'p>(
+pub(crate) fn inside_runs<'p>(
     points: &'p [Vector2<f64>],
     x: &Range<f64>,
     y: &Range<f64>,
@@ -658,7 +663,7 @@ fn inside_runs<'p>(
 
 /// Splits a run of wall points where the surface changes between smooth and rough; `true`
 /// marks a rough piece.
-fn surface_runs(wall: &Wall, run: &[Vector2<f64>]) -> Vec<(bool, Vec<Vector2<f64>>)> {
+pub(crate) fn surface_runs(wall: &Wall, run: &[Vector2<f64>]) -> Vec<(bool, Vec<Vector2<f64>>)> {
     let mut out: Vec<(bool, Vec<Vector2<f64>>)> = Vec::new();
     for p in run {
         let rough = matches!(

@@ -10,6 +10,7 @@
 //! did not yield an identification (`identify`); 2 bad input (a message on stderr that says what and where, nothing on
 //! stdout); 3 the solver broke down numerically.
 
+mod follow;
 mod optimize;
 mod study;
 mod sweep;
@@ -46,6 +47,7 @@ struct Cli {
 enum Command {
     Solve(SolveArgs),
     Sweep(sweep::SweepArgs),
+    Follow(follow::FollowArgs),
     Study(study::StudyArgs),
     Optimize(optimize::OptimizeArgs),
     Design(DesignArgs),
@@ -241,6 +243,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Solve(args) => run_solve(&args),
         Command::Sweep(args) => sweep::run(&args),
+        Command::Follow(args) => follow::run(&args),
         Command::Study(args) => study::run(&args),
         Command::Optimize(args) => optimize::run(&args),
         Command::Design(args) => run_design(&args),
