@@ -19,6 +19,8 @@ mod equilibrium_limits;
 mod equilibrium_pinned;
 mod equilibrium_pinned_regressions;
 mod equilibrium_structured;
+mod follow_loop;
+mod follow_theory;
 mod identify_table_6_4;
 mod kinematics_errors;
 mod kinematics_fast_vs_seed;

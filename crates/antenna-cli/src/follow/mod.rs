@@ -21,6 +21,7 @@
 //! ```
 
 pub mod plot;
+pub mod v_max;
 
 use std::time::Instant;
 

@@ -3,6 +3,7 @@
 //! do not see the body's heading (a scene turned rigidly gives the same estimates); the
 //! contact-line and bend estimators follow a straight wall with the thesis's antenna.
 
+
 #![allow(clippy::unwrap_used)]
 
 use nalgebra::{Rotation2, Vector2};
