@@ -609,3 +609,59 @@ fn run_errors_are_put_at_their_keys() {
     assert!(matches!(*e.kind, SceneErrorKind::Run { .. }));
     assert_eq!(e.to_string(), "f.toml: the sensors: broken");
 }
+
+#[test]
+fn a_failed_placement_is_put_at_start_or_at_the_pose() {
+    let error =
+        FollowError::Placement(sim_core::sweep::SweepError::Placement("jammed".to_string()));
+    // The default approach: at [follow] pose_m, saying it was the default.
+    let text = full();
+    let s = scene(&text);
+    let e = s
+        .follow
+        .as_ref()
+        .expect("follow")
+        .locate(&error)
+        .to_string();
+    assert!(
+        e.starts_with(&format!(
+            "{} `pose_m` in [follow]: the default placement of a follow scene (an approach \
+             onto wall 0) failed:",
+            at(&text, "[0.0, 0.12]")
+        )),
+        "{e}"
+    );
+    // A written [start]: at its placement.
+    let text = format!("{}[start]\nplacement = \"tip-on-wall\"\n", full());
+    let s = scene(&text);
+    let e = s
+        .follow
+        .as_ref()
+        .expect("follow")
+        .locate(&error)
+        .to_string();
+    assert!(
+        e.starts_with(&format!(
+            "{} `placement` in [start]:",
+            at(&text, "\"tip-on-wall\"")
+        )),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_mount_turns_with_the_heading_and_the_wall_side() {
+    let text = with("heading_deg = 0.0", "heading_deg = 90.0");
+    let s = scene(&text);
+    // Heading +y: ahead is +y, the wall's side (left) is -x.
+    assert!((s.base_position_m - Vector2::new(-0.02, 0.12 + 0.04)).norm() < 1e-12);
+    let f = s.follow.as_ref().expect("follow");
+    assert!((f.open_loop_motion().velocity_m_per_s - Vector2::new(0.0, 0.3)).norm() < 1e-12);
+    let s = scene(&text.replace(
+        "mount_angle_deg = 30.0",
+        "mount_angle_deg = 30.0\nwall_side = \"right\"",
+    ));
+    assert!((s.base_position_m - Vector2::new(0.02, 0.12 + 0.04)).norm() < 1e-12);
+    // The chain's base angle is the mount angle whatever the heading.
+    assert!((s.chain.base_angle_rad() - 30f64.to_radians()).abs() < 1e-15);
+}
