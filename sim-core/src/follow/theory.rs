@@ -20,7 +20,8 @@
 //! alone, `v* = b l / J`), at every speed otherwise ([`TemplateLinear`]).
 //!
 //! # The simulation ([`simulate_ideal_preview`])
-//! The template ([`super::body::step_body`], RK4) runs along a straight wall; each step the
+//! The closed loop itself ([`super::Follow`] without an antenna) runs the template
+//! ([`super::body::step_body`], RK4) along a straight wall; each step the
 //! ideal preview `d` is measured by a ray cast from the point `l` ahead of the POR along the
 //! body's normal toward the wall ([`crate::wall::first_ray_hit`]), `dd/dt` is the backward
 //! difference of successive `d`, and `u` is held over the step (a zero-order hold, which
@@ -44,9 +45,8 @@
 
 use nalgebra::{Matrix3, Vector2};
 
-use super::BodyModel;
-use super::body::{BodyState, step_body};
-use crate::wall::{Line, SolidSide, Wall, first_ray_hit};
+use super::{BodyModel, Estimator, Follow, FollowConfig};
+use crate::wall::{Line, SolidSide, Wall};
 
 /// The template's closed loop under an ideal-preview PD controller, linearized about the
 /// setpoint.
@@ -193,7 +193,10 @@ pub struct PreviewHistory {
 /// under `u = -Kp (d - d_set) - Kd dd/dt` with `d` the ideal preview measured by a ray from
 /// the point `l` ahead of the POR along the body's normal, `dd/dt` the backward difference
 /// of successive `d` (zero at the first step) and `u` held over each step (module docs).
-/// A run with a non-positive or non-finite step or duration records nothing.
+/// It is the closed loop itself ([`super::Follow::without_antenna`] with the
+/// [`Estimator::IdealPreview`](super::Estimator::IdealPreview)), recording `d - d_set`. A
+/// run with a non-positive or non-finite step or duration, or one the loop refuses (a step
+/// outside its range), records nothing.
 pub fn simulate_ideal_preview(
     linear: &TemplateLinear,
     speed_m_per_s: f64,
@@ -211,37 +214,42 @@ pub fn simulate_ideal_preview(
     let Ok(line) = Line::new(Vector2::zeros(), 0.0, SolidSide::Left) else {
         return history;
     };
-    let walls = [Wall::smooth(line)];
-    let body = linear.body();
-    let steps = (run.duration_s / h).round() as usize;
-    history.times_s.reserve(steps + 1);
-    history.errors_m.reserve(steps + 1);
-    let mut state = BodyState::new(
-        Vector2::new(0.0, -(run.setpoint_m + run.start_offset_m)),
-        0.0,
-    );
-    let mut previous_d: Option<f64> = None;
-    for k in 0..=steps {
-        let preview = state.por_m + state.forward() * linear.preview_m;
-        let Some((_, d)) = first_ray_hit(&walls, &preview, &state.toward_wall(), f64::INFINITY)
-        else {
+    let mut config = FollowConfig::default();
+    config.robot.speed_m_per_s = speed_m_per_s;
+    config.robot.body = linear.body();
+    // A point-like body: collisions are not what is measured.
+    config.robot.footprint_m = [1e-3, 1e-3];
+    config.controller.estimator = Estimator::IdealPreview {
+        preview_m: linear.preview_m,
+    };
+    config.controller.setpoint_m = run.setpoint_m;
+    config.controller.kp_n = linear.kp_n;
+    config.controller.kd_n_s = linear.kd_n_s;
+    config.controller.delay_s = 0.0;
+    config.settings.step_s = h;
+    // One step more than the duration: the sample at `t = duration` is recorded too.
+    config.settings.duration_s = run.duration_s + h;
+    config.settings.pose_m = Vector2::new(0.0, -(run.setpoint_m + run.start_offset_m));
+    config.settings.heading_rad = 0.0;
+    config.settings.lost_after_s = run.duration_s + 1.0;
+    let Ok(mut follow) = Follow::without_antenna(vec![Wall::smooth(line)], &config) else {
+        return history;
+    };
+    let steps = config.steps();
+    history.times_s.reserve(steps);
+    history.errors_m.reserve(steps);
+    while let Some(Ok(step)) = follow.next_step() {
+        let Some(estimate) = step.estimate else {
             history.diverged = true;
             break;
         };
-        let error = d - run.setpoint_m;
-        history.times_s.push(k as f64 * h);
+        let error = estimate.distance_m - run.setpoint_m;
+        history.times_s.push(step.t_s);
         history.errors_m.push(error);
         if error.abs() > 0.5 * run.setpoint_m {
             history.diverged = true;
             break;
         }
-        if k == steps {
-            break;
-        }
-        let rate = previous_d.map_or(0.0, |p| (d - p) / h);
-        previous_d = Some(d);
-        let u = -linear.kp_n * error - linear.kd_n_s * rate;
-        state = step_body(&body, speed_m_per_s, &state, u, h);
     }
     history
 }

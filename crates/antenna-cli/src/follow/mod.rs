@@ -89,14 +89,11 @@ impl FollowRun {
     pub fn start(scene: &Scene) -> Result<FollowRun, FollowFailure> {
         let started = Instant::now();
         let (sweep_scene, config, sensors) = scene.follow_parts()?;
-        let follow = Follow::new(&sweep_scene, &sensors, &config).map_err(|e| {
-            match (&scene.follow, &e) {
-                (Some(f), FollowError::Invalid { .. } | FollowError::StartsInWall { .. }) => {
-                    FollowFailure::BadInput(f.locate(&e).to_string())
-                }
-                _ => FollowFailure::BadInput(format!("{}: {e}", scene.locations.path)),
-            }
-        })?;
+        let follow =
+            Follow::new(&sweep_scene, &sensors, &config).map_err(|e| match &scene.follow {
+                Some(f) => FollowFailure::BadInput(f.locate(&e).to_string()),
+                None => FollowFailure::BadInput(format!("{}: {e}", scene.locations.path)),
+            })?;
         Ok(FollowRun {
             label: scene.locations.path.clone(),
             scene_toml: std::fs::read_to_string(&scene.locations.path).unwrap_or_default(),
