@@ -17,7 +17,7 @@ use super::ContactError;
 use super::feature::Slip;
 use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
-use super::posture::Posture;
+use super::posture::{Pose, Posture};
 use super::quasistatic::{QuasiStatic, theta_of};
 use crate::wall::lerp;
 use crate::{ConvexFeature, FeatureContact, WallPoint};
@@ -41,9 +41,9 @@ const HAND_BACK_FRACTION: f64 = 1e-2;
 
 impl QuasiStatic {
     /// The pairs of a step to the base at `goal` (see the module docs).
-    pub(super) fn candidates(&self, goal: Vector2<f64>) -> Result<Vec<Pair>, ContactError> {
+    pub(super) fn candidates(&self, goal: Pose) -> Result<Vec<Pair>, ContactError> {
         for (w, wall) in self.walls.iter().enumerate() {
-            self.check_base(w, wall, &self.probe, goal)?;
+            self.check_base(w, wall, &self.probe, goal.base_m)?;
         }
         let mut out: Vec<Pair> = self
             .touching(&self.probe, &self.beta, self.settings.margin_m)
@@ -500,7 +500,7 @@ impl QuasiStatic {
     /// locks the antenna in most steps, step 1019 took 1,118 -> 6 Newton iterations): on a
     /// frictionless sinusoid of 1.2 mm crests under 150 links (soak 181) the hand-over took
     /// 8,448 -> 11,720 Newton iterations.
-    fn hand_sliding_joints_onto_links(&self, pairs: &mut Vec<Pair>, goal: Vector2<f64>) {
+    fn hand_sliding_joints_onto_links(&self, pairs: &mut Vec<Pair>, goal: Pose) {
         // The sliding joints and the crest pairs past them, by index in `pairs`.
         let mut passing: Vec<(usize, usize)> = Vec::new();
         for (j, c) in pairs.iter().enumerate() {
@@ -525,7 +525,7 @@ impl QuasiStatic {
             return;
         };
         let mut ahead = self.start.clone();
-        ahead.update(&self.chain, goal, &theta_of(&self.theta, &predicted));
+        ahead.update_at(&self.chain, goal, &theta_of(&self.theta, &predicted));
         let mut left: Vec<usize> = Vec::new();
         for (j, l) in passing {
             let on_link = self
@@ -632,9 +632,9 @@ impl QuasiStatic {
 
     /// Puts the probe posture at the solution `x` of a step to `goal` (hair angles are not
     /// part of it; [`Self::missed_pairs`] takes them from `x`).
-    pub(super) fn probe_at(&mut self, x: &[f64], goal: Vector2<f64>) {
+    pub(super) fn probe_at(&mut self, x: &[f64], goal: Pose) {
         let theta = theta_of(&self.theta, x);
-        self.probe.update(&self.chain, goal, &theta);
+        self.probe.update_at(&self.chain, goal, &theta);
     }
 
     /// The hair angles of a solution `x` whose hair coordinates are those of `hair_links`

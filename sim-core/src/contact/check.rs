@@ -1,15 +1,17 @@
 //! An independent check of a quasi-static state (docs/model.md 6: "every step is checked"):
 //! recomputed from the posture and the reported contact forces with the crate's own
 //! kinematics ([`crate::frame_poses`], [`crate::hair_poses`]) and the walls' own distance
-//! queries, not from the solver's equations. [`super::QuasiStatic::step_to`] runs it on
-//! every step it accepts and refuses a step that fails it
-//! ([`super::ContactError::Uncertified`]).
+//! queries, not from the solver's equations. [`super::QuasiStatic::step_to_pose`] (and so
+//! [`super::QuasiStatic::step_to`]) runs it on every step it accepts and refuses a step that
+//! fails it ([`super::ContactError::Uncertified`]). A contact's slip is recomputed too: its
+//! material point now against where it was in the committed state the last (sub)step
+//! started from (base pivot and base angle), not read from the solver.
 
 use nalgebra::Vector2;
 
 use super::feature::{Contact, Feature, FrictionLaw, Slip};
 use super::quasistatic::QuasiStatic;
-use crate::{Frame, hair_poses};
+use crate::{Frame, HairPose, hair_poses};
 
 /// How far a state is from a frictional-contact equilibrium; every field is `0` for an
 /// exact one, and `NaN` where something was not finite (which fails [`Self::holds`]).
@@ -30,7 +32,7 @@ pub struct EquilibriumCheck {
     /// The largest gap of a contact that carries a force (complementarity), metres.
     pub separation_m: f64,
     /// The largest slip of a contact reported stuck, metres (Coulomb: a stuck contact does
-    /// not move).
+    /// not move), recomputed from the committed state the last (sub)step started from.
     pub stuck_slip_m: f64,
     /// The largest departure of a slipping contact's shear force from the friction limit
     /// (`|T| = bound`; the bound relaxed on a jam where it was), newtons.
@@ -229,6 +231,11 @@ impl QuasiStatic {
                 .map(|h| (base + h.pivot_m, base + h.tip_m))
         };
         let contacts = self.contacts();
+        // Each contact's slip over the last (sub)step, recomputed: its material point now
+        // against the same point in the committed state the (sub)step started from (its
+        // base pivot and base angle, its joint and hair angles), along the contact's
+        // tangent.
+        let slips = self.recomputed_slips_m(&ends, &hairs, base);
         // Where each contact's force acts, from the feature alone.
         let point_of = |c: &Contact| match c.feature {
             Feature::Vertex { link } => Some(ends[link]),
@@ -331,7 +338,7 @@ impl QuasiStatic {
         }
         // Cone, Coulomb's law and complementarity.
         let shear_zero_n = self.certify_tolerances().force_n.max(FORCE_ZERO_N);
-        for c in &contacts {
+        for (c, &slip_m) in contacts.iter().zip(&slips) {
             // `N >= N_min` and the shear bound at normal force `normal_n`.
             let cone_at = |normal_n: f64| {
                 let (min_n, bound) = match c.law {
@@ -349,7 +356,7 @@ impl QuasiStatic {
                 c.shear_force_n.abs() - bound,
             );
             match c.slip {
-                Slip::Stuck => out.stuck_slip_m = worst(out.stuck_slip_m, c.slip_m.abs()),
+                Slip::Stuck => out.stuck_slip_m = worst(out.stuck_slip_m, slip_m.abs()),
                 Slip::Forward | Slip::Backward => {
                     // At the limit, against the slip.
                     let at_limit = (c.shear_force_n.abs() - bound).abs();
@@ -359,9 +366,9 @@ impl QuasiStatic {
                     // with a shear of rounding size, either sign): its size is held to the
                     // bound just above, within the same tolerance.
                     let wrong_way = if c.shear_force_n > shear_zero_n {
-                        c.slip_m
+                        slip_m
                     } else if c.shear_force_n < -shear_zero_n {
-                        -c.slip_m
+                        -slip_m
                     } else {
                         0.0
                     };
@@ -409,7 +416,7 @@ impl QuasiStatic {
                     shear_n.abs() - wall_bound,
                 );
             }
-            for v in [c.normal_force_n, c.shear_force_n, c.slip_m] {
+            for v in [c.normal_force_n, c.shear_force_n, slip_m] {
                 if !v.is_finite() {
                     out.cone_violation_n = f64::NAN;
                 }
@@ -424,6 +431,73 @@ impl QuasiStatic {
         }
         out.penetration_m = worst(out.penetration_m, 0.0);
         out
+    }
+}
+
+impl QuasiStatic {
+    /// The slip of each contact (in [`Self::contacts`]' order) over the last committed
+    /// (sub)step, metres: along the contact's tangent, its material point (the point of the
+    /// chain that touched at the start: a link end, a point along a link, a hair tip) in
+    /// the current posture (`ends`, `hairs`, the pivot at `base`) less the same point in
+    /// the state the (sub)step started from ([`QuasiStatic::step_start`]), both from the
+    /// crate's own kinematics. `NaN` where a point cannot be computed.
+    fn recomputed_slips_m(
+        &self,
+        ends: &[Vector2<f64>],
+        hairs: &[HairPose],
+        base: Vector2<f64>,
+    ) -> Vec<f64> {
+        if self.pairs.is_empty() {
+            return Vec::new();
+        }
+        let chain = self.chain();
+        let start = &self.step_start;
+        let nan = Vector2::new(f64::NAN, f64::NAN);
+        let start_poses = crate::frame_poses(chain, &start.theta, Frame::GROUND).ok();
+        // The end of link `i` in the start state (the pivot for `i = None`).
+        let start_end = |i: Option<usize>| match (i, &start_poses) {
+            (None, _) => start.base_m,
+            (Some(i), Some(poses)) => {
+                start.base_m + poses.position_m(Frame::link(i)).unwrap_or(nan)
+            }
+            (Some(_), None) => nan,
+        };
+        // Hair tips only where a hair touches (their poses cost a second pass).
+        let start_hairs = if self.pairs.iter().any(|p| p.key.hair_link().is_some()) {
+            hair_poses(chain, &start.theta, &start.beta, Frame::GROUND).unwrap_or_default()
+        } else {
+            Vec::new()
+        };
+        let point = |base: Vector2<f64>, ends: &[Vector2<f64>], link: usize, s: f64| {
+            let from = if link == 0 { base } else { ends[link - 1] };
+            from + (ends[link] - from) * s
+        };
+        let start_point = |link: usize, s: f64| {
+            let from = start_end(link.checked_sub(1));
+            from + (start_end(Some(link)) - from) * s
+        };
+        let tip = |hairs: &[HairPose], base: Vector2<f64>, link: usize| {
+            hairs
+                .iter()
+                .find(|h| h.link == link)
+                .map_or(nan, |h| base + h.tip_m)
+        };
+        self.pairs
+            .iter()
+            .map(|pair| {
+                let (now, then) = match pair.key.hair_link() {
+                    Some(link) => (
+                        tip(hairs, base, link),
+                        tip(&start_hairs, start.base_m, link),
+                    ),
+                    None => {
+                        let (link, s) = (pair.material_link, pair.material_s);
+                        (point(base, ends, link, s), start_point(link, s))
+                    }
+                };
+                pair.geo.tangent.dot(&(now - then))
+            })
+            .collect()
     }
 }
 

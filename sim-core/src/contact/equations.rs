@@ -56,6 +56,8 @@ pub(crate) struct StepProblem<'a> {
     pub pieces: &'a [Wall],
     pub tip_force_n: Vector2<f64>,
     pub base_m: Vector2<f64>,
+    /// The base link's angle `theta_0` at the goal, radians (the base turns with the step).
+    pub base_angle_rad: f64,
     /// Links whose hair angle is a coordinate, in coordinate order after the joints.
     pub hair_links: &'a [usize],
     /// Hair angles of every link (`n + 1`; links without a hair, or whose hair is not a
@@ -197,7 +199,7 @@ impl Equations {
         self.held.resize(m, None);
         self.theta.clear();
         self.theta.resize(n + 1, 0.0);
-        self.theta[0] = chain.base_angle_rad();
+        self.theta[0] = p.base_angle_rad;
         self.beta.clear();
         self.beta.extend_from_slice(p.hair_beta_rad);
         self.link_force_n.clear();

@@ -41,7 +41,7 @@ pub struct JammedContact {
 use super::ContactError;
 use super::geometry::{PairGeometry, evaluate, generalized};
 use super::pair::{PairKey, PairKind};
-use super::posture::{Posture, perp};
+use super::posture::{Pose, Posture, perp};
 use super::quasistatic::{QuasiStatic, theta_of};
 use nalgebra::{DMatrix, DVector};
 
@@ -64,12 +64,9 @@ const ON_STOP_RAD: f64 = 1e-9;
 impl QuasiStatic {
     /// Why a step to `goal` failed: a [`Jam`] where no posture near the last one (the joints
     /// within their limits, friction and springs aside) keeps every link out of the walls
-    /// with the base at `goal`; otherwise `error` as it was (the solver's failure).
-    pub(super) fn diagnose_failure(
-        &mut self,
-        goal: Vector2<f64>,
-        error: ContactError,
-    ) -> ContactError {
+    /// with the base at `goal` (pivot and angle); otherwise `error` as it was (the solver's
+    /// failure).
+    pub(super) fn diagnose_failure(&mut self, goal: Pose, error: ContactError) -> ContactError {
         if !matches!(error, ContactError::NoConvergence { .. }) {
             return error;
         }
@@ -83,9 +80,9 @@ impl QuasiStatic {
 
     /// The least penetration (metres) of the links and hair tips into the walls a projected
     /// Gauss-Newton search over the joint angles and the hair angles reaches from the current
-    /// posture with the base at `goal`, and what stays deepest ("link 3", "the hair tip of
-    /// link 3").
-    fn least_penetration(&mut self, goal: Vector2<f64>) -> (f64, String) {
+    /// posture with the base at `goal` (pivot and angle), and what stays deepest ("link 3",
+    /// "the hair tip of link 3").
+    fn least_penetration(&mut self, goal: Pose) -> (f64, String) {
         let n = self.chain.n();
         // The coordinates: the joints `1..=n`, then the hair angle of each link with a hair.
         let hair_links: Vec<usize> = (0..=n)
@@ -103,10 +100,12 @@ impl QuasiStatic {
         let mut posture = Posture::default();
         let mut beta = self.beta.clone();
         // A hand holding the tip carries it with the base: the tip stays where the hand
-        // holds it now, moved by the base's displacement.
+        // holds it now, moved by the base's displacement and turned about the pivot by its
+        // turn.
+        let from = self.pose();
         let hand_m = self.hand_offset_m.map(|_| {
             posture.update(&self.chain, self.base_m, &self.theta);
-            posture.end_m[n] + (goal - self.base_m)
+            from.carry(&goal, posture.end_m[n])
         });
         // The penetrating pairs at `x`: each one's gap and geometry.
         let penetrating = |sim: &Self,
@@ -114,7 +113,7 @@ impl QuasiStatic {
                            beta: &mut Vec<f64>,
                            x: &[f64],
                            out: &mut Vec<(PairKey, PairGeometry)>| {
-            posture.update(&sim.chain, goal, &theta_of(&sim.theta, &x[..n]));
+            posture.update_at(&sim.chain, goal, &theta_of(&sim.theta, &x[..n]));
             for (k, &l) in hair_links.iter().enumerate() {
                 beta[l] = x[n + k];
             }
@@ -234,7 +233,7 @@ impl QuasiStatic {
 
     /// The jam at the current state, for a step to `goal` that leaves `deepest` (a link or a
     /// hair tip, in words) at least `depth_m` inside a wall.
-    fn jam(&self, goal: Vector2<f64>, depth_m: f64, deepest: &str) -> Jam {
+    fn jam(&self, goal: Pose, depth_m: f64, deepest: &str) -> Jam {
         let contacts: Vec<JammedContact> = self
             .contacts()
             .iter()
@@ -271,9 +270,18 @@ impl QuasiStatic {
                 )
             })
             .collect();
+        let turn_rad = goal.angle_rad - self.theta[0];
+        let turning = if turn_rad == 0.0 {
+            String::new()
+        } else {
+            format!(
+                " with the base turned by {:.3} degrees",
+                turn_rad.to_degrees()
+            )
+        };
         let description = format!(
-            "no posture near the last one{} keeps {deepest} out of the walls (it stays {:.3} \
-             mm inside); {}; pinned by {}",
+            "no posture near the last one{turning}{} keeps {deepest} out of the walls (it \
+             stays {:.3} mm inside); {}; pinned by {}",
             if self.hand_offset_m.is_some() {
                 " with the tip where the hand holds it"
             } else {
@@ -292,8 +300,8 @@ impl QuasiStatic {
             }
         );
         Jam {
-            base_x_m: goal.x,
-            base_y_m: goal.y,
+            base_x_m: goal.base_m.x,
+            base_y_m: goal.base_m.y,
             contacts,
             joints_on_stops,
             description,

@@ -2,9 +2,13 @@
 //! friction that truly sticks, anchoring hairs, snaps (docs/model.md 6-7, thesis 3.2-3.3, 4.2).
 //!
 //! # The model
-//! The base pivot moves in small steps; inertia is neglected (the thesis's base speeds are
-//! 2-17 mm/s). Each step finds the posture where the spring torques balance the contact
-//! forces, with
+//! The base moves in small steps; inertia is neglected (the thesis's base speeds are
+//! 2-17 mm/s). A sweep's base only moves ([`QuasiStatic::step_to`]: its pivot steps, the
+//! base link's angle `theta_0` stays); a mobile robot's base moves and turns at every step
+//! ([`QuasiStatic::step_to_pose`]: pivot and `theta_0` together; the joint angles
+//! `theta_1..theta_n` are relative, so the chain turns with its base, and a hand holding
+//! the tip turns with it too). Each step finds the posture where the spring torques balance
+//! the contact forces, with
 //! - **non-penetration** of every link (its ends and, against a wall corner or crest, its
 //!   interior) and of every hair tip: normal force `N >= 0` complementary to the gap, one
 //!   per feature pair (`pair.rs`: a chain point against a wall's surface, a convex corner
@@ -13,8 +17,10 @@
 //!   friction a loaded point slips off a convex corner, as it does in the world);
 //! - **Coulomb friction per step**: a contact's material point does not move along the wall
 //!   while `|T| < mu N` (stuck: exactly, no creep) and slides with `T = -mu N sign(slip)`
-//!   otherwise; the slip is measured from where the point was at the start of the step, so
-//!   the friction state carries from step to step;
+//!   otherwise; the slip is measured from where the point was at the start of the step
+//!   (the committed state: the base pivot and the base angle the step starts from, while
+//!   the broad phase and the predictor look at the goal's), so the friction state carries
+//!   from step to step, and a contact stuck on a wall stays there while the base turns;
 //! - **hairs** (docs/model.md 7): each hair angle is a coordinate with its spring and its range
 //!   `[0, open]`, taking part only while its tip is near a wall. On a rough surface a hair
 //!   tip open against its stop and loaded toward opening **anchors**: it sticks and holds up
@@ -23,13 +29,16 @@
 //!
 //! The equations of a step are a nonlinear complementarity problem, solved by a semismooth
 //! Newton method on the coordinates and the contact forces together (`ssn.rs`). A step that
-//! fails to converge, or moves a joint by more than
-//! [`ContactSettings::jump_rad`], is split in halves; where the posture's branch of
+//! fails to converge, or moves a joint by more than [`ContactSettings::jump_rad`], is split
+//! in halves, its displacement and its turn together (a step's size is
+//! `max(|d base|, reach |d angle|)`, [`QuasiStatic::reach_m`] the farthest a point of the
+//! chain is from the pivot: a pure turn is split too); where the posture's branch of
 //! equilibria ends (the antenna flips or springs forward) the posture follows the downhill
 //! path by implicit steps of the friction-aware gradient flow and the step reports a snap.
 //! Every accepted solve has its residuals (equilibrium, gaps, slips, the complementarity of
 //! forces, joint-limit multipliers of the right sign) below [`ContactSettings::tolerance_m`];
-//! [`QuasiStatic::check`] re-derives them independently.
+//! [`QuasiStatic::check`] re-derives them independently (each contact's slip too, from the
+//! committed state the step started from).
 //!
 //! A scene pays only for what it has: without walls a step does no contact work, hair angles
 //! are coordinates only while their tips are near a wall, and a frictionless contact has no
@@ -64,6 +73,11 @@
 //! // Now drag it along the wall: the tip slides backward relative to the base.
 //! sim.step_to(Vector2::new(0.001, 0.03))?;
 //! assert!(sim.contacts().iter().any(|c| c.slip != Slip::Stuck));
+//! // A robot's base turns as it moves: 2 mm ahead and 1 degree toward the wall.
+//! let turned_rad = sim.base_angle_rad() + 1f64.to_radians();
+//! sim.step_to_pose(Vector2::new(0.003, 0.03), turned_rad)?;
+//! assert_eq!(sim.chain().base_angle_rad(), turned_rad);
+//! assert!(!sim.contacts().is_empty());
 //! # Ok(())
 //! # }
 //! ```
@@ -88,6 +102,8 @@ mod ssn;
 mod stability;
 mod substep;
 mod tresca;
+#[cfg(test)]
+mod turn_tests;
 
 pub use check::{CertifyTolerances, EquilibriumCheck};
 pub use error::ContactError;

@@ -827,6 +827,7 @@ mod tests {
             pieces: &c.pieces,
             tip_force_n: Vector2::new(0.01, -0.02),
             base_m: Vector2::zeros(),
+            base_angle_rad: c.chain.base_angle_rad(),
             hair_links: &c.hair_links,
             hair_beta_rad: &c.beta,
             proximal: None,

@@ -9,7 +9,7 @@ use super::check::FORCE_ZERO_N;
 use super::feature::{Contact, FrictionLaw};
 use super::pair::Pair;
 use super::pieces::Pieces;
-use super::posture::Posture;
+use super::posture::{Pose, Posture};
 use super::report::StepReport;
 use super::settings::ContactSettings;
 use super::ssn::Ssn;
@@ -39,13 +39,22 @@ pub struct QuasiStatic {
     /// The posture at the start of the (sub)step, and carried to its goal.
     pub(super) start: Posture,
     pub(super) probe: Posture,
-    /// A hand holding the tip at this offset from the base pivot.
+    /// A hand holding the tip at this offset from the base pivot, given with the base link
+    /// at `hand_angle_rad` (the offset turns with the base).
     pub(super) hand_offset_m: Option<Vector2<f64>>,
+    pub(super) hand_angle_rad: f64,
     pub(super) hand_force_n: Vector2<f64>,
     /// No hair anchors during the rest of this step (set after anchors were torn out).
     pub(super) anchoring_blocked: bool,
-    /// The last plain (sub)step's base displacement and change of the joint angles.
-    pub(super) secant: Option<(Vector2<f64>, Vec<f64>)>,
+    /// The last plain (sub)step's base displacement, turn and change of the joint angles.
+    pub(super) secant: Option<Secant>,
+    /// The state the last committed (sub)step started from (what its contacts' slips are
+    /// measured from: [`Self::check`] recomputes them).
+    pub(super) step_start: StepStart,
+    /// The farthest a point of the chain can be from the base pivot, metres: the links'
+    /// lengths and the longest hair (a turn of the base by `a` radians moves a point by at
+    /// most `reach_m a`).
+    pub(super) reach_m: f64,
     /// Friction is off for the rest of this step (see [`StepReport::friction_dropped`]).
     pub(super) friction_off: bool,
     /// Friction was dropped in the last step.
@@ -62,14 +71,34 @@ const CERTIFY_SPLITS: usize = 3;
 /// halved again but followed downhill as a snap (see [`QuasiStatic::advance`]).
 const FOLD_FAILURES: usize = 2;
 
-/// The state a step changes ([`QuasiStatic::step_to`] takes a refused step again from it).
+/// The last plain (sub)step's change: the base's displacement and turn, and the change of
+/// the joint angles `theta_1..theta_n` (the secant predictor, [`QuasiStatic::secant_prediction`]).
+#[derive(Clone, Debug)]
+pub(super) struct Secant {
+    pub delta_m: Vector2<f64>,
+    pub turn_rad: f64,
+    pub dtheta_rad: Vec<f64>,
+}
+
+/// The committed state a (sub)step started from: the base pivot, the joint angles
+/// (`theta_0` the base angle then) and the hair angles.
+#[derive(Clone, Debug, Default)]
+pub(super) struct StepStart {
+    pub base_m: Vector2<f64>,
+    pub theta: Vec<f64>,
+    pub beta: Vec<f64>,
+}
+
+/// The state a step changes ([`QuasiStatic::step_to_pose`] takes a refused step again from
+/// it).
 struct SavedState {
     base_m: Vector2<f64>,
     theta: Vec<f64>,
     beta: Vec<f64>,
     pairs: Vec<Pair>,
     hand_force_n: Vector2<f64>,
-    secant: Option<(Vector2<f64>, Vec<f64>)>,
+    secant: Option<Secant>,
+    step_start: StepStart,
     friction_locked: bool,
     anchoring_blocked: bool,
 }
@@ -118,12 +147,24 @@ impl QuasiStatic {
         }
         let mut theta = theta_rad.to_vec();
         theta[0] = chain.base_angle_rad();
-        let beta = chain
+        let beta: Vec<f64> = chain
             .hairs()
             .iter()
             .map(|h| h.map_or(0.0, |h| h.rest_angle_rad()))
             .collect();
         let pieces = Pieces::new(&walls);
+        let hair_reach_m = chain
+            .hairs()
+            .iter()
+            .flatten()
+            .map(|h| h.pivot_in_link_m().norm() + h.length_m)
+            .fold(0.0_f64, f64::max);
+        let reach_m = chain.total_length_m() + hair_reach_m;
+        let step_start = StepStart {
+            base_m,
+            theta: theta.clone(),
+            beta: beta.clone(),
+        };
         let mut sim = QuasiStatic {
             chain,
             pieces,
@@ -138,9 +179,12 @@ impl QuasiStatic {
             start: Posture::default(),
             probe: Posture::default(),
             hand_offset_m: None,
+            hand_angle_rad: 0.0,
             hand_force_n: Vector2::zeros(),
             anchoring_blocked: false,
             secant: None,
+            step_start,
+            reach_m,
             friction_off: false,
             friction_locked: false,
             quick_attempt: false,
@@ -159,11 +203,13 @@ impl QuasiStatic {
         self.tip_force_n
     }
 
-    /// Holds the tip near `offset_m` from the base pivot (a hand moving with the base, for
-    /// placing the antenna) by a stiff spring, or lets go (`None`). While held,
-    /// [`Self::hand_force_n`] is the hand's force on the tip.
+    /// Holds the tip near `offset_m` from the base pivot (a hand moving and turning with the
+    /// base, for placing the antenna: the offset is in the ground frame at the current base
+    /// angle, and turns about the pivot as the base turns) by a stiff spring, or lets go
+    /// (`None`). While held, [`Self::hand_force_n`] is the hand's force on the tip.
     pub fn hold_tip(&mut self, offset_m: Option<Vector2<f64>>) {
         self.hand_offset_m = offset_m;
+        self.hand_angle_rad = self.theta[0];
         if offset_m.is_none() {
             self.hand_force_n = Vector2::zeros();
         }
@@ -174,7 +220,8 @@ impl QuasiStatic {
         self.hand_force_n
     }
 
-    /// The chain.
+    /// The chain; its base angle ([`Chain::base_angle_rad`]) is the current one,
+    /// `theta_rad()[0]`.
     pub fn chain(&self) -> &Chain {
         &self.chain
     }
@@ -187,6 +234,19 @@ impl QuasiStatic {
     /// The base pivot, ground frame, metres.
     pub fn base_m(&self) -> Vector2<f64> {
         self.base_m
+    }
+
+    /// The base link's angle `theta_0` from the ground x-axis, radians (`theta_rad()[0]`).
+    pub fn base_angle_rad(&self) -> f64 {
+        self.theta[0]
+    }
+
+    /// The farthest a point of the chain can be from the base pivot, metres: the sum of the
+    /// link lengths and the longest reach of a hair past its link. A turn of the base by
+    /// `a` radians moves no point by more than `reach_m() * a`, and
+    /// [`Self::step_to_pose`] measures a step by `max(|d base|, reach_m() |d angle|)`.
+    pub fn reach_m(&self) -> f64 {
+        self.reach_m
     }
 
     /// The joint angles `theta_0..theta_n`, radians.
@@ -276,8 +336,9 @@ impl QuasiStatic {
         self.step_to(self.base_m)
     }
 
-    /// Moves the base pivot to `base_m` and solves the equilibrium there with friction
-    /// remembered from the last step. A step that does not converge, or jumps, is split in
+    /// Moves the base pivot to `base_m`, the base angle kept ([`Self::step_to_pose`] at the
+    /// current angle), and solves the equilibrium there with friction remembered from the
+    /// last step. A step that does not converge, or jumps, is split in
     /// halves (up to `2^max_substep_depth` substeps); where the posture's branch of
     /// equilibria ends, the posture follows the downhill path to the next one (a snap).
     ///
@@ -291,31 +352,78 @@ impl QuasiStatic {
     /// [`ContactError::Jammed`], or [`ContactError::Uncertified`] (the state is the one
     /// that failed the check).
     pub fn step_to(&mut self, base_m: Vector2<f64>) -> Result<StepReport, ContactError> {
-        finite("base_m", &[base_m.x, base_m.y])?;
-        self.step_certified(base_m, CERTIFY_SPLITS)
+        self.step_to_pose(base_m, self.theta[0])
     }
 
-    /// [`Self::step_to`] with `splits` halvings left for a step that fails its check.
-    fn step_certified(
+    /// Moves the base pivot to `base_m` and turns the base link to `base_angle_rad` (its
+    /// angle `theta_0` from the ground x-axis) together, and solves the equilibrium there
+    /// with friction remembered from the last step: a mobile robot's antenna, whose base
+    /// moves and turns at every step. The joint angles `theta_1..theta_n` are relative, so
+    /// the chain turns with its base; the contacts slip (or stick) from where they were.
+    ///
+    /// The turn is the difference of the angles as given (no wrapping: from `3.1` to
+    /// `-3.1` radians is a turn of `-6.2`). The step is measured by
+    /// `max(|d base|, reach |d angle|)` ([`Self::reach_m`]); a step that fails or jumps is
+    /// split in halves of both the displacement and the turn, a pure turn too. A held tip
+    /// ([`Self::hold_tip`]) turns with the base. `step_to_pose(b, self.base_angle_rad())`
+    /// is [`Self::step_to`]`(b)`, bit for bit.
+    ///
+    /// # Errors
+    /// As [`Self::step_to`]; [`ContactError::NotFinite`] for a base position or angle that
+    /// is not finite. After an error the state (and the chain's base angle) is that of the
+    /// last substep solved.
+    pub fn step_to_pose(
         &mut self,
         base_m: Vector2<f64>,
-        splits: usize,
+        base_angle_rad: f64,
     ) -> Result<StepReport, ContactError> {
-        let from_m = self.base_m;
-        if splits == 0 || (base_m - from_m).norm() == 0.0 {
-            return self.step_once(base_m);
+        finite("base_m", &[base_m.x, base_m.y])?;
+        finite("base_angle_rad", &[base_angle_rad])?;
+        let goal = Pose {
+            base_m,
+            angle_rad: base_angle_rad,
+        };
+        let result = self.step_certified(goal, CERTIFY_SPLITS);
+        self.sync_chain_angle();
+        result
+    }
+
+    /// The committed base pose.
+    pub(super) fn pose(&self) -> Pose {
+        Pose {
+            base_m: self.base_m,
+            angle_rad: self.theta[0],
+        }
+    }
+
+    /// Keeps the chain's base angle ([`Chain::base_angle_rad`]) at the committed `theta_0`
+    /// (the solver itself reads only `theta_0`): a turned step replaces the chain by its
+    /// copy at the new angle, once per step.
+    fn sync_chain_angle(&mut self) {
+        if self.chain.base_angle_rad() != self.theta[0]
+            && let Ok(turned) = self.chain.with_base_angle_rad(self.theta[0])
+        {
+            self.chain = turned;
+        }
+    }
+
+    /// [`Self::step_to_pose`] with `splits` halvings left for a step that fails its check.
+    fn step_certified(&mut self, goal: Pose, splits: usize) -> Result<StepReport, ContactError> {
+        let from = self.pose();
+        if splits == 0 || from.distance_m(&goal, self.reach_m) == 0.0 {
+            return self.step_once(goal);
         }
         let saved = self.saved_state();
-        match self.step_once(base_m) {
+        match self.step_once(goal) {
             Err(refused @ ContactError::Uncertified { .. }) => {
                 self.restore_state(saved);
-                let mid_m = from_m + (base_m - from_m) * 0.5;
-                let mut report = match self.step_certified(mid_m, splits - 1) {
+                let mid = from.midway(&goal);
+                let mut report = match self.step_certified(mid, splits - 1) {
                     Ok(r) => r,
                     Err(ContactError::Uncertified { .. }) => return Err(refused),
                     Err(other) => return Err(other),
                 };
-                let second = self.step_certified(base_m, splits - 1)?;
+                let second = self.step_certified(goal, splits - 1)?;
                 report.accumulate(&second);
                 report.certificate = second.certificate;
                 report.dense_solves += second.dense_solves;
@@ -334,6 +442,7 @@ impl QuasiStatic {
             pairs: self.pairs.clone(),
             hand_force_n: self.hand_force_n,
             secant: self.secant.clone(),
+            step_start: self.step_start.clone(),
             friction_locked: self.friction_locked,
             anchoring_blocked: self.anchoring_blocked,
         }
@@ -346,23 +455,27 @@ impl QuasiStatic {
         self.pairs = saved.pairs;
         self.hand_force_n = saved.hand_force_n;
         self.secant = saved.secant;
+        self.step_start = saved.step_start;
         self.friction_locked = saved.friction_locked;
         self.anchoring_blocked = saved.anchoring_blocked;
         self.friction_off = false;
         self.quick_attempt = false;
     }
 
-    /// One step to `base_m`, certified (see [`Self::step_to`]).
-    fn step_once(&mut self, base_m: Vector2<f64>) -> Result<StepReport, ContactError> {
+    /// One step to `goal`, certified (see [`Self::step_to_pose`]).
+    fn step_once(&mut self, goal: Pose) -> Result<StepReport, ContactError> {
+        let base_m = goal.base_m;
         let mut report = StepReport::default();
         // No wall, no contact: the posture is the free equilibrium under the tip load, which
-        // the base's translation does not change. So too where every wall is clear of the
-        // unloaded antenna at rest by more than the candidate margin at the new base (the
-        // broad phase: a wall never reached costs a bound per link, not a solve).
+        // the base's translation does not change (nor its turn, unloaded). So too where
+        // every wall is clear of the unloaded antenna at rest by more than the candidate
+        // margin at the new base pose (the broad phase: a wall never reached costs a bound
+        // per link, not a solve).
         let unloaded_at_rest =
             self.tip_force_n == Vector2::zeros() && self.hand_offset_m.is_none() && self.at_rest();
-        if unloaded_at_rest && (self.walls.is_empty() || self.clear_of_walls(base_m)) {
+        if unloaded_at_rest && (self.walls.is_empty() || self.clear_of_walls(goal)) {
             self.base_m = base_m;
+            self.theta[0] = goal.angle_rad;
             report.substeps = 1;
             self.certify(&mut report)?;
             return Ok(report);
@@ -378,12 +491,12 @@ impl QuasiStatic {
         let mut result = if self.friction_locked {
             self.friction_locked = false;
             self.quick_attempt = true;
-            let quick = self.attempt(base_m, None, &mut report);
+            let quick = self.attempt(goal, None, &mut report);
             self.quick_attempt = false;
             match quick {
                 Ok(accepted) => {
                     report.note_residual(accepted.residual_m, &self.settings);
-                    self.commit(base_m, accepted);
+                    self.commit(goal, accepted);
                     report.substeps += 1;
                     Ok(())
                 }
@@ -394,7 +507,7 @@ impl QuasiStatic {
                 )),
             }
         } else {
-            self.advance(base_m, self.settings.max_step_iterations, &mut report)
+            self.advance(goal, self.settings.max_step_iterations, &mut report)
         };
         if let Err(first) = result {
             // No frictional equilibrium nearby (friction locks the antenna: sliding would
@@ -402,7 +515,7 @@ impl QuasiStatic {
             // of the step, which the step reports; without friction either, it failed.
             result = if self.has_friction() {
                 self.friction_off = true;
-                let retry = self.advance(base_m, self.settings.max_step_iterations, &mut report);
+                let retry = self.advance(goal, self.settings.max_step_iterations, &mut report);
                 self.friction_off = false;
                 match retry {
                     Ok(()) => {
@@ -424,28 +537,28 @@ impl QuasiStatic {
             // friction, in full (substeps, the fixed point, snaps), before it fails.
             self.restore_state(saved);
             self.friction_locked = false;
-            result = self.advance(base_m, self.settings.max_step_iterations, &mut report);
+            result = self.advance(goal, self.settings.max_step_iterations, &mut report);
         }
         report.dense_solves = self.ssn.system.dense_solves - dense_before;
         if let Err(e) = result {
-            return Err(self.diagnose_failure(base_m, e));
+            return Err(self.diagnose_failure(goal, e));
         }
         self.certify(&mut report)?;
         Ok(report)
     }
 
-    /// Moves the base to `base_m` in substeps (halving a step that fails or jumps,
-    /// following a snap downhill where the smallest substep fails); the state is that of
-    /// the last substep solved.
+    /// Moves the base to `target` in substeps (halving a step that fails or jumps, its
+    /// displacement and its turn, following a snap downhill where the smallest substep
+    /// fails); the state is that of the last substep solved.
     fn advance(
         &mut self,
-        base_m: Vector2<f64>,
+        target: Pose,
         budget_iterations: usize,
         report: &mut StepReport,
     ) -> Result<(), ContactError> {
-        let full_m = (base_m - self.base_m).norm();
+        let full_m = self.pose().distance_m(&target, self.reach_m);
         let min_m = full_m / f64::powi(2.0, self.settings.max_substep_depth as i32);
-        let mut goals = vec![base_m];
+        let mut goals = vec![target];
         let budget = report.iterations + budget_iterations;
         // Failed substeps in a row whose repairs found other modes converging only to
         // answers those modes refuse.
@@ -453,7 +566,7 @@ impl QuasiStatic {
         while let Some(&goal) = goals.last() {
             if report.iterations > budget {
                 return Err(ContactError::no_convergence(
-                    goal,
+                    goal.base_m,
                     "the step took more Newton iterations than max_step_iterations",
                     report.iterations,
                 ));
@@ -467,19 +580,25 @@ impl QuasiStatic {
             match attempted {
                 Ok(accepted) => {
                     report.note_residual(accepted.residual_m, &self.settings);
-                    let delta = goal - self.base_m;
-                    let dtheta: Vec<f64> = accepted.x[..self.chain.n()]
+                    let delta_m = goal.base_m - self.base_m;
+                    let turn_rad = goal.angle_rad - self.theta[0];
+                    let dtheta_rad: Vec<f64> = accepted.x[..self.chain.n()]
                         .iter()
                         .zip(&self.theta[1..])
                         .map(|(a, b)| a - b)
                         .collect();
-                    self.secant = (delta.norm() > 0.0).then_some((delta, dtheta));
+                    let moved = self.pose().distance_m(&goal, self.reach_m) > 0.0;
+                    self.secant = moved.then_some(Secant {
+                        delta_m,
+                        turn_rad,
+                        dtheta_rad,
+                    });
                     self.commit(goal, accepted);
                     report.substeps += 1;
                     goals.pop();
                 }
                 Err(_) => {
-                    let d = goal - self.base_m;
+                    let d = self.pose().distance_m(&goal, self.reach_m);
                     // A substep that fails at a fold of its branch (its stalled solves'
                     // repairs find other modes that converge, but only to answers those
                     // modes refuse: a tip stuck beyond its friction cone, or let go where
@@ -495,8 +614,8 @@ impl QuasiStatic {
                     // along a digitized wall with mu = 0.6 (CI sample 38) took 13,440 ->
                     // 18,554: a stall one halving clears as often as not.
                     let at_fold = refused_in_a_row >= FOLD_FAILURES;
-                    if d.norm() > min_m && d.norm() > 0.0 && !at_fold {
-                        goals.push(self.base_m + d * 0.5);
+                    if d > min_m && d > 0.0 && !at_fold {
+                        goals.push(self.pose().midway(&goal));
                     } else {
                         let followed = match self.follow_snap(goal, budget, report) {
                             Err(e) if self.release_anchors(report) => {
@@ -538,10 +657,10 @@ impl QuasiStatic {
         }
     }
 
-    /// Whether, with no pair standing and every hair open, every link and hair tip at
-    /// `base_m` is farther than the candidate margin from every wall by the broad phase's
+    /// Whether, with no pair standing and every hair open, every link and hair tip with the
+    /// base at `goal` is farther than the candidate margin from every wall by the broad phase's
     /// bound ([`crate::WallShape::segment_gap_lower_bound_m`]).
-    fn clear_of_walls(&mut self, base_m: Vector2<f64>) -> bool {
+    fn clear_of_walls(&mut self, goal: Pose) -> bool {
         if !self.pairs.is_empty() {
             return false;
         }
@@ -555,7 +674,7 @@ impl QuasiStatic {
             return false;
         }
         let margin_m = self.settings.margin_m;
-        self.probe.update(&self.chain, base_m, &self.theta);
+        self.probe.update_at(&self.chain, goal, &self.theta);
         let probe = &self.probe;
         self.walls.iter().all(|wall| {
             (0..=self.chain.n()).all(|link| {
@@ -584,10 +703,15 @@ impl QuasiStatic {
         self.theta[1..].to_vec()
     }
 
-    /// Makes an accepted (sub)step the state.
-    pub(super) fn commit(&mut self, goal: Vector2<f64>, accepted: Accepted) {
+    /// Makes an accepted (sub)step the state (the base at `goal`, pivot and angle); the
+    /// state it started from is kept as [`Self::step_start`].
+    pub(super) fn commit(&mut self, goal: Pose, accepted: Accepted) {
         let n = self.chain.n();
-        self.base_m = goal;
+        self.step_start.base_m = self.base_m;
+        self.step_start.theta.clone_from(&self.theta);
+        self.step_start.beta.clone_from(&self.beta);
+        self.base_m = goal.base_m;
+        self.theta[0] = goal.angle_rad;
         self.hand_force_n = accepted.hand_force_n;
         self.theta[1..].copy_from_slice(&accepted.x[..n]);
         for (link, hair) in self.chain.hairs().iter().enumerate() {
@@ -678,6 +802,19 @@ impl QuasiStatic {
             }
         }
         Ok(())
+    }
+
+    /// The point the hand holding the tip pulls it to with the base at `at` (its offset
+    /// turned by the base's turn since [`Self::hold_tip`]); `None` without a hand.
+    pub(super) fn hand_target(&self, at: Pose) -> Option<Vector2<f64>> {
+        self.hand_offset_m.map(|o| {
+            let turn_rad = at.angle_rad - self.hand_angle_rad;
+            if turn_rad == 0.0 {
+                at.base_m + o
+            } else {
+                at.base_m + super::posture::rotate(turn_rad, o)
+            }
+        })
     }
 
     /// The friction law of a fresh contact on piece `piece` at `point_m`: the surface's

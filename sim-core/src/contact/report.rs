@@ -1,6 +1,7 @@
 //! What one step of the quasi-static solver took, and what it relaxed to get through.
 
-/// What one call of [`super::QuasiStatic::step_to`] took.
+/// What one call of [`super::QuasiStatic::step_to_pose`] (or
+/// [`super::QuasiStatic::step_to`]) took.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepReport {
     /// Substeps solved (1 when the step was solved whole).

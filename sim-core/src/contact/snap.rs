@@ -4,9 +4,8 @@
 //! converges without a jump (docs/model.md 6: "follow the downhill path, not jump to whatever
 //! minimum a Newton step lands in").
 
-use nalgebra::Vector2;
-
 use super::ContactError;
+use super::posture::Pose;
 use super::quasistatic::QuasiStatic;
 use super::report::StepReport;
 
@@ -35,7 +34,7 @@ impl QuasiStatic {
     /// failure), until a plain solve from the posture reached converges without a jump.
     pub(super) fn follow_snap(
         &mut self,
-        goal: Vector2<f64>,
+        goal: Pose,
         budget: usize,
         report: &mut StepReport,
     ) -> Result<(), ContactError> {
@@ -102,7 +101,7 @@ impl QuasiStatic {
             }
         }
         Err(ContactError::no_convergence(
-            goal,
+            goal.base_m,
             "the downhill path did not come to rest",
             report.iterations,
         ))

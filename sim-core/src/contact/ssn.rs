@@ -635,6 +635,7 @@ mod tests {
             pieces,
             tip_force_n: Vector2::zeros(),
             base_m: Vector2::zeros(),
+            base_angle_rad: chain.base_angle_rad(),
             hair_links: &[],
             hair_beta_rad: &[0.0, 0.0],
             proximal: None,

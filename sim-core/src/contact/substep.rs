@@ -7,6 +7,7 @@ use nalgebra::Vector2;
 
 use super::equations::{Proximal, StepProblem};
 use super::pair::{Pair, PairKey};
+use super::posture::Pose;
 use super::quasistatic::{QuasiStatic, theta_of};
 use super::report::StepReport;
 use super::ssn::STALL_ITERATIONS;
@@ -71,15 +72,23 @@ fn taking_turns_with(round_keys: &mut Vec<Vec<PairKey>>, pairs: &[Pair]) -> bool
 }
 
 impl QuasiStatic {
-    /// The secant predictor of the joint angles `theta_1..theta_n` at the base position
-    /// `goal`: the last plain step's change, scaled to this step's base displacement (up to
-    /// twice the last one), within the joint limits; `None` without a last plain step or
-    /// where the displacements do not point the same way.
-    pub(super) fn secant_prediction(&self, goal: Vector2<f64>) -> Option<Vec<f64>> {
-        let (delta, dtheta) = self.secant.as_ref()?;
-        let d2 = delta.norm_squared();
+    /// The secant predictor of the joint angles `theta_1..theta_n` with the base at
+    /// `goal`: the last plain step's change, scaled to this step's change of the base pose
+    /// (up to twice the last one; displacement and turn weighed together, the turn by the
+    /// chain's reach), within the joint limits; `None` without a last plain step or where
+    /// the changes do not point the same way.
+    pub(super) fn secant_prediction(&self, goal: Pose) -> Option<Vec<f64>> {
+        let secant = self.secant.as_ref()?;
+        let (delta, dtheta) = (&secant.delta_m, &secant.dtheta_rad);
+        // A turn weighs as the displacement of a point at the chain's reach. Without turns
+        // both terms are zero and this is the projection on the displacement alone, bit
+        // for bit.
+        let w = self.reach_m * self.reach_m;
+        let d2 = delta.norm_squared() + w * secant.turn_rad * secant.turn_rad;
         let scale = if d2 > 0.0 {
-            (goal - self.base_m).dot(delta) / d2
+            ((goal.base_m - self.base_m).dot(delta)
+                + w * (goal.angle_rad - self.theta[0]) * secant.turn_rad)
+                / d2
         } else {
             0.0
         };
@@ -98,16 +107,19 @@ impl QuasiStatic {
     }
 
     /// Tries one (sub)step from the committed state to the base at `goal` (with a proximal
-    /// term when following a snap).
+    /// term when following a snap). The start posture (where the contacts' material points
+    /// were, their slips measured from there) is the committed pose, pivot and angle; the
+    /// probe (the last posture carried to the goal), the broad phase and the predictor use
+    /// the goal's.
     pub(super) fn attempt(
         &mut self,
-        goal: Vector2<f64>,
+        goal: Pose,
         proximal: Option<(f64, &[f64])>,
         report: &mut StepReport,
     ) -> Result<Accepted, Reject> {
         let n = self.chain.n();
         self.start.update(&self.chain, self.base_m, &self.theta);
-        self.probe.update(&self.chain, goal, &self.theta);
+        self.probe.update_at(&self.chain, goal, &self.theta);
         let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
         let mut anchoring = super::anchoring::AnchorRounds::default();
         let mut handed_over = Vec::new();
@@ -152,11 +164,12 @@ impl QuasiStatic {
                 chain: &self.chain,
                 pieces: &self.pieces.walls,
                 tip_force_n: self.tip_force_n,
-                base_m: goal,
+                base_m: goal.base_m,
+                base_angle_rad: goal.angle_rad,
                 hair_links: &hair_links,
                 hair_beta_rad: &self.beta,
                 proximal: prox,
-                hand_m: self.hand_offset_m.map(|o| goal + o),
+                hand_m: self.hand_target(goal),
                 tolerance_m: self.settings.tolerance_m,
                 // A pseudo-time step of a snap is held to the same residual as a step: a
                 // looser one lets the flow creep by stalled solves where a contact sits on
@@ -197,7 +210,7 @@ impl QuasiStatic {
                 // step over 20 s 46 -> 25).
                 // (`Self::probe_at`, written out: `problem` still borrows the chain.)
                 let theta = theta_of(&self.theta, &x);
-                self.probe.update(&self.chain, goal, &theta);
+                self.probe.update_at(&self.chain, goal, &theta);
                 let missed = self.missed_pairs(&x, &hair_links, &pairs);
                 if !missed.is_empty() {
                     pairs = pairs_start;

@@ -10,6 +10,11 @@
 //! recorded poses, so a replay takes exactly the rig's path (friction makes the posture depend
 //! on it).
 //!
+//! A turn by [`step_base_to`] starts the contacts afresh (a servo turning the base link
+//! between a rig's stage steps). A base that moves and turns continuously (a mobile robot)
+//! is stepped by [`QuasiStatic::step_to_pose`] instead, which turns the base within the
+//! step and keeps the contacts, their friction state and the hair deflections.
+//!
 //! ```
 //! use nalgebra::Vector2;
 //! use sim_core::sweep::{BasePose, Placement, SweepScene, place_at, step_base_to};
