@@ -284,6 +284,15 @@ impl FollowConfig {
                 }
             }
         }
+        if r.antenna_loads_body && matches!(r.body, BodyModel::Wheeled { .. }) {
+            return bad(
+                "robot",
+                "antenna_loads_body",
+                "a wheeled robot's turning rate is commanded, so the antenna's moment cannot \
+                 turn it: antenna_loads_body needs body = \"template\""
+                    .to_string(),
+            );
+        }
         for (k, v) in r.footprint_m.iter().enumerate() {
             if !positive(*v) {
                 let what = if k == 0 { "length" } else { "width" };
@@ -404,6 +413,16 @@ mod tests {
         assert!(matches!(
             c.validate(),
             Err(FollowError::Invalid { key: "kp_n", .. })
+        ));
+        let mut c = FollowConfig::default();
+        c.robot.antenna_loads_body = true;
+        c.robot.body = BodyModel::Wheeled {
+            max_turn_rate_rad_per_s: 3.0,
+            max_turn_accel_rad_per_s2: 10.0,
+        };
+        assert!(matches!(
+            c.validate(),
+            Err(FollowError::Invalid { key: "antenna_loads_body", .. })
         ));
         let mut c = FollowConfig::default();
         c.settings.step_s = 0.0001;
