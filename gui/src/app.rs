@@ -1,12 +1,16 @@
 //! [`MonitorApp`]: the whole monitor, laid out from the panels, for eframe and for tests.
 //!
 //! A source feeds it: [`LiveClient`] (antennad's stream), a [`RecordedTrial`] (an MCAP
-//! file) or a [`SweepWorker`] (a scene file's simulated sweep, solved on its own thread).
+//! file), a [`SweepWorker`] (a scene file's simulated sweep, solved on its own thread) or a
+//! [`FollowWorker`] (a closed-loop wall-following run: a follow scene run on its own thread,
+//! or a `--jsonl` file of `antenna follow`). Files open from the command line, the source bar
+//! or by dropping them on the window (`.mcap`, `.toml`, `.jsonl`).
 //! Every frame it reads the source's [`History`] under the view's window, draws the chain at
 //! the view's cursor (with the prediction for the same base pose, for the rig's sources), and
 //! carries out the user's view, export and control actions. A sweep is shown whole as it is
 //! solved (the chain at the newest step) until the user moves the view, then played, paused
-//! and scrubbed like a recording.
+//! and scrubbed like a recording; a follow run the same way, with its top view (the robot, its
+//! antenna, the walls, the estimator's points) and its distance error against time.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -18,13 +22,14 @@ use sim_core::CoverageSettings;
 use crate::client::{ClientOptions, Command, ConnectionState, LiveClient, ReplyRecord};
 use crate::error::MonitorError;
 use crate::export::{FigureInput, export_csv, export_figure};
+use crate::follow::{FollowRunState, FollowWorker, MAX_FOLLOW_STEPS};
 use crate::frame::{ChainFrame, SegmentState};
 use crate::history::{Health, History};
 use crate::mapping::CoverageCache;
 use crate::panels::chain::WallMap;
 use crate::panels::{
-    ChainPanel, ControlsPanel, HealthPanel, JointAnglesPanel, StageInfo, StagePanel,
-    TimelineAction, TimelinePanel, TouchRasterPanel,
+    ChainPanel, ControlsPanel, FollowErrorPanel, FollowInfoPanel, HealthPanel, JointAnglesPanel,
+    StageInfo, StagePanel, TimelineAction, TimelinePanel, TouchRasterPanel,
 };
 use crate::prediction::{BasePose, PredictionWorker, predictor_for};
 use crate::recording::{RecordedTrial, open_trial};
@@ -41,8 +46,12 @@ pub struct AppOptions {
     pub token: String,
     /// Open this recorded trial instead.
     pub trial: Option<PathBuf>,
-    /// Run this scene file's sweep instead (when no trial is given).
+    /// Run this scene file instead (when no trial is given): its sweep, or its closed-loop
+    /// run for a follow scene.
     pub scene: Option<PathBuf>,
+    /// Play this `--jsonl` file of `antenna follow` instead (when no trial or scene is
+    /// given).
+    pub follow: Option<PathBuf>,
     /// The live history window, seconds.
     pub history_s: f64,
     /// Where exports are written.
@@ -57,6 +66,7 @@ impl Default for AppOptions {
             token: String::new(),
             trial: None,
             scene: None,
+            follow: None,
             history_s: 60.0,
             export_dir: PathBuf::from("."),
         }
@@ -81,6 +91,7 @@ enum Source {
     Live(LiveClient),
     Trial(Box<RecordedTrial>),
     Sweep(SweepWorker),
+    Follow(FollowWorker),
 }
 
 struct PredictionSlot {
@@ -129,6 +140,8 @@ struct Panels {
     stage: StagePanel,
     controls: ControlsPanel,
     timeline: TimelinePanel,
+    follow_error: FollowErrorPanel,
+    follow_info: FollowInfoPanel,
 }
 
 /// What one frame reads from the source.
@@ -137,6 +150,8 @@ struct DataRef<'a> {
     rig: Option<&'a RigGeometry>,
     /// A simulated sweep: the chain is its step at the cursor (there is no rig).
     sweep: Option<&'a SweepRunState>,
+    /// A closed-loop run: the chain is its step at the cursor, with the robot.
+    follow: Option<&'a FollowRunState>,
     stage_range_m: Option<(f64, f64)>,
     mount_angle_rad: f64,
     addresses: &'a [u8],
@@ -171,6 +186,8 @@ impl MonitorApp {
                 stage: StagePanel,
                 controls: ControlsPanel::new(options.token.clone()),
                 timeline: TimelinePanel::new(options.history_s),
+                follow_error: FollowErrorPanel,
+                follow_info: FollowInfoPanel,
             },
             prediction: None,
             address: options
@@ -180,6 +197,7 @@ impl MonitorApp {
             trial_path: options
                 .trial
                 .as_ref()
+                .or(options.follow.as_ref())
                 .map_or_else(String::new, |p| p.display().to_string()),
             scene_path: options
                 .scene
@@ -201,6 +219,8 @@ impl MonitorApp {
             app.open(path);
         } else if let Some(path) = &options.scene {
             app.open_scene(path);
+        } else if let Some(path) = &options.follow {
+            app.open_follow_file(path);
         } else if let Some(address) = &options.connect {
             app.connect(address.clone());
         }
@@ -222,8 +242,23 @@ impl MonitorApp {
         }
     }
 
-    /// Opens the recorded trial at `path` (replacing the current source).
+    /// Opens the file at `path` by its extension: a scene file (`.toml`, [`Self::open_scene`]),
+    /// a follow file (`.jsonl`, [`Self::open_follow_file`]) or a recorded trial (anything else,
+    /// [`Self::open`]). Dropping a file on the window does this.
+    pub fn open_path(&mut self, path: &Path) {
+        match extension(path).as_str() {
+            "toml" => self.open_scene(path),
+            _ => self.open(path),
+        }
+    }
+
+    /// Opens the recorded trial at `path` (replacing the current source); a `.jsonl` file is a
+    /// follow file ([`Self::open_follow_file`]).
     pub fn open(&mut self, path: &Path) {
+        if extension(path) == "jsonl" {
+            self.open_follow_file(path);
+            return;
+        }
         match open_trial(path) {
             Ok(trial) => {
                 let span = trial
@@ -256,10 +291,75 @@ impl MonitorApp {
         }
     }
 
-    /// Reads the scene file at `path` and starts its sweep on a worker thread (replacing the
+    /// Opens a `--jsonl` file of `antenna follow` and shows the whole run (replacing the
+    /// current source). A file that cannot be played leaves the source as it was, with the
+    /// error (naming the file and the line) in the status line.
+    pub fn open_follow_file(&mut self, path: &Path) {
+        match FollowWorker::open_file(path) {
+            Ok(worker) => {
+                let note = {
+                    let state = worker.lock();
+                    let span = state.history.first_t_s().zip(state.history.latest_t_s());
+                    let length_s = span.map_or(1.0, |(a, b)| (b - a).max(0.01));
+                    self.view = ViewState::new(length_s);
+                    if let Some((first, _)) = span {
+                        self.view.show_range(first, first + length_s, first);
+                    }
+                    let mut note = format!(
+                        "opened {} ({} steps, {:.2} s, status {})",
+                        path.display(),
+                        state.steps.len(),
+                        length_s,
+                        state
+                            .summary
+                            .as_ref()
+                            .map_or("unknown: no summary line", |s| s.status.as_str())
+                    );
+                    if let Some(why) = &state.walls_note {
+                        note.push_str(&format!("; no walls drawn: {why}"));
+                    }
+                    note
+                };
+                self.message = Some((note, false));
+                self.sweep_view = None;
+                self.sweep_reported = true;
+                self.playing = None;
+                self.source = Source::Follow(worker);
+            }
+            Err(e) => self.message = Some((e.to_string(), true)),
+        }
+    }
+
+    /// Reads the scene file at `path` and starts its sweep on a worker thread, or for a follow
+    /// scene (`[robot]`, `[controller]`, `[follow]`) its closed-loop run (replacing the
     /// current source). A file that does not parse leaves the source as it was, with the
     /// error (naming the key, line and column) in the status line.
     pub fn open_scene(&mut self, path: &Path) {
+        match antenna_scene::Scene::from_path(path) {
+            Ok(scene) if scene.follow.is_some() => {
+                match FollowWorker::start_scene(path, &scene, MAX_FOLLOW_STEPS) {
+                    Ok(worker) => {
+                        let planned_end_s = worker.lock().planned_end_s();
+                        self.view = ViewState::new(planned_end_s.max(0.01));
+                        self.sweep_view = Some(self.view.clone());
+                        self.sweep_reported = false;
+                        self.message = Some((
+                            format!("running the follow run of {}", path.display()),
+                            false,
+                        ));
+                        self.playing = None;
+                        self.source = Source::Follow(worker);
+                    }
+                    Err(e) => self.message = Some((e.to_string(), true)),
+                }
+                return;
+            }
+            Ok(_) => {}
+            Err(e) => {
+                self.message = Some((MonitorError::Scene(e).to_string(), true));
+                return;
+            }
+        }
         match SweepWorker::start(path, MAX_SWEEP_STEPS) {
             Ok(worker) => {
                 let planned_end_s = worker.lock().planned_end_s();
@@ -289,6 +389,14 @@ impl MonitorApp {
     /// a map is computed. The map is computed only while it is shown.
     pub fn coverage_key(&self) -> Option<(u64, usize)> {
         self.coverage.key()
+    }
+
+    /// The closed-loop run, if one is the source (a follow scene's or a file's).
+    pub fn follow(&self) -> Option<&FollowWorker> {
+        match &self.source {
+            Source::Follow(w) => Some(w),
+            _ => None,
+        }
     }
 
     /// The view (window, cursor, following).
@@ -349,6 +457,18 @@ impl MonitorApp {
                 }
                 Source::Trial(_) => return true,
                 Source::Sweep(worker) => {
+                    let state = worker.lock();
+                    let span = state
+                        .history
+                        .first_t_s()
+                        .zip(state.history.latest_t_s())
+                        .map(|(a, b)| b - a);
+                    if state.is_finished() || span.is_some_and(|s| s >= history_s) {
+                        return true;
+                    }
+                    None
+                }
+                Source::Follow(worker) => {
                     let state = worker.lock();
                     let span = state
                         .history
@@ -435,7 +555,24 @@ impl MonitorApp {
 
     /// Draws the whole app into `ui` (eframe's root `Ui`, or a test harness's).
     pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let dropped: Option<PathBuf> = ui.ctx().input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .rev()
+                .map(|f| f.path().to_path_buf())
+                .find(|p| !p.as_os_str().is_empty())
+        });
+        if let Some(path) = dropped {
+            if extension(&path) == "toml" {
+                self.scene_path = path.display().to_string();
+            } else {
+                self.trial_path = path.display().to_string();
+            }
+            self.open_path(&path);
+        }
         self.follow_sweep();
+        self.follow_follow_run();
         self.source_bar(ui);
         let mut source = std::mem::replace(&mut self.source, Source::Idle);
         let deferred = match &mut source {
@@ -445,6 +582,7 @@ impl MonitorApp {
                     history: &state.history,
                     rig: state.rig.as_ref(),
                     sweep: None,
+                    follow: None,
                     stage_range_m: state.rig.as_ref().and_then(|r| r.stage_range_m),
                     mount_angle_rad: state.rig.as_ref().map_or(0.0, |r| r.base_mount_angle_rad),
                     addresses: &state.segment_addresses,
@@ -472,6 +610,7 @@ impl MonitorApp {
                     history: &trial.history,
                     rig: Some(&trial.rig),
                     sweep: None,
+                    follow: None,
                     stage_range_m: trial.rig.stage_range_m,
                     mount_angle_rad: trial.rig.base_mount_angle_rad,
                     addresses: &trial.segment_addresses,
@@ -488,12 +627,18 @@ impl MonitorApp {
                 let state = worker.lock();
                 if !state.is_finished() {
                     // Steps arrive between locks: the chain drawn is the newest of this lock.
-                    keep_sweep_in_view(&mut self.view, &mut self.sweep_view, &state);
+                    keep_run_in_view(
+                        &mut self.view,
+                        &mut self.sweep_view,
+                        &state.history,
+                        state.planned_end_s(),
+                    );
                 }
                 let data = DataRef {
                     history: &state.history,
                     rig: None,
                     sweep: Some(&state),
+                    follow: None,
                     stage_range_m: state.track_m,
                     mount_angle_rad: state.chain.base_angle_rad(),
                     addresses: &[],
@@ -517,11 +662,45 @@ impl MonitorApp {
                 }
                 deferred
             }
+            Source::Follow(worker) => {
+                let state = worker.lock();
+                if !state.is_finished() {
+                    keep_run_in_view(
+                        &mut self.view,
+                        &mut self.sweep_view,
+                        &state.history,
+                        state.planned_end_s(),
+                    );
+                }
+                let data = DataRef {
+                    history: &state.history,
+                    rig: None,
+                    sweep: None,
+                    follow: Some(&state),
+                    stage_range_m: None,
+                    mount_angle_rad: 0.0,
+                    addresses: &[],
+                    counters: None,
+                    trial: Some(format!("follow-{}", state.name)),
+                    note: None,
+                    replies: &[],
+                    connected: false,
+                    live: false,
+                };
+                let deferred = self.draw(ui, &data);
+                if !state.is_finished() {
+                    ui.ctx().request_repaint_after(Duration::from_millis(30));
+                } else if !self.sweep_reported {
+                    ui.ctx().request_repaint();
+                }
+                deferred
+            }
             Source::Idle => {
                 egui::CentralPanel::default().show(ui, |ui| {
                     ui.label(
-                        "Connect to antennad, open a recorded trial (.mcap) or run a scene \
-                         file's sweep (.toml) above.",
+                        "Connect to antennad, open a recorded trial (.mcap) or a follow run \
+                         (.jsonl of antenna follow), or run a scene file (.toml: a sweep or a \
+                         follow scene) above, or drop one of these files here.",
                     );
                 });
                 Deferred::default()
@@ -581,7 +760,11 @@ impl MonitorApp {
                     let label = ui.label("trial .mcap");
                     ui.add(egui::TextEdit::singleline(&mut self.trial_path).desired_width(180.0))
                         .labelled_by(label.id);
-                    if ui.button("Open").clicked() {
+                    if ui
+                        .button("Open")
+                        .on_hover_text("a recorded trial (.mcap) or a follow run (.jsonl)")
+                        .clicked()
+                    {
                         let path = PathBuf::from(self.trial_path.trim());
                         self.open(&path);
                     }
@@ -589,7 +772,11 @@ impl MonitorApp {
                     let label = ui.label("scene .toml");
                     ui.add(egui::TextEdit::singleline(&mut self.scene_path).desired_width(180.0))
                         .labelled_by(label.id);
-                    if ui.button("Run sweep").clicked() {
+                    if ui
+                        .button("Run sweep")
+                        .on_hover_text("a sweep scene, or a follow scene's closed-loop run")
+                        .clicked()
+                    {
                         let path = PathBuf::from(self.scene_path.trim());
                         self.open_scene(&path);
                     }
@@ -665,6 +852,27 @@ impl MonitorApp {
                                 ui.label(RichText::new(text).color(Color32::from_rgb(220, 120, 0)));
                             }
                         }
+                        Source::Follow(worker) => {
+                            let state = worker.lock();
+                            let colour = match &state.phase {
+                                crate::follow::FollowPhase::Running => {
+                                    Color32::from_rgb(200, 140, 0)
+                                }
+                                crate::follow::FollowPhase::Failed(_) => Color32::RED,
+                                crate::follow::FollowPhase::Done
+                                    if state.summary.as_ref().is_some_and(|s| s.status != "ok") =>
+                                {
+                                    Color32::from_rgb(220, 120, 0)
+                                }
+                                crate::follow::FollowPhase::Done => Color32::from_rgb(0, 150, 0),
+                            };
+                            ui.add(
+                                egui::Label::new(
+                                    RichText::new(state.progress()).color(colour).strong(),
+                                )
+                                .wrap_mode(egui::TextWrapMode::Extend),
+                            );
+                        }
                         Source::Idle => {
                             ui.label("no source");
                         }
@@ -689,6 +897,11 @@ impl MonitorApp {
         let ended_playing = self.advance_playback(ui.ctx(), latest);
         let cursor_index = self.view.cursor_s(latest).and_then(|c| history.index_at(c));
         let measured = match (data.sweep, data.rig, cursor_index) {
+            _ if data.follow.is_some() => self
+                .view
+                .cursor_s(latest)
+                .zip(data.follow)
+                .and_then(|(c, follow)| follow.frame_at(c)),
             (Some(sweep), _, _) => self
                 .view
                 .cursor_s(latest)
@@ -796,21 +1009,29 @@ impl MonitorApp {
                         );
                         ui.separator();
                     }
-                    ui.heading("Stage and servo");
                     let sample = cursor_index.and_then(|i| history.sample(i));
-                    let info = StageInfo {
-                        stage_position_m: sample.as_ref().and_then(|s| s.stage_position_m),
-                        stage_range_m: data.stage_range_m,
-                        servo_angle_deg: sample
-                            .as_ref()
-                            .and_then(|s| s.servo_angle_rad)
-                            .map(f64::to_degrees),
-                        mount_angle_deg: data.mount_angle_rad.to_degrees(),
-                        trial: data.trial.clone(),
-                        note: data.note.clone(),
-                    };
-                    self.panels.stage.ui(ui, &info);
-                    ui.separator();
+                    if let Some(follow) = data.follow {
+                        ui.heading("Follow run");
+                        self.panels
+                            .follow_info
+                            .ui(ui, follow, self.view.cursor_s(latest));
+                        ui.separator();
+                    } else {
+                        ui.heading("Stage and servo");
+                        let info = StageInfo {
+                            stage_position_m: sample.as_ref().and_then(|s| s.stage_position_m),
+                            stage_range_m: data.stage_range_m,
+                            servo_angle_deg: sample
+                                .as_ref()
+                                .and_then(|s| s.servo_angle_rad)
+                                .map(f64::to_degrees),
+                            mount_angle_deg: data.mount_angle_rad.to_degrees(),
+                            trial: data.trial.clone(),
+                            note: data.note.clone(),
+                        };
+                        self.panels.stage.ui(ui, &info);
+                        ui.separator();
+                    }
                     ui.heading("Segment health");
                     let now: Vec<Health> = sample
                         .as_ref()
@@ -857,7 +1078,12 @@ impl MonitorApp {
             .show(ui, |ui| {
                 let width = ui.available_width();
                 let height = ui.available_height();
-                ui.allocate_ui(egui::vec2(width, height * 0.5), |ui| {
+                let (chain_share, angles_share) = if data.follow.is_some() {
+                    (0.45, 0.18)
+                } else {
+                    (0.5, 0.3)
+                };
+                ui.allocate_ui(egui::vec2(width, height * chain_share), |ui| {
                     self.panels.chain.ui(
                         ui,
                         measured.as_ref(),
@@ -867,7 +1093,12 @@ impl MonitorApp {
                         map.as_ref(),
                     );
                 });
-                ui.allocate_ui(egui::vec2(width, height * 0.3), |ui| {
+                if let Some(follow) = data.follow {
+                    ui.allocate_ui(egui::vec2(width, height * 0.22), |ui| {
+                        self.panels.follow_error.ui(ui, follow, &mut self.view);
+                    });
+                }
+                ui.allocate_ui(egui::vec2(width, height * angles_share), |ui| {
                     self.panels
                         .angles
                         .ui(ui, history, &mut self.view, max_window_s);
@@ -889,7 +1120,12 @@ impl MonitorApp {
         };
         let state = worker.lock();
         if !state.is_finished() {
-            keep_sweep_in_view(&mut self.view, &mut self.sweep_view, &state);
+            keep_run_in_view(
+                &mut self.view,
+                &mut self.sweep_view,
+                &state.history,
+                state.planned_end_s(),
+            );
             return;
         }
         if self.sweep_reported {
@@ -906,6 +1142,57 @@ impl MonitorApp {
                 );
                 if let Some(note) = &state.placement_note {
                     text.push_str(&format!("; placement: {note}"));
+                }
+                (text, false)
+            }
+        });
+        let untouched = self.sweep_view.as_ref() == Some(&self.view);
+        let span = state.history.first_t_s().zip(state.history.latest_t_s());
+        if let (true, Some((first, latest))) = (untouched, span) {
+            let cursor = if state.error().is_some() {
+                latest
+            } else {
+                first
+            };
+            self.view.show_range(first, latest, cursor);
+        }
+        self.sweep_view = None;
+    }
+
+    /// As [`Self::follow_sweep`] for a follow scene's closed-loop run: kept in view as a
+    /// whole while it runs and the user has not moved the view; at its end, reports how it
+    /// ended (its status and RMS error, or the error that stopped it) and shows it from its
+    /// start.
+    fn follow_follow_run(&mut self) {
+        let Source::Follow(worker) = &self.source else {
+            return;
+        };
+        let state = worker.lock();
+        if !state.is_finished() {
+            keep_run_in_view(
+                &mut self.view,
+                &mut self.sweep_view,
+                &state.history,
+                state.planned_end_s(),
+            );
+            return;
+        }
+        if self.sweep_reported {
+            return;
+        }
+        self.sweep_reported = true;
+        self.message = Some(match (state.error(), &state.summary) {
+            (Some(e), _) => (e.to_string(), true),
+            (None, summary) => {
+                let mut text = format!("ran {}: {} steps", state.path.display(), state.steps.len());
+                if let Some(s) = summary {
+                    text.push_str(&format!(", status {}", s.status));
+                    if let Some(rms) = s.rms_error_m {
+                        text.push_str(&format!(", rms error {:.1} mm", rms * 1e3));
+                    }
+                }
+                if !state.start.note.is_empty() {
+                    text.push_str(&format!("; placement: {}", state.start.note));
                 }
                 (text, false)
             }
@@ -996,18 +1283,27 @@ impl MonitorApp {
 }
 
 /// While the user has not moved `view` since the app last set it (`sweep_view`): the whole
-/// sweep planned in view, the chain at the newest step of `state`.
-fn keep_sweep_in_view(
+/// simulated run (a sweep or a follow run) planned in view (`planned_end_s` after its start),
+/// the chain at the newest step of its `history`.
+fn keep_run_in_view(
     view: &mut ViewState,
     sweep_view: &mut Option<ViewState>,
-    state: &SweepRunState,
+    history: &History,
+    planned_end_s: f64,
 ) {
-    let span = state.history.first_t_s().zip(state.history.latest_t_s());
+    let span = history.first_t_s().zip(history.latest_t_s());
     if let (true, Some((first, latest))) = (sweep_view.as_ref() == Some(view), span) {
-        let end = (first + state.planned_end_s()).max(latest);
+        let end = (first + planned_end_s).max(latest);
         view.show_range(first, end, latest);
         *sweep_view = Some(view.clone());
     }
+}
+
+/// `path`'s extension, lower case (empty without one).
+fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
 }
 
 /// Whether eframe's OpenGL context is a software rasterizer (Mesa's llvmpipe or softpipe,

@@ -83,6 +83,21 @@ pub enum MonitorError {
         /// What failed, worded with the scene file, the key or the step.
         source: antenna_scene::SweepFailure,
     },
+    /// A `--jsonl` file of `antenna follow` that cannot be read or played; `line` is 1-based
+    /// (0: the file could not be read).
+    #[error("{}:{line}: {message}", path.display())]
+    FollowFile {
+        /// The file.
+        path: PathBuf,
+        /// The line.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A follow scene's closed-loop run could not start, or stopped before its end (the
+    /// steps before it are kept).
+    #[error("follow: {0}")]
+    Follow(String),
     /// A control command was not sent.
     #[error("control: {0}")]
     Control(String),

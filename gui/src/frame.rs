@@ -6,6 +6,12 @@
 //! stage position. Positions are metres in the track frame: x along the stage's track from
 //! home, y towards the wall, the antenna's base attachment at `(stage_position_m, 0)`.
 //!
+//! The base need not ride a stage along x: a frame carries the path its base takes
+//! ([`ChainFrame::path_m`]: a sweep's straight track in any direction, a follow run's path of
+//! the robot so far), and a closed-loop run's frame the robot's body ([`BodyDrawing`]: its
+//! footprint at its pose and heading), the estimator's points and the whole run's extent, so
+//! that sweeps and follow runs draw through the same chain panel.
+//!
 //! Where a touch switch sits is the frame's to say, the same for every source:
 //! [`ChainFrame::lit_switches`] places each switch that fires at sim-core's place for it,
 //! [`TouchLayout::switch_fraction`] of its segment's link from the proximal joint (switch `i`
@@ -68,8 +74,52 @@ pub struct HairDrawing {
     pub tip_m: PointM,
 }
 
+/// A moving robot's body in a frame (a closed-loop run, [`crate::follow`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyDrawing {
+    /// The point of rotation, ground frame, metres.
+    pub por_m: PointM,
+    /// The heading, ground frame, counter-clockwise, radians.
+    pub heading_rad: f64,
+    /// The footprint's corners (a rectangle about the point of rotation), counter-clockwise
+    /// from the front corner on the body's right, ground frame, metres.
+    pub corners_m: [PointM; 4],
+    /// Whether the footprint overlaps a wall.
+    pub collided: bool,
+    /// The estimated wall point: `estimate_m` across the body axis at the estimate's preview,
+    /// toward the wall's side, ground frame, metres (`None` without an estimate).
+    pub estimated_wall_m: Option<PointM>,
+}
+
+impl BodyDrawing {
+    /// The body at `por_m` heading `heading_rad`, with a `footprint_m` = `[length, width]`
+    /// rectangle centred on the point of rotation.
+    pub fn new(por_m: PointM, heading_rad: f64, footprint_m: [f64; 2], collided: bool) -> Self {
+        let (sin, cos) = heading_rad.sin_cos();
+        let (half_length, half_width) = (footprint_m[0] / 2.0, footprint_m[1] / 2.0);
+        let corner = |ahead: f64, left: f64| {
+            [
+                por_m[0] + cos * ahead - sin * left,
+                por_m[1] + sin * ahead + cos * left,
+            ]
+        };
+        Self {
+            por_m,
+            heading_rad,
+            corners_m: [
+                corner(half_length, -half_width),
+                corner(half_length, half_width),
+                corner(-half_length, half_width),
+                corner(-half_length, -half_width),
+            ],
+            collided,
+            estimated_wall_m: None,
+        }
+    }
+}
+
 /// One instant of the chain (see the module documentation).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct ChainFrame {
     /// The instant, seconds on the source's clock.
     pub t_s: f64,
@@ -91,8 +141,21 @@ pub struct ChainFrame {
     pub stage_position_m: Option<f64>,
     /// The base link's angle from the track (mounting angle plus servo), radians.
     pub base_angle_rad: f64,
-    /// The stage's soft limits, metres, if known (drawn as the track).
+    /// The stage's soft limits, metres, if known (drawn as the track when `path_m` is
+    /// empty).
     pub stage_range_m: Option<(f64, f64)>,
+    /// The path of a moving base, ground frame, metres: a sweep's track from its start to its
+    /// end (in any direction), a follow run's point of rotation up to this instant. Empty for
+    /// the rig (its track is `stage_range_m`).
+    pub path_m: Vec<PointM>,
+    /// A closed-loop run's robot body (`None` for the rig and a sweep).
+    pub body: Option<BodyDrawing>,
+    /// A closed-loop run's estimator points (the contact line's window), ground frame,
+    /// metres.
+    pub estimated_points_m: Vec<PointM>,
+    /// The whole run's extent `(min, max)` (every pose's footprint and antenna reach), for a
+    /// view that fits the run; `None`: fit the frame ([`ChainFrame::bounds_m`]).
+    pub run_extent_m: Option<(PointM, PointM)>,
 }
 
 /// How far a second frame's joints are from a first's.
@@ -156,9 +219,20 @@ impl ChainFrame {
             .collect()
     }
 
-    /// The smallest box holding the chain, the base and the stage's track, as
-    /// `(min, max)`; walls are not included (they are drawn clipped to it).
+    /// The smallest box holding the chain, the base, the stage's track, the base's path and
+    /// the body, as `(min, max)`; walls are not included (they are drawn clipped to it).
     pub fn bounds_m(&self) -> (PointM, PointM) {
+        let (mut min, mut max) = self.local_bounds_m();
+        for p in &self.path_m {
+            min = [min[0].min(p[0]), min[1].min(p[1])];
+            max = [max[0].max(p[0]), max[1].max(p[1])];
+        }
+        (min, max)
+    }
+
+    /// [`Self::bounds_m`] without the base's path: the chain, the base, the stage's track
+    /// and the body (a view that follows the robot).
+    pub fn local_bounds_m(&self) -> (PointM, PointM) {
         let mut min = self.base_m;
         let mut max = self.base_m;
         let mut grow = |p: &PointM| {
@@ -170,6 +244,9 @@ impl ChainFrame {
         if let Some((lo, hi)) = self.stage_range_m {
             grow(&[lo, 0.0]);
             grow(&[hi, 0.0]);
+        }
+        if let Some(body) = &self.body {
+            body.corners_m.iter().for_each(&mut grow);
         }
         (min, max)
     }
@@ -212,6 +289,7 @@ mod tests {
             stage_position_m: None,
             base_angle_rad: 0.0,
             stage_range_m: Some((0.0, 0.3)),
+            ..ChainFrame::default()
         }
     }
 
@@ -226,6 +304,23 @@ mod tests {
         assert_eq!(b.bounds_m(), ([0.0, 0.0], [0.3, 0.03]));
         assert_eq!(a.link_m(1), Some(([0.04, 0.0], [0.08, 0.0])));
         assert_eq!(a.link_m(2), None);
+        // A moving base's path widens the bounds; the local bounds leave it out.
+        let mut c = a.clone();
+        c.path_m = vec![[-0.5, 0.0], [0.0, 0.0]];
+        assert_eq!(c.bounds_m(), ([-0.5, 0.0], [0.3, 0.0]));
+        assert_eq!(c.local_bounds_m(), a.bounds_m());
+    }
+
+    #[test]
+    fn a_body_turned_a_quarter_has_its_length_along_y() {
+        let body = BodyDrawing::new([1.0, 2.0], std::f64::consts::FRAC_PI_2, [0.2, 0.1], false);
+        let near =
+            |p: PointM, q: PointM| (p[0] - q[0]).abs() < 1e-12 && (p[1] - q[1]).abs() < 1e-12;
+        // Ahead is +y, the body's right is +x.
+        assert!(near(body.corners_m[0], [1.05, 2.1]), "{:?}", body.corners_m);
+        assert!(near(body.corners_m[1], [0.95, 2.1]));
+        assert!(near(body.corners_m[2], [0.95, 1.9]));
+        assert!(near(body.corners_m[3], [1.05, 1.9]));
     }
 
     /// Bit `i` lights switch `i` alone, `(i + 1/2) / 4` of the way along its segment's link;

@@ -62,6 +62,7 @@ pub mod app;
 pub mod client;
 pub mod error;
 pub mod export;
+pub mod follow;
 pub mod frame;
 pub mod history;
 pub mod mapping;

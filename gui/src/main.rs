@@ -8,14 +8,17 @@ use antenna_monitor::{AppOptions, MonitorApp, is_software_gl, tune_for_software_
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 
-/// The egui desktop monitor for antennad's live chain, recorded trials and simulated sweeps.
+/// The egui desktop monitor for antennad's live chain, recorded trials, simulated sweeps and
+/// closed-loop wall-following runs.
 #[derive(Debug, Parser)]
 #[command(
     version,
     after_help = "Examples:\n  antenna-monitor --connect 127.0.0.1:7878\n  \
                   antenna-monitor --connect 127.0.0.1:7878 --token \"$ANTENNA_TOKEN\"\n  \
                   antenna-monitor --trial data/wall-sweep.mcap\n  \
-                  antenna-monitor --scene examples/sweep_line_wall.toml"
+                  antenna-monitor --scene examples/sweep_line_wall.toml\n  \
+                  antenna-monitor --scene examples/follow/straight_wall.toml\n  \
+                  antenna-monitor --follow run.jsonl   # from antenna follow SCENE --jsonl"
 )]
 struct Args {
     /// antennad's stream, host:port (the default when no trial or scene is given:
@@ -29,10 +32,14 @@ struct Args {
     /// Open a recorded trial (MCAP) to scrub instead of connecting.
     #[arg(long, value_name = "FILE", conflicts_with = "connect")]
     trial: Option<PathBuf>,
-    /// Run a scene file's sweep (sim-core, on a worker thread) and animate it instead of
-    /// connecting.
+    /// Run a scene file's sweep, or a follow scene's closed-loop run (sim-core, on a worker
+    /// thread), and animate it instead of connecting.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["connect", "trial"])]
     scene: Option<PathBuf>,
+    /// Play a closed-loop run written by `antenna follow SCENE --jsonl` instead of
+    /// connecting.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["connect", "trial", "scene"])]
+    follow: Option<PathBuf>,
     /// Seconds of live history kept (the plots' longest window).
     #[arg(long, default_value_t = 60.0)]
     history_s: f64,
@@ -40,8 +47,8 @@ struct Args {
     #[arg(long, default_value = ".")]
     export_dir: PathBuf,
     /// Before opening the window, wait until the live history spans this many seconds and
-    /// the first prediction is in (a scene's sweep: until it has run this many seconds, or
-    /// ended; at most 10 s longer): for screenshots.
+    /// the first prediction is in (a scene's sweep or follow run: until it has run this many
+    /// seconds, or ended; at most 10 s longer): for screenshots.
     #[arg(long, value_name = "S")]
     wait_for_history_s: Option<f64>,
     /// Window size in points, WIDTHxHEIGHT.
@@ -66,9 +73,9 @@ fn main() -> Result<()> {
         .split_once('x')
         .and_then(|(w, h)| Some((w.parse::<f32>().ok()?, h.parse::<f32>().ok()?)))
         .with_context(|| format!("--size {:?}: expected WIDTHxHEIGHT", args.size))?;
-    let connect = match (&args.connect, &args.trial, &args.scene) {
-        (None, None, None) => Some("127.0.0.1:7878".to_owned()),
-        (c, _, _) => c.clone(),
+    let connect = match (&args.connect, &args.trial, &args.scene, &args.follow) {
+        (None, None, None, None) => Some("127.0.0.1:7878".to_owned()),
+        (c, ..) => c.clone(),
     };
     let mut app = MonitorApp::new(AppOptions {
         connect,
@@ -78,6 +85,7 @@ fn main() -> Result<()> {
             .unwrap_or_default(),
         trial: args.trial,
         scene: args.scene,
+        follow: args.follow,
         history_s: args.history_s,
         export_dir: args.export_dir,
     });

@@ -219,6 +219,7 @@ impl RigGeometry {
             stage_position_m,
             base_angle_rad,
             stage_range_m: self.stage_range_m,
+            ..ChainFrame::default()
         })
     }
 

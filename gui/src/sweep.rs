@@ -4,7 +4,9 @@
 //! [`frame_from_step`] turns one [`SweepStep`] into a [`ChainFrame`]: joint positions from
 //! sim-core's kinematics shifted to the step's base, the step's touch bits per segment, its
 //! contact points, the hair tips, and every wall drawn as a polyline around the antenna
-//! ([`wall_polyline_m`]). [`run_sweep`] runs a whole [`SweepScene`] into frames at once;
+//! ([`wall_polyline_m`]), with the base's straight path from its start to its end
+//! ([`base_path_m`], in any direction: the stage along x is one case of it).
+//! [`run_sweep`] runs a whole [`SweepScene`] into frames at once;
 //! the monitor runs a scene file's sweep on a worker thread instead
 //! ([`crate::sweep_run::SweepWorker`]), step by step, with these frames drawn at the cursor.
 
@@ -48,20 +50,39 @@ pub fn track_m(scene: &SweepScene) -> Option<(f64, f64)> {
         .then(|| (start_m.x.min(end_x_m), start_m.x.max(end_x_m)))
 }
 
+/// The straight path a sweep's base takes, from its start to its planned end, ground frame,
+/// metres (in any direction; empty when not finite).
+pub fn base_path_m(scene: &SweepScene) -> Vec<PointM> {
+    let start_m = scene.base_start_m;
+    let end_m = start_m + scene.motion.velocity_m_per_s * scene.motion.duration_s;
+    if start_m.iter().chain(end_m.iter()).all(|v| v.is_finite()) {
+        vec![[start_m.x, start_m.y], [end_m.x, end_m.y]]
+    } else {
+        Vec::new()
+    }
+}
+
 /// Runs `scene` to the end (at most `max_steps` steps after the placement) and returns its
 /// frames.
 pub fn run_sweep(scene: SweepScene, max_steps: usize) -> Result<SweepFrames, MonitorError> {
     let chain = scene.chain.clone();
     let walls = scene.walls.clone();
     let track = track_m(&scene);
+    let path_m = base_path_m(&scene);
     let mut sweep = Sweep::new(scene).map_err(|e| MonitorError::Sweep(e.to_string()))?;
     let mut frames = Vec::new();
+    let with_path = |mut frame: ChainFrame| {
+        frame.path_m.clone_from(&path_m);
+        frame
+    };
     if let Some(placed) = sweep.placed() {
-        frames.push(frame_from_step(&chain, &walls, track, placed)?);
+        frames.push(with_path(frame_from_step(&chain, &walls, track, placed)?));
     }
     while frames.len() <= max_steps {
         match sweep.next_step() {
-            Some(Ok(step)) => frames.push(frame_from_step(&chain, &walls, track, &step)?),
+            Some(Ok(step)) => {
+                frames.push(with_path(frame_from_step(&chain, &walls, track, &step)?));
+            }
             Some(Err(e)) => {
                 return Err(MonitorError::Sweep(format!(
                     "after {} steps: {e}",
@@ -134,6 +155,7 @@ pub fn frame_from_step(
         stage_position_m: Some(base.x),
         base_angle_rad: step.theta_rad.first().copied().unwrap_or(0.0),
         stage_range_m: track_m,
+        ..ChainFrame::default()
     })
 }
 
@@ -251,6 +273,8 @@ mod tests {
                 );
             }
             assert_eq!(frame.stage_range_m, Some((0.0, 0.2 * 0.0167)));
+            assert_eq!(frame.path_m.len(), 2);
+            assert!((frame.path_m[1][0] - 0.2 * 0.0167).abs() < 1e-12);
             for p in &frame.walls_m[0] {
                 let d = wall.signed_distance(&Vector2::new(p[0], p[1])).gap_m;
                 assert!(d.abs() < 1e-9);

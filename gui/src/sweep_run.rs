@@ -28,10 +28,10 @@ use sim_core::sweep::{Sweep, SweepError, SweepScene, SweepStep};
 use sim_core::{Chain, SensorSettings, Wall};
 
 use crate::error::MonitorError;
-use crate::frame::ChainFrame;
+use crate::frame::{ChainFrame, PointM};
 use crate::history::{Health, History, Sample, SegmentReading};
 use crate::mapping::SweepMapping;
-use crate::sweep::{frame_from_step, track_m};
+use crate::sweep::{base_path_m, frame_from_step, track_m};
 
 /// The most steps the monitor holds of one sweep (2000 s at 100 Hz); a longer scene is run
 /// to this many and says so.
@@ -63,6 +63,9 @@ pub struct SweepRunState {
     pub walls: Vec<Wall>,
     /// The stage track the base runs along, metres ([`track_m`]).
     pub track_m: Option<(f64, f64)>,
+    /// The base's straight path from its start to its planned end, in any direction
+    /// ([`base_path_m`]), drawn in the chain panel.
+    pub path_m: Vec<PointM>,
     /// The steps solved, in time order: the placed posture (step 0) first.
     pub steps: Vec<SweepStep>,
     /// The same steps as polls: joint `k`'s angle and touch bits as segment `k`'s reading,
@@ -139,8 +142,11 @@ impl SweepRunState {
     /// The chain at instant `t_s` ([`Self::step_at`]) as a frame; `None` before the
     /// placement is done.
     pub fn frame_at(&self, t_s: f64) -> Option<Result<ChainFrame, MonitorError>> {
-        self.step_at(t_s)
-            .map(|step| frame_from_step(&self.chain, &self.walls, self.track_m, step))
+        self.step_at(t_s).map(|step| {
+            let mut frame = frame_from_step(&self.chain, &self.walls, self.track_m, step)?;
+            frame.path_m.clone_from(&self.path_m);
+            Ok(frame)
+        })
     }
 
     /// One line on the sweep's progress, e.g. `sweep line_wall: step 12 of 50`.
@@ -252,6 +258,7 @@ impl SweepWorker {
             chain: sweep_scene.chain.clone(),
             walls: sweep_scene.walls.clone(),
             track_m: track_m(&sweep_scene),
+            path_m: base_path_m(&sweep_scene),
             steps: Vec::new(),
             history: History::new(sweep_scene.chain.n(), steps_total.min(max_steps) + 1),
             steps_total,

@@ -3,6 +3,12 @@
 //! with sim-core's prediction for the same base pose and wall, and the difference between
 //! them.
 //!
+//! The base need not ride a stage along x: a frame's path ([`ChainFrame::path_m`]: a sweep's
+//! straight track in any direction, a follow run's path so far) is drawn as the track, and a
+//! closed-loop run's robot ([`crate::frame::BodyDrawing`]) as its footprint at its pose and
+//! heading (red while it overlaps a wall), with the estimator's points and the estimated wall
+//! point. Such a view either follows the robot or fits the whole run ([`TopView`]).
+//!
 //! Touches are drawn from the frame alone, so live, recorded and simulated chains show them
 //! the same way: a link whose segment has any touch bit set is drawn red, and each switch
 //! that fires is a dot at its place along the link ([`ChainFrame::lit_switches`]); the
@@ -37,6 +43,14 @@ pub const UNHEALTHY_COLOUR: Color32 = Color32::from_rgb(150, 150, 150);
 const WALL_COLOUR: Color32 = Color32::from_rgb(170, 140, 110);
 const DIFFERENCE_COLOUR: Color32 = Color32::from_rgb(255, 0, 255);
 const TRACK_COLOUR: Color32 = Color32::from_rgb(110, 110, 110);
+/// A closed-loop run's body outline.
+const BODY_COLOUR: Color32 = Color32::from_rgb(90, 90, 90);
+/// The body while its footprint overlaps a wall.
+const COLLIDED_COLOUR: Color32 = Color32::from_rgb(230, 0, 0);
+/// The estimator's points and the estimated wall point (bluish green).
+const ESTIMATE_COLOUR: Color32 = Color32::from_rgb(0, 158, 115);
+/// How far around the robot a view that follows it shows at least, metres.
+const FOLLOW_MARGIN_M: f64 = 0.15;
 /// The band under the wall map's colours.
 const MAP_UNDERLAY_COLOUR: Color32 = Color32::from_rgb(35, 35, 35);
 
@@ -49,6 +63,17 @@ pub struct ChainPanel {
     pub show_difference: bool,
     /// Draw a sweep's wall map.
     pub show_map: bool,
+    /// A moving robot's view: following it, or the whole run.
+    pub top_view: TopView,
+}
+
+/// What a closed-loop run's top view shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TopView {
+    /// The robot, its antenna and what is around it, moving with it.
+    FollowRobot,
+    /// The whole run (its extent: every pose's footprint and antenna).
+    FitRun,
 }
 
 impl Default for ChainPanel {
@@ -57,6 +82,7 @@ impl Default for ChainPanel {
             show_prediction: true,
             show_difference: true,
             show_map: true,
+            top_view: TopView::FollowRobot,
         }
     }
 }
@@ -83,16 +109,15 @@ struct ToScreen {
 }
 
 impl ToScreen {
-    /// The scale and centre that show `frames` and the points `also_m` in `rect`.
-    fn fit(rect: Rect, frames: &[&ChainFrame], also_m: impl Iterator<Item = PointM>) -> Self {
+    /// The scale and centre that show the points `points_m` in `rect`.
+    fn fit(rect: Rect, points_m: impl Iterator<Item = PointM>) -> Self {
         let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        let bounds = frames.iter().flat_map(|f| {
-            let (a, b) = f.bounds_m();
-            [a, b]
-        });
-        for p in bounds.chain(also_m) {
+        for p in points_m.filter(|p| p[0].is_finite() && p[1].is_finite()) {
             min = [min[0].min(p[0]), min[1].min(p[1])];
             max = [max[0].max(p[0]), max[1].max(p[1])];
+        }
+        if !(min[0] <= max[0] && min[1] <= max[1]) {
+            (min, max) = ([0.0; 2], [0.0; 2]);
         }
         let span = [(max[0] - min[0]).max(0.02), (max[1] - min[1]).max(0.02)];
         let scale =
@@ -125,6 +150,11 @@ impl ChainPanel {
         map: Option<&WallMap<'_>>,
     ) {
         ui.horizontal(|ui| {
+            if measured.is_some_and(|m| m.run_extent_m.is_some()) {
+                ui.selectable_value(&mut self.top_view, TopView::FollowRobot, "follow robot");
+                ui.selectable_value(&mut self.top_view, TopView::FitRun, "fit run");
+                ui.separator();
+            }
             ui.checkbox(&mut self.show_prediction, "prediction");
             ui.checkbox(&mut self.show_difference, "difference");
             if let Some(map) = map {
@@ -189,11 +219,46 @@ impl ChainPanel {
         let map_points_m = mapped
             .into_iter()
             .flat_map(|(_, c)| c.samples.iter().map(|s| [s.point_m.x, s.point_m.y]));
-        let to = ToScreen::fit(fit_rect, &frames, map_points_m);
+        let corners = |(a, b): (PointM, PointM)| [a, b];
+        let to = match (measured.run_extent_m, &measured.body, self.top_view) {
+            (Some(extent), _, TopView::FitRun) => ToScreen::fit(
+                fit_rect,
+                frames
+                    .iter()
+                    .flat_map(|f| corners(f.local_bounds_m()))
+                    .chain(corners(extent)),
+            ),
+            (Some(_), Some(body), TopView::FollowRobot) => {
+                let m = FOLLOW_MARGIN_M;
+                let around = [
+                    [body.por_m[0] - m, body.por_m[1] - m],
+                    [body.por_m[0] + m, body.por_m[1] + m],
+                ];
+                ToScreen::fit(
+                    fit_rect,
+                    frames
+                        .iter()
+                        .flat_map(|f| corners(f.local_bounds_m()))
+                        .chain(around)
+                        .chain(body.estimated_wall_m),
+                )
+            }
+            _ => ToScreen::fit(
+                fit_rect,
+                frames
+                    .iter()
+                    .flat_map(|f| corners(f.bounds_m()))
+                    .chain(map_points_m),
+            ),
+        };
         let painter = painter.with_clip_rect(rect);
 
-        // The track (the stage's soft limits), the wall, the base and the stage carriage.
-        if let Some((lo, hi)) = measured.stage_range_m {
+        // The track (a moving base's path, or the stage's soft limits), the wall, the base
+        // and the stage carriage (or the robot's body).
+        if measured.path_m.len() >= 2 {
+            let points: Vec<Pos2> = measured.path_m.iter().map(|p| to.pos(*p)).collect();
+            painter.add(Shape::line(points, Stroke::new(2.0, TRACK_COLOUR)));
+        } else if let Some((lo, hi)) = measured.stage_range_m {
             painter.line_segment(
                 [to.pos([lo, 0.0]), to.pos([hi, 0.0])],
                 Stroke::new(2.0, TRACK_COLOUR),
@@ -214,11 +279,43 @@ impl ChainPanel {
             );
         }
         let base = to.pos(measured.base_m);
-        painter.rect_filled(
-            Rect::from_center_size(base, Vec2::new(22.0, 10.0)),
-            2.0,
-            TRACK_COLOUR,
-        );
+        if let Some(body) = &measured.body {
+            let colour = if body.collided {
+                COLLIDED_COLOUR
+            } else {
+                BODY_COLOUR
+            };
+            let outline: Vec<Pos2> = body.corners_m.iter().map(|p| to.pos(*p)).collect();
+            painter.add(Shape::closed_line(outline, Stroke::new(2.0, colour)));
+            // The heading: from the point of rotation to the front edge's middle.
+            let [front_right, front_left, ..] = body.corners_m;
+            let front = [
+                (front_right[0] + front_left[0]) / 2.0,
+                (front_right[1] + front_left[1]) / 2.0,
+            ];
+            painter.arrow(
+                to.pos(body.por_m),
+                to.pos(front) - to.pos(body.por_m),
+                Stroke::new(1.5, colour),
+            );
+            painter.circle_filled(to.pos(body.por_m), 3.5, colour);
+            for p in &measured.estimated_points_m {
+                painter.circle_filled(to.pos(*p), 2.5, ESTIMATE_COLOUR);
+            }
+            if let Some(p) = body.estimated_wall_m {
+                let at = to.pos(p);
+                let r = 6.0;
+                let stroke = Stroke::new(2.0, ESTIMATE_COLOUR);
+                painter.line_segment([at + Vec2::new(-r, -r), at + Vec2::new(r, r)], stroke);
+                painter.line_segment([at + Vec2::new(-r, r), at + Vec2::new(r, -r)], stroke);
+            }
+        } else {
+            painter.rect_filled(
+                Rect::from_center_size(base, Vec2::new(22.0, 10.0)),
+                2.0,
+                TRACK_COLOUR,
+            );
+        }
 
         if let Some(p) = predicted {
             let points: Vec<Pos2> = p.joints_m.iter().map(|q| to.pos(*q)).collect();
@@ -283,7 +380,8 @@ impl ChainPanel {
         let spacing_px = measured
             .link_m(1)
             .map_or(0.0, |(a, b)| to.pos(a).distance(to.pos(b)));
-        for p in measured.joints_m[1..].iter().filter(|_| spacing_px >= 8.0) {
+        let distal = measured.joints_m.get(1..).unwrap_or_default();
+        for p in distal.iter().filter(|_| spacing_px >= 8.0) {
             painter.circle(
                 to.pos(*p),
                 width * 0.8,
@@ -311,6 +409,13 @@ impl ChainPanel {
         if let Some(x) = measured.stage_position_m {
             legend.push_str(&format!("   stage {:.1} mm", x * 1e3));
         }
+        if let Some(body) = &measured.body {
+            legend.push_str(&format!(
+                "   heading {:.1} deg{}",
+                body.heading_rad.to_degrees(),
+                if body.collided { "   IN A WALL" } else { "" }
+            ));
+        }
         legend.push_str(
             "\nblue: measured   red: touched, dots: the switches that fire   grey dashed: unhealthy",
         );
@@ -319,6 +424,12 @@ impl ChainPanel {
         }
         if predicted.is_some() {
             legend.push_str(&format!("\norange dashed: predicted ({model})"));
+        }
+        if measured.body.is_some() {
+            legend.push_str(
+                "\ngrey: the body (red: in a wall), its path   green dots: the estimator's \
+                 points   green cross: the estimated wall",
+            );
         }
         if mapped.is_some() {
             legend.push_str(

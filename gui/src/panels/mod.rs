@@ -3,6 +3,8 @@
 
 pub mod chain;
 pub mod controls;
+pub mod follow_error;
+pub mod follow_info;
 pub mod health;
 pub mod joint_angles;
 pub mod stage;
@@ -11,6 +13,8 @@ pub mod touch_raster;
 
 pub use chain::ChainPanel;
 pub use controls::ControlsPanel;
+pub use follow_error::FollowErrorPanel;
+pub use follow_info::FollowInfoPanel;
 pub use health::HealthPanel;
 pub use joint_angles::JointAnglesPanel;
 pub use stage::{StageInfo, StagePanel};

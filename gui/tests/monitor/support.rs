@@ -57,6 +57,7 @@ pub fn monitor(
         token: token.to_owned(),
         trial: None,
         scene: None,
+        follow: None,
         history_s: 30.0,
         export_dir,
     });
