@@ -283,7 +283,7 @@ impl PosturePoints {
 }
 
 /// An index drawn with the relative `weights`.
-fn weighted(rng: &mut impl Rng, weights: &[f64]) -> usize {
+pub fn weighted(rng: &mut impl Rng, weights: &[f64]) -> usize {
     let total: f64 = weights.iter().sum();
     let mut x = rng.random_range(0.0..total);
     for (i, w) in weights.iter().enumerate() {

@@ -15,6 +15,7 @@
 //! soak of at least 2,000 sweeps.
 
 pub mod case;
+pub mod follow;
 pub mod outcome;
 pub mod parallel;
 pub mod step_cost;

@@ -116,7 +116,7 @@ impl TimeLimit {
 }
 
 /// The last step a child's output says was done.
-fn last_progress(output: &str) -> Option<usize> {
+pub fn last_progress(output: &str) -> Option<usize> {
     output
         .lines()
         .filter_map(|l| l.strip_prefix(PROGRESS))
@@ -124,37 +124,32 @@ fn last_progress(output: &str) -> Option<usize> {
         .next_back()
 }
 
-/// Runs case `index` in a child process, killed after its time limit.
-pub fn run_in_child(
-    command: &ChildCommand,
-    limit: &TimeLimit,
-    seed: u64,
-    index: u64,
-    sample: Sample,
-) -> SweepRecord {
-    let case = match Case::generate(seed, index, sample) {
-        Ok(c) => c,
-        Err(e) => return SweepRecord::invalid(seed, index, sample, e.to_string()),
-    };
-    let limit_s = limit.for_case(&case);
+/// What a child process left: its output, and whether it was killed past its time limit.
+#[derive(Clone, Debug)]
+pub struct ChildRun {
+    /// Its standard output.
+    pub stdout: String,
+    /// Its standard error.
+    pub stderr: String,
+    /// Whether it was killed past its time limit.
+    pub killed: bool,
+    /// How it exited, in words.
+    pub status: String,
+}
+
+/// Runs `command` with [`CHILD_ENV`] set to `spec`, killed after `limit_s` seconds.
+///
+/// # Errors
+/// The error of starting the process.
+pub fn run_child(command: &ChildCommand, spec: &str, limit_s: f64) -> std::io::Result<ChildRun> {
     let started = Instant::now();
-    let mut rec = SweepRecord::new(&case);
-    let spawned = Command::new(&command.program)
+    let mut child = Command::new(&command.program)
         .args(&command.args)
-        .env(CHILD_ENV, format!("{}:{seed}:{index}", sample.name()))
+        .env(CHILD_ENV, spec)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
-        .spawn();
-    let mut child = match spawned {
-        Ok(c) => c,
-        Err(e) => {
-            rec.outcome = Outcome::InvalidCase {
-                message: format!("could not start a child process: {e}"),
-            };
-            return rec;
-        }
-    };
+        .spawn()?;
     let reader = |pipe: Option<Box<dyn Read + Send>>| {
         std::thread::spawn(move || {
             let mut text = String::new();
@@ -187,30 +182,68 @@ pub fn run_in_child(
         std::thread::sleep(Duration::from_millis(5));
     };
     let status = child.wait();
-    let out = out.join().unwrap_or_default();
-    let err = err.join().unwrap_or_default();
-    if !killed && let Some(r) = SweepRecord::from_wire(&out) {
+    Ok(ChildRun {
+        stdout: out.join().unwrap_or_default(),
+        stderr: err.join().unwrap_or_default(),
+        killed,
+        status: status.map_or_else(|e| e.to_string(), |s| s.to_string()),
+    })
+}
+
+/// Runs case `index` in a child process, killed after its time limit.
+pub fn run_in_child(
+    command: &ChildCommand,
+    limit: &TimeLimit,
+    seed: u64,
+    index: u64,
+    sample: Sample,
+) -> SweepRecord {
+    let case = match Case::generate(seed, index, sample) {
+        Ok(c) => c,
+        Err(e) => return SweepRecord::invalid(seed, index, sample, e.to_string()),
+    };
+    let limit_s = limit.for_case(&case);
+    let started = Instant::now();
+    let mut rec = SweepRecord::new(&case);
+    let spec = format!("{}:{seed}:{index}", sample.name());
+    let child = match run_child(command, &spec, limit_s) {
+        Ok(c) => c,
+        Err(e) => {
+            rec.outcome = Outcome::InvalidCase {
+                message: format!("could not start a child process: {e}"),
+            };
+            return rec;
+        }
+    };
+    if !child.killed
+        && let Some(r) = SweepRecord::from_wire(&child.stdout)
+    {
         return r;
     }
     rec.wall_clock_s = started.elapsed().as_secs_f64();
-    rec.outcome = if killed {
+    rec.outcome = if child.killed {
         Outcome::TimedOut {
             limit_s,
-            last_step: last_progress(&out),
+            last_step: last_progress(&child.stdout),
         }
     } else {
-        let tail: Vec<&str> = err.lines().rev().take(6).collect();
-        let tail: Vec<&str> = tail.into_iter().rev().collect();
         Outcome::SolverFailure {
-            step: last_progress(&out).map(|s| s + 1),
+            step: last_progress(&child.stdout).map(|s| s + 1),
             message: format!(
                 "the child process ended ({}) without a record; its stderr ends: {}",
-                status.map_or_else(|e| e.to_string(), |s| s.to_string()),
-                tail.join(" / ")
+                child.status,
+                stderr_tail(&child.stderr)
             ),
         }
     };
     rec
+}
+
+/// The last lines of a child's standard error, joined by ` / `.
+pub fn stderr_tail(err: &str) -> String {
+    let tail: Vec<&str> = err.lines().rev().take(6).collect();
+    let tail: Vec<&str> = tail.into_iter().rev().collect();
+    tail.join(" / ")
 }
 
 /// How [`run_cases`] runs.
@@ -245,34 +278,53 @@ pub fn run_cases(
     sample: Sample,
     options: &RunOptions,
 ) -> Vec<SweepRecord> {
+    let mut out = on_workers(
+        indices,
+        options.threads,
+        options.progress_every,
+        "sweeps",
+        |index| run_in_child(&options.command, &options.limit, seed, index, sample),
+    );
+    out.sort_by_key(|r| r.index);
+    out
+}
+
+/// Runs `run` on every index of `indices` on a pool of `threads` worker threads (rayon's,
+/// one index at a time each), with a line to stderr every `progress_every` (0: none)
+/// naming them `noun`; the results in the order of `indices`.
+pub fn on_workers<T: Send>(
+    indices: &[u64],
+    threads: usize,
+    progress_every: usize,
+    noun: &str,
+    run: impl Fn(u64) -> T + Sync + Send,
+) -> Vec<T> {
     let done = AtomicUsize::new(0);
     let total = indices.len();
     let started = Instant::now();
-    let run_all = || -> Vec<SweepRecord> {
+    let run_all = || -> Vec<T> {
         indices
             .par_iter()
             .with_max_len(1)
             .map(|&index| {
-                let rec = run_in_child(&options.command, &options.limit, seed, index, sample);
+                let result = run(index);
                 let count = done.fetch_add(1, Ordering::Relaxed) + 1;
-                if options.progress_every > 0 && count.is_multiple_of(options.progress_every) {
+                if progress_every > 0 && count.is_multiple_of(progress_every) {
                     eprintln!(
-                        "[stress] {count}/{total} sweeps, {:.0} s",
+                        "[stress] {count}/{total} {noun}, {:.0} s",
                         started.elapsed().as_secs_f64()
                     );
                 }
-                rec
+                result
             })
             .collect()
     };
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads.max(1))
+        .num_threads(threads.max(1))
         .build();
-    // A pool that cannot start its threads leaves the cases to rayon's global pool.
-    let mut out = match pool {
+    // A pool that cannot start its threads leaves the work to rayon's global pool.
+    match pool {
         Ok(pool) => pool.install(run_all),
         Err(_) => run_all(),
-    };
-    out.sort_by_key(|r| r.index);
-    out
+    }
 }

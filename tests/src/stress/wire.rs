@@ -19,13 +19,15 @@ pub const END: &str = "stress-record>>>";
 /// step 0).
 pub const PROGRESS: &str = "stress-progress ";
 
-fn escape(s: &str) -> String {
+/// `s` with `\\`, newlines and tabs escaped (one field of a record line).
+pub fn escape(s: &str) -> String {
     s.replace('\\', "\\\\")
         .replace('\n', "\\n")
         .replace('\t', "\\t")
 }
 
-fn unescape(s: &str) -> String {
+/// The inverse of [`escape`].
+pub fn unescape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     let mut chars = s.chars();
     while let Some(c) = chars.next() {
