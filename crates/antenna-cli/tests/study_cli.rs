@@ -162,7 +162,7 @@ fn bad_study_files_name_the_key() {
     let cases = [
         (
             format!("[study]\nscene = \"{scene}\"\n[axes]\nprofile = [\"linear\"]\n"),
-            ":4:1: unknown key `profile` in [axes]; allowed: profiles, base_angles_deg, wall_distances_m, hairs, surfaces",
+            ":4:1: unknown key `profile` in [axes]; allowed: profiles, base_angles_deg, wall_distances_m, hairs, surfaces, speeds_m_per_s, kp_n, kd_n_s, kp_rad_per_s_per_m, kd_rad_per_m, delays_s",
         ),
         (
             format!("[study]\nscene = \"{scene}\"\n[axes]\nprofiles = [\"lin\"]\n"),

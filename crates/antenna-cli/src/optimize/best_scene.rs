@@ -30,17 +30,23 @@ pub fn best_scene_text(spec: &OptimizeSpec, report: &OptimizeReport) -> Result<S
     let values: Array = report.values_n_m_per_rad.iter().copied().collect();
     stiffness.insert("values_n_m_per_rad", value(values));
     stiffness.decor_mut().set_prefix(format!(
-        "\n# found by `antenna optimize {}`: {} = {} m ({})\n",
+        "\n# found by `antenna optimize {}`: {} = {} {} ({})\n",
         spec.path.display(),
         report.objective,
         report
             .objective_value
             .map_or("infeasible".to_string(), |v| format!("{v}")),
+        spec.objective.si_unit(),
         report.found_by
     ));
     antenna.insert("stiffness", Item::Table(stiffness));
     if let Some(sweep) = doc.get_mut("sweep").and_then(Item::as_table_like_mut) {
         sweep.insert("duration_s", value(scene.motion.duration_s));
+    }
+    if let Some(follow) = &scene.follow
+        && let Some(table) = doc.get_mut("follow").and_then(Item::as_table_like_mut)
+    {
+        table.insert("duration_s", value(follow.config.settings.duration_s));
     }
     let folder = path.parent().unwrap_or_else(|| Path::new(""));
     if let Some(walls) = doc.get_mut("walls").and_then(Item::as_array_of_tables_mut) {

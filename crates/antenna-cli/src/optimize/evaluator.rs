@@ -1,6 +1,8 @@
 //! The evaluations of `antenna optimize`: each a sweep of every scene with one set of joint
-//! stiffnesses, the sweeps of a batch run in parallel, never more sweeps than the budget,
-//! each set of stiffnesses swept once (a point the search comes back to is looked up).
+//! stiffnesses (for a follow objective, a closed-loop run or a v_max search of every follow
+//! scene, each counted as one "sweep" of the budget), the sweeps of a batch run in parallel,
+//! never more sweeps than the budget, each set of stiffnesses swept once (a point the search
+//! comes back to is looked up).
 
 use std::collections::HashMap;
 use std::panic::AssertUnwindSafe;
@@ -13,6 +15,8 @@ use serde::{Deserialize, Serialize};
 
 use super::log::LogWriter;
 use super::{Objective, OptimizeSpec};
+use crate::follow::run_summary;
+use crate::follow::v_max::{VMaxOptions, v_max};
 use crate::progress;
 use crate::sweep::SweepRun;
 use antenna_scene::{Scene, StiffnessSpec};
@@ -24,7 +28,10 @@ pub struct SceneResult {
     pub scene: usize,
     /// The objective of this sweep, metres (`null`: infeasible, see `why`).
     pub objective_value: Option<f64>,
-    /// The sweep's outcome: `"finished"`, `"jammed"` or `"failed"`.
+    /// The sweep's outcome: `"finished"`, `"jammed"` or `"failed"`; for `follow-rms` the
+    /// run's status (`"ok"`, `"collided"`, `"lost"`, the solver's outcome) and for
+    /// `follow-v-max` `"ok"` when a speed was found, else the slowest speed's status
+    /// (`"failed"`: the run could not start).
     pub outcome: String,
     /// Why the sweep has no objective: why it stopped, or what it lacked.
     pub why: Option<String>,
@@ -315,12 +322,22 @@ impl<'a> Evaluator<'a> {
         let sweep = |w: usize| {
             let (set, scene) = (w / scenes, w % scenes);
             let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
-                sweep_one(
-                    &self.spec.scenes[scene].1,
-                    scene,
-                    todo[set],
-                    self.spec.objective,
-                )
+                if self.spec.objective.is_follow() {
+                    follow_one(
+                        &self.spec.scenes[scene].1,
+                        scene,
+                        todo[set],
+                        self.spec.objective,
+                        &self.spec.v_max,
+                    )
+                } else {
+                    sweep_one(
+                        &self.spec.scenes[scene].1,
+                        scene,
+                        todo[set],
+                        self.spec.objective,
+                    )
+                }
             }))
             .unwrap_or_else(|panic| SceneResult {
                 scene,
@@ -331,7 +348,7 @@ impl<'a> Evaluator<'a> {
             let inner = self.lock();
             let done = inner.sweeps + finished.fetch_add(1, Ordering::Relaxed) + 1;
             let note = match inner.best {
-                Some(b) => format!(", best {:.4} mm", b * 1000.0),
+                Some(b) => format!(", best {}", self.spec.objective.show(b)),
                 None => String::new(),
             };
             inner.progress.set_message(note);
@@ -414,6 +431,65 @@ pub fn with_stiffness(scene: &Scene, values_n_m_per_rad: &[f64]) -> Result<Scene
         .map_err(|e| e.to_string())?;
     scene.stiffness = StiffnessSpec::Values;
     Ok(scene)
+}
+
+/// One closed-loop run (`follow-rms`) or v_max search (`follow-v-max`) of the follow scene
+/// `scene` with these stiffnesses and the scene's robot and gains.
+fn follow_one(
+    scene: &Scene,
+    index: usize,
+    values: &[f64],
+    objective: Objective,
+    options: &VMaxOptions,
+) -> SceneResult {
+    let failed = |why: String| SceneResult {
+        scene: index,
+        objective_value: None,
+        outcome: "failed".to_string(),
+        why: Some(why),
+    };
+    let scene_with = match with_stiffness(scene, values) {
+        Ok(s) => s,
+        Err(why) => return failed(why),
+    };
+    let (sweep_scene, config, sensors) = match scene_with.follow_parts() {
+        Ok(parts) => parts,
+        Err(e) => return failed(e.to_string()),
+    };
+    let located = |e: &sim_core::follow::FollowError| match &scene_with.follow {
+        Some(f) => f.locate(e).to_string(),
+        None => e.to_string(),
+    };
+    let (outcome, scored) = if objective == Objective::FollowVMax {
+        match v_max(&sweep_scene, &sensors, &config, options) {
+            Ok(result) => (
+                match (&result.v_max_m_per_s, &result.failure) {
+                    (None, Some(status)) => status.clone(),
+                    _ => "ok".to_string(),
+                },
+                Objective::of_v_max(&result),
+            ),
+            Err(e) => return failed(located(&e)),
+        }
+    } else {
+        match run_summary(&sweep_scene, &sensors, &config) {
+            Ok(summary) => (
+                summary.status.name().to_string(),
+                Objective::of_follow(&summary),
+            ),
+            Err(e) => return failed(located(&e)),
+        }
+    };
+    let (objective_value, why) = match scored {
+        Ok(v) => (Some(v), None),
+        Err(why) => (None, Some(why)),
+    };
+    SceneResult {
+        scene: index,
+        objective_value,
+        outcome,
+        why,
+    }
 }
 
 /// One certified sweep of `scene` with these stiffnesses, scored by the spec's objective.

@@ -10,7 +10,8 @@
 //! scenes = ["../wall_following_4_2_1.toml"]  # base scenes, relative to this file; the
 //!                                             # objective is averaged over them
 //! objective = "preview-mean"       # maximized: "preview-mean", "mapping-error",
-//!                                  # "flip-free-preview" (see Objective)
+//!                                  # "flip-free-preview"; on follow scenes "follow-v-max"
+//!                                  # or "follow-rms" (see Objective)
 //! parameters = "per-joint"         # one stiffness per joint, or "exponential-taper"
 //! stiffness_bounds_n_m_per_rad = [0.004, 0.082]  # default: the first scene's profile bounds
 //! wires = "any"                    # or "available": only stiffnesses a Nitinol wire makes
@@ -18,7 +19,19 @@
 //! budget = 300                     # sweeps at most (the named profiles' included)
 //! seed = 1                         # the particle swarm's random numbers
 //! duration_s = 20.0                # optional: replaces every scene's [sweep] duration_s
+//!                                  # (a follow scene's [follow] duration_s)
+//!
+//! [v_max]                          # follow-v-max only (optional): the speed search
+//! speeds_m_per_s = [0.2, 0.4, 0.6] # the coarse grid, m/s (default 0.1 to 2.0 by 0.1)
+//! distance_m = 1.5                 # every run covers this distance, m
+//! tolerance_m_per_s = 0.01         # the bisection's bracket, m/s
 //! ```
+//!
+//! The follow objectives (issue #47) run each scene's closed loop (`antenna follow`) with the
+//! scene's robot and gains and the stiffnesses under test: `follow-v-max` is the highest
+//! speed found by [`crate::follow::v_max`] (m/s), `follow-rms` minus the RMS error at the
+//! scene's speed (m); a run that is not `ok` (or a search whose slowest speed fails) makes
+//! its evaluation infeasible, as a failed sweep does.
 //!
 //! The pieces: the file ([`OptimizeSpec`], errors located like a scene's), the objective
 //! ([`Objective`]), the search space ([`Space`]), the sweeps of one evaluation run in
@@ -89,7 +102,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 
-use antenna_scene::error::SceneError;
+use antenna_scene::error::{SceneError, SceneErrorKind};
+use antenna_scene::follow::MAX_FOLLOW_STEPS;
 use antenna_scene::motion::MAX_SWEEP_STEPS;
 use antenna_scene::source::{Source, list_of_len, one_of, positive, read_input};
 use antenna_scene::{Scene, StiffnessSpec};
@@ -100,6 +114,9 @@ pub use objective::Objective;
 pub use report::{FailedEvaluation, NamedResult, OptimizeReport};
 pub use search::{OptimizeError, OptimizeOptions, TABLE_4_1, run_optimization};
 pub use space::{Family, Space, Wires};
+
+use crate::follow::v_max::VMaxOptions;
+use crate::study::follow::RawVMax;
 
 const OPTIMIZE: &str = "[optimize]";
 
@@ -140,6 +157,7 @@ impl Method {
 #[serde(deny_unknown_fields)]
 struct RawOptimizeFile {
     optimize: Spanned<RawOptimize>,
+    v_max: Option<Spanned<RawVMax>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -174,6 +192,8 @@ pub struct OptimizeSpec {
     pub budget: usize,
     /// The seed of the swarm's random numbers.
     pub seed: u64,
+    /// The speed search of `follow-v-max` (`[v_max]`, else its defaults).
+    pub v_max: VMaxOptions,
 }
 
 impl OptimizeSpec {
@@ -194,6 +214,7 @@ impl OptimizeSpec {
     pub fn parse(text: &str, path: &str, folder: &Path) -> Result<OptimizeSpec, SceneError> {
         let source = Source { text, path };
         let raw: RawOptimizeFile = toml::from_str(text).map_err(|e| source.toml_error(&e))?;
+        let raw_v_max = raw.v_max;
         let span = raw.optimize.span();
         let raw = raw.optimize.into_inner();
         let required = |key: &str| source.missing(span.clone(), OPTIMIZE, key);
@@ -226,7 +247,31 @@ impl OptimizeSpec {
                 .map_err(|_| source.invalid(s.span(), OPTIMIZE, "seed", "the seed must be >= 0"))?,
             None => 1,
         };
+        let v_max = match &raw_v_max {
+            Some(table) if objective != Objective::FollowVMax => {
+                return Err(source.error(
+                    Some(table.span()),
+                    SceneErrorKind::Run {
+                        message: format!(
+                            "[v_max]: the speed search belongs to the objective \"follow-v-max\", \
+                             not \"{}\"",
+                            objective.name()
+                        ),
+                    },
+                ));
+            }
+            Some(table) => table.get_ref().validate(&source, table.span())?,
+            None => VMaxOptions::default(),
+        };
         let duration_s = match &raw.duration_s {
+            Some(d) if objective == Objective::FollowVMax => {
+                return Err(source.invalid(
+                    d.span(),
+                    OPTIMIZE,
+                    "duration_s",
+                    "follow-v-max runs every speed over [v_max] distance_m: remove duration_s",
+                ));
+            }
             Some(d) => Some((positive(&source, OPTIMIZE, "duration_s", d)?, d.span())),
             None => None,
         };
@@ -309,6 +354,7 @@ impl OptimizeSpec {
             method,
             budget,
             seed,
+            v_max,
         })
     }
 }
@@ -334,7 +380,42 @@ fn read_scenes(
         let scene_path = folder.join(key.get_ref());
         let mut scene = Scene::from_path(&scene_path)?;
         let bad = |why: String| source.invalid(key.span(), OPTIMIZE, "scenes", why);
-        if let Some((d, span)) = &duration_s {
+        match (&scene.follow, objective.is_follow()) {
+            (None, true) => {
+                return Err(bad(format!(
+                    "{} is not a follow scene (no [robot], [controller] or [follow]): the \
+                     objective \"{}\" runs a robot's closed loop",
+                    scene_path.display(),
+                    objective.name()
+                )));
+            }
+            (Some(_), false) => {
+                return Err(bad(format!(
+                    "{} is a follow scene: its objectives are \"follow-v-max\" and \
+                     \"follow-rms\", not \"{}\" (a sweep's)",
+                    scene_path.display(),
+                    objective.name()
+                )));
+            }
+            _ => {}
+        }
+        if let Some(follow) = scene.follow.as_mut() {
+            if let Some((d, span)) = &duration_s {
+                let step_s = follow.config.settings.step_s;
+                if (d / step_s).round() > MAX_FOLLOW_STEPS as f64 {
+                    return Err(source.invalid(
+                        span.clone(),
+                        OPTIMIZE,
+                        "duration_s",
+                        format!(
+                            "{d} s is more than {MAX_FOLLOW_STEPS} steps of {step_s} s of {}",
+                            scene_path.display()
+                        ),
+                    ));
+                }
+                follow.config.settings.duration_s = *d;
+            }
+        } else if let Some((d, span)) = &duration_s {
             if (d / scene.motion.step_s).round() > MAX_SWEEP_STEPS as f64 {
                 return Err(source.invalid(
                     span.clone(),

@@ -7,7 +7,7 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::OptimizeReport;
+use super::{Objective, OptimizeReport};
 use crate::sweep::plot::{Drawing, PlotError, write_drawing};
 
 /// Figure size, pixels (PNG) or user units (SVG).
@@ -45,11 +45,14 @@ impl Figure<'_> {
         area: &DrawingArea<DB, Shift>,
     ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
         let r = self.0;
+        let (unit, factor) = Objective::by_name(&r.objective)
+            .unwrap_or(Objective::PreviewMean)
+            .display_unit();
         let mm: Vec<(f64, f64)> = r
             .objective_values
             .iter()
             .enumerate()
-            .filter_map(|(i, v)| v.map(|v| (i as f64, v * 1e3)))
+            .filter_map(|(i, v)| v.map(|v| (i as f64, v * factor)))
             .collect();
         let (lo, hi) = mm
             .iter()
@@ -72,7 +75,7 @@ impl Figure<'_> {
             .configure_mesh()
             .x_desc("evaluation")
             .x_label_formatter(&|v| format!("{v:.0}"))
-            .y_desc("objective (mm)")
+            .y_desc(format!("objective ({unit})"))
             .draw()?;
         chart.draw_series(
             mm.iter()
@@ -97,7 +100,7 @@ impl Figure<'_> {
         {
             chart
                 .draw_series(LineSeries::new(
-                    [(0.0, named * 1e3), (evaluations, named * 1e3)],
+                    [(0.0, named * factor), (evaluations, named * factor)],
                     BEST_NAMED.stroke_width(2),
                 ))?
                 .label(format!(
@@ -112,7 +115,7 @@ impl Figure<'_> {
             .history
             .iter()
             .enumerate()
-            .filter_map(|(i, v)| v.map(|v| (i as f64, v * 1e3)))
+            .filter_map(|(i, v)| v.map(|v| (i as f64, v * factor)))
             .collect();
         chart
             .draw_series(LineSeries::new(best, FOUND.stroke_width(3)))?

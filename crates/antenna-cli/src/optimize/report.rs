@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use super::{Evaluation, OptimizeSpec, Wires};
+use super::{Evaluation, Objective, OptimizeSpec, Wires};
 
 /// A named profile's evaluation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -194,8 +194,8 @@ impl OptimizeReport {
 
     /// A short table: the named profiles, the profile found, what it beats them by.
     pub fn table(&self) -> String {
-        let mm =
-            |v: Option<f64>| v.map_or("infeasible".to_string(), |v| format!("{:.4} mm", v * 1e3));
+        let objective = Objective::by_name(&self.objective).unwrap_or(Objective::PreviewMean);
+        let mm = |v: Option<f64>| v.map_or("infeasible".to_string(), |v| objective.show(v));
         let mut out = String::new();
         let _ = writeln!(
             out,
@@ -229,8 +229,9 @@ impl OptimizeReport {
         {
             let _ = writeln!(
                 out,
-                "  {:+.4} mm over the best named profile, {} ({})",
-                (best - nv) * 1e3,
+                "  {:+.4} {} over the best named profile, {} ({})",
+                (best - nv) * objective.display_unit().1,
+                objective.display_unit().0,
                 named.name,
                 mm(Some(nv))
             );

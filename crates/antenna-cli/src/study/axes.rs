@@ -1,6 +1,7 @@
 //! The axes of a study and how one value of each changes the base scene: the stiffness
 //! profile, the base angle, the base's start distance from the wall, the hair layout and
-//! the walls' surface.
+//! the walls' surface; in a follow scene also the robot's speed, the controller's gains and
+//! its delay.
 
 use nalgebra::Vector2;
 use sim_core::sweep::Placement;
@@ -150,6 +151,18 @@ pub struct Variant {
     pub hairs: Option<HairLayout>,
     /// The walls' surface.
     pub surface: Option<SurfaceChoice>,
+    /// A follow scene's forward speed, m/s.
+    pub speed_m_per_s: Option<f64>,
+    /// A follow scene's template gain `kp_n`, N m per m.
+    pub kp_n: Option<f64>,
+    /// A follow scene's template gain `kd_n_s`, N m per m/s.
+    pub kd_n_s: Option<f64>,
+    /// A follow scene's wheeled gain `kp_rad_per_s_per_m`, rad/s per m.
+    pub kp_rad_per_s_per_m: Option<f64>,
+    /// A follow scene's wheeled gain `kd_rad_per_m`, rad per m.
+    pub kd_rad_per_m: Option<f64>,
+    /// A follow scene's sensing-to-actuation delay, s.
+    pub delay_s: Option<f64>,
 }
 
 /// The wall a study measures the base's distance from: the placement's wall, else wall 0.
@@ -176,7 +189,9 @@ pub fn base_at_distance(wall: &Wall, base_m: Vector2<f64>, distance_m: f64) -> V
 }
 
 impl Variant {
-    /// The base scene changed by this variant; `bounds` normalizes the profile.
+    /// The base scene changed by this variant; `bounds` normalizes the profile. The follow
+    /// values change a follow scene's `[robot]` and `[controller]` (a scene without them
+    /// ignores them: the study refuses such axes when it reads the file).
     ///
     /// # Errors
     /// [`VariantError`] when the changed scene is not valid (a hair that does not fit its
@@ -221,6 +236,20 @@ impl Variant {
             && let Some(wall) = scene.walls.get(reference_wall(&scene))
         {
             scene.base_position_m = base_at_distance(wall, scene.base_position_m, d);
+        }
+        if let Some(follow) = scene.follow.as_mut() {
+            let (robot, controller) = (&mut follow.config.robot, &mut follow.config.controller);
+            let set = |to: &mut f64, value: Option<f64>| {
+                if let Some(v) = value {
+                    *to = v;
+                }
+            };
+            set(&mut robot.speed_m_per_s, self.speed_m_per_s);
+            set(&mut controller.kp_n, self.kp_n);
+            set(&mut controller.kd_n_s, self.kd_n_s);
+            set(&mut controller.kp_rad_per_s_per_m, self.kp_rad_per_s_per_m);
+            set(&mut controller.kd_rad_per_m, self.kd_rad_per_m);
+            set(&mut controller.delay_s, self.delay_s);
         }
         Ok(scene)
     }

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::Variant;
+use super::{FollowRow, Variant};
 use crate::sweep::SweepSummary;
 use antenna_scene::{Scene, StiffnessSpec};
 
@@ -15,6 +15,57 @@ pub enum StudyFormat {
     Csv,
     /// One JSON object per line.
     Jsonl,
+}
+
+/// One row of a study: a sweep's ([`StudyRow`]) or a follow run's ([`FollowRow`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Row {
+    /// A sweep study's row.
+    Sweep(StudyRow),
+    /// A follow study's row.
+    Follow(FollowRow),
+}
+
+impl Row {
+    /// The grid point.
+    pub fn index(&self) -> usize {
+        match self {
+            Row::Sweep(r) => r.index,
+            Row::Follow(r) => r.index,
+        }
+    }
+
+    /// The row's status.
+    pub fn status(&self) -> &str {
+        match self {
+            Row::Sweep(r) => &r.status,
+            Row::Follow(r) => &r.status,
+        }
+    }
+
+    /// Steps the solver relaxed something in (sweeps only).
+    pub fn relaxed_steps(&self) -> Option<usize> {
+        match self {
+            Row::Sweep(r) => r.relaxed_steps,
+            Row::Follow(_) => None,
+        }
+    }
+
+    /// The CSV fields of `columns` (the study's [`super::Study::columns`]).
+    pub fn csv_fields(&self, columns: &[&str]) -> Vec<String> {
+        match self {
+            Row::Sweep(r) => r.csv_fields(),
+            Row::Follow(r) => r.csv_fields(columns),
+        }
+    }
+
+    /// The row as one JSON line with `columns`' keys.
+    pub fn json_line(&self, columns: &[&str]) -> String {
+        match self {
+            Row::Sweep(r) => r.json_line(),
+            Row::Follow(r) => r.json_line(columns),
+        }
+    }
 }
 
 /// The result of one sweep of a study.
@@ -138,11 +189,7 @@ impl StudyRow {
         error: Option<String>,
     ) -> StudyRow {
         let shown = scene.unwrap_or(base);
-        let profile = match (&variant.profile, &shown.stiffness) {
-            (Some(p), _) => p.name().to_string(),
-            (None, StiffnessSpec::Profile { profile, .. }) => profile.name().to_string(),
-            (None, StiffnessSpec::Values) => "custom".to_string(),
-        };
+        let profile = profile_label(variant, shown);
         let wall_distance_m = shown
             .walls
             .get(super::axes::reference_wall(shown))
@@ -211,6 +258,15 @@ impl StudyRow {
     /// The row as one JSON line.
     pub fn json_line(&self) -> String {
         serde_json::to_string(self).unwrap_or_default()
+    }
+}
+
+/// The profile of a grid point as written in rows (`custom` for explicit values).
+pub fn profile_label(variant: &Variant, scene: &Scene) -> String {
+    match (&variant.profile, &scene.stiffness) {
+        (Some(p), _) => p.name().to_string(),
+        (None, StiffnessSpec::Profile { profile, .. }) => profile.name().to_string(),
+        (None, StiffnessSpec::Values) => "custom".to_string(),
     }
 }
 

@@ -1,13 +1,18 @@
 //! Running a study: the grid points of one shard on a rayon pool of `--jobs` threads (each
-//! sweep is independent), the rows handed back in grid order as they become ready.
+//! sweep or follow run is independent), the rows handed back in grid order as they become
+//! ready.
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
+use std::time::Instant;
 
 use indicatif::ProgressBar;
 
-use super::{Shard, Study, StudyRow};
+use super::row::profile_label;
+use super::{FollowRow, Row, Shard, Study, StudyRow};
+use crate::follow::run_summary;
+use crate::follow::v_max::v_max;
 use crate::progress;
 use crate::sweep::SweepRun;
 
@@ -33,6 +38,10 @@ pub struct RunCounts {
     pub jammed: usize,
     /// Rows with steps the solver relaxed something in.
     pub relaxed: usize,
+    /// Follow rows whose status is `collided` (the body hit a wall: a physical outcome).
+    pub collided: usize,
+    /// Follow rows whose status is `lost` (no estimate for too long: a physical outcome).
+    pub lost: usize,
 }
 
 /// Runs the grid points of `options.shard` on a pool of `options.jobs` threads and hands each
@@ -45,7 +54,7 @@ pub struct RunCounts {
 pub fn run_study<E>(
     study: &Study,
     options: &RunOptions,
-    on_row: &mut dyn FnMut(&StudyRow) -> Result<(), E>,
+    on_row: &mut dyn FnMut(&Row) -> Result<(), E>,
 ) -> Result<RunCounts, E> {
     let indices: Vec<usize> = options.shard.indices(study.len()).collect();
     let mut rows = InOrder {
@@ -63,7 +72,7 @@ pub fn run_study<E>(
         return Ok(rows.counts);
     };
     let stop = AtomicBool::new(false);
-    let (tx, rx) = mpsc::channel::<(usize, StudyRow)>();
+    let (tx, rx) = mpsc::channel::<(usize, Row)>();
     // The points are queued in grid order (first in, first out) and this thread takes the
     // rows as they come back.
     pool.in_place_scope_fifo(|scope| {
@@ -93,7 +102,7 @@ pub fn run_study<E>(
 /// The rows that came back before the ones ahead of them, and what was handed on.
 struct InOrder {
     progress: ProgressBar,
-    pending: BTreeMap<usize, StudyRow>,
+    pending: BTreeMap<usize, Row>,
     counts: RunCounts,
 }
 
@@ -102,20 +111,22 @@ impl InOrder {
     fn deliver<E>(
         &mut self,
         k: usize,
-        row: StudyRow,
-        on_row: &mut dyn FnMut(&StudyRow) -> Result<(), E>,
+        row: Row,
+        on_row: &mut dyn FnMut(&Row) -> Result<(), E>,
     ) -> Result<(), E> {
         self.pending.insert(k, row);
         while let Some(row) = self.pending.remove(&self.counts.runs) {
             on_row(&row)?;
             let counts = &mut self.counts;
             counts.runs += 1;
-            match row.status.as_str() {
+            match row.status() {
                 "ok" => {}
                 "jammed" => counts.jammed += 1,
+                "collided" => counts.collided += 1,
+                "lost" => counts.lost += 1,
                 _ => counts.failed += 1,
             }
-            if row.relaxed_steps.is_some_and(|r| r > 0) {
+            if row.relaxed_steps().is_some_and(|r| r > 0) {
                 counts.relaxed += 1;
             }
             self.progress.set_position(counts.runs as u64);
@@ -124,8 +135,99 @@ impl InOrder {
     }
 }
 
+/// The row of grid point `index`: its sweep, or in a follow study its closed-loop run (or
+/// v_max search).
+pub fn run_point(study: &Study, index: usize) -> Row {
+    if study.is_follow() {
+        Row::Follow(run_follow_point(study, index))
+    } else {
+        Row::Sweep(run_sweep_point(study, index))
+    }
+}
+
+/// The closed-loop run (or, with `[v_max]`, the v_max search) of grid point `index`.
+pub fn run_follow_point(study: &Study, index: usize) -> FollowRow {
+    let started = Instant::now();
+    let variant = study.variant(index);
+    let shown = |scene: &antenna_scene::Scene| {
+        let config = scene.follow.as_ref().map(|f| f.config).unwrap_or_default();
+        let c = &config.controller;
+        let wheeled = matches!(
+            config.robot.body,
+            sim_core::follow::BodyModel::Wheeled { .. }
+        );
+        FollowRow {
+            index,
+            profile: profile_label(&variant, scene),
+            hairs: variant
+                .hairs
+                .as_ref()
+                .map_or_else(|| "scene".to_string(), super::HairLayout::label),
+            surface: variant
+                .surface
+                .map_or_else(|| "scene".to_string(), |s| s.label()),
+            speed_m_per_s: study.v_max.is_none().then_some(config.robot.speed_m_per_s),
+            kp_n: (!wheeled).then_some(c.kp_n),
+            kd_n_s: (!wheeled).then_some(c.kd_n_s),
+            kp_rad_per_s_per_m: wheeled.then_some(c.kp_rad_per_s_per_m),
+            kd_rad_per_m: wheeled.then_some(c.kd_rad_per_m),
+            delay_s: c.delay_s,
+            status: "failed".to_string(),
+            error: None,
+            steps: None,
+            duration_s: None,
+            travel_m: None,
+            rms_error_m: None,
+            max_error_m: None,
+            settling_distance_m: None,
+            collisions: None,
+            first_collision_s: None,
+            contact_share: None,
+            estimate_share: None,
+            estimate_rms_error_m: None,
+            v_max_m_per_s: None,
+            v_max_failure: None,
+            v_max_monotone: None,
+            v_max_runs: None,
+            wall_clock_ms: None,
+        }
+    };
+    let scene = match variant.apply(&study.scene, study.bounds) {
+        Ok(scene) => scene,
+        Err(e) => {
+            let mut row = shown(&study.scene);
+            row.error = Some(format!("this grid point is not a valid scene: {e}"));
+            return row;
+        }
+    };
+    let mut row = shown(&scene);
+    let (sweep_scene, config, sensors) = match scene.follow_parts() {
+        Ok(parts) => parts,
+        Err(e) => {
+            row.error = Some(e.to_string());
+            return row;
+        }
+    };
+    let located = |e: &sim_core::follow::FollowError| match &scene.follow {
+        Some(f) => f.locate(e).to_string(),
+        None => e.to_string(),
+    };
+    match &study.v_max {
+        None => match run_summary(&sweep_scene, &sensors, &config) {
+            Ok(summary) => row.set_summary(&summary),
+            Err(e) => row.error = Some(located(&e)),
+        },
+        Some(options) => match v_max(&sweep_scene, &sensors, &config, options) {
+            Ok(result) => row.set_v_max(&result),
+            Err(e) => row.error = Some(located(&e)),
+        },
+    }
+    row.wall_clock_ms = Some(started.elapsed().as_secs_f64() * 1e3);
+    row
+}
+
 /// The sweep of grid point `index`, as a row.
-pub fn run_point(study: &Study, index: usize) -> StudyRow {
+pub fn run_sweep_point(study: &Study, index: usize) -> StudyRow {
     let variant = study.variant(index);
     let scene = match variant.apply(&study.scene, study.bounds) {
         Ok(scene) => scene,

@@ -1,10 +1,11 @@
-//! `antenna study STUDY.toml`: a grid of sweeps, one result row per grid point.
+//! `antenna study STUDY.toml`: a grid of sweeps (or of follow runs), one result row per grid
+//! point.
 
 use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use antenna_cli::study::{CSV_COLUMNS, RunOptions, Shard, Study, StudyFormat, StudyRow, run_study};
+use antenna_cli::study::{Row, RunOptions, Shard, Study, StudyFormat, run_study};
 use anyhow::{Context as _, anyhow};
 use clap::{Args, ValueEnum};
 
@@ -16,6 +17,13 @@ use crate::Failure;
 /// The grid is the product of the study file's axes, the last varying fastest; each row
 /// carries its grid index, its axis values and the sweep's metrics (see docs/sweeps.md for the
 /// file format and the columns). Sweeps run in parallel; rows come out in grid order.
+///
+/// On a follow scene (`[robot]`, `[controller]`, `[follow]`) each row is a closed-loop run
+/// with the follow summary as columns, over the axes profiles, hairs, surfaces,
+/// speeds_m_per_s, kp_n, kd_n_s (kp_rad_per_s_per_m, kd_rad_per_m for a wheeled body) and
+/// delays_s; with a `[v_max]` table each row is the highest speed at which the robot follows
+/// the wall (v_max_m_per_s, v_max_failure, v_max_monotone, v_max_runs). Collided and lost
+/// runs are physical outcomes, not failures.
 ///
 /// Exit status: 0 every sweep ran (some may have jammed: the antenna jammed against a wall,
 /// a physical outcome with status `jammed`); 1 some failed (their rows say why; every row
@@ -76,28 +84,34 @@ pub(crate) fn run(args: &StudyArgs) -> Result<(), Failure> {
         StudyFormat::Jsonl => Rows::Jsonl(out),
     };
     let runs = shard.indices(study.len()).count();
+    let what = match (study.is_follow(), &study.v_max) {
+        (false, _) => "sweep(s)",
+        (true, None) => "follow run(s)",
+        (true, Some(_)) => "v_max search(es)",
+    };
     eprintln!(
-        "{}: {} grid points ({}), shard {shard}: {runs} sweep(s) on {} thread(s)",
+        "{}: {} grid points ({}), shard {shard}: {runs} {what} on {} thread(s)",
         args.study.display(),
         study.len(),
         axis_summary(&study),
         jobs.min(runs.max(1))
     );
     let started = Instant::now();
+    let columns = study.columns();
     if let Rows::Csv(csv) = &mut out {
-        csv.write_record(CSV_COLUMNS).context("writing the rows")?;
+        csv.write_record(columns).context("writing the rows")?;
     }
     let options = RunOptions {
         shard,
         jobs,
         progress: true,
     };
-    let counts = run_study(&study, &options, &mut |row: &StudyRow| match &mut out {
+    let counts = run_study(&study, &options, &mut |row: &Row| match &mut out {
         Rows::Csv(csv) => {
-            csv.write_record(row.csv_fields())?;
+            csv.write_record(row.csv_fields(columns))?;
             csv.flush()
         }
-        Rows::Jsonl(out) => writeln!(out, "{}", row.json_line()).and_then(|()| out.flush()),
+        Rows::Jsonl(out) => writeln!(out, "{}", row.json_line(columns)).and_then(|()| out.flush()),
     })
     .context("writing the rows")?;
     match &mut out {
@@ -105,17 +119,29 @@ pub(crate) fn run(args: &StudyArgs) -> Result<(), Failure> {
         Rows::Jsonl(out) => out.flush(),
     }
     .context("writing the rows")?;
-    eprintln!(
-        "{} sweep(s) in {:.1} s, {} failed, {} jammed, {} with relaxed steps",
-        counts.runs,
-        started.elapsed().as_secs_f64(),
-        counts.failed,
-        counts.jammed,
-        counts.relaxed
-    );
+    if study.is_follow() {
+        eprintln!(
+            "{} {what} in {:.1} s, {} failed, {} collided, {} lost, {} jammed",
+            counts.runs,
+            started.elapsed().as_secs_f64(),
+            counts.failed,
+            counts.collided,
+            counts.lost,
+            counts.jammed
+        );
+    } else {
+        eprintln!(
+            "{} sweep(s) in {:.1} s, {} failed, {} jammed, {} with relaxed steps",
+            counts.runs,
+            started.elapsed().as_secs_f64(),
+            counts.failed,
+            counts.jammed,
+            counts.relaxed
+        );
+    }
     if counts.failed > 0 {
         return Err(Failure::NoSuccess(Some(anyhow!(
-            "{}: {} of {} sweep(s) failed (their rows say why)",
+            "{}: {} of {} {what} failed (their rows say why)",
             args.study.display(),
             counts.failed,
             counts.runs
@@ -139,6 +165,12 @@ fn axis_summary(study: &Study) -> String {
         (a.wall_distances_m.len(), "wall distances"),
         (a.hairs.len(), "hair layouts"),
         (a.surfaces.len(), "surfaces"),
+        (a.speeds_m_per_s.len(), "speeds"),
+        (a.kp_n.len(), "kp_n"),
+        (a.kd_n_s.len(), "kd_n_s"),
+        (a.kp_rad_per_s_per_m.len(), "kp_rad_per_s_per_m"),
+        (a.kd_rad_per_m.len(), "kd_rad_per_m"),
+        (a.delays_s.len(), "delays"),
     ]
     .into_iter()
     .filter(|(n, _)| *n > 0)
