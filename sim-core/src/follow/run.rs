@@ -540,12 +540,14 @@ impl Follow {
     }
 }
 
-/// One solve of the antenna at a base pose.
+/// One solve of the antenna at a base pose: the base moves and turns in one step
+/// ([`QuasiStatic::step_to_pose`]), its contacts and hairs carried along.
 fn step_antenna(
     sim: &mut QuasiStatic,
     pose: &BasePose,
 ) -> Result<(), crate::contact::ContactError> {
-    crate::sweep::step_base_to(sim, pose).map(|_| ())
+    sim.step_to_pose(pose.base_m, pose.base_angle_rad)
+        .map(|_| ())
 }
 
 /// Distances of the calibration's straight walls beyond the mount, as fractions of the
