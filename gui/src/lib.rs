@@ -2,8 +2,10 @@
 //! chains.
 //!
 //! It connects to antennad's stream ([`client`], `docs/stream-protocol.md`), opens a
-//! recorded MCAP trial ([`recording`]) or runs a scene file's simulated sweep on a worker
-//! thread ([`sweep_run`]), keeps a bounded [`history`] of every poll, and draws ([`panels`])
+//! recorded MCAP trial ([`recording`]), runs a scene file's simulated sweep on a worker
+//! thread ([`sweep_run`]) or plays a closed-loop wall-following run ([`follow`]: a follow
+//! scene run by sim-core's loop, or the lines of `antenna follow --jsonl`), keeps a bounded
+//! [`history`] of every poll, and draws ([`panels`])
 //! the chain with its touches, walls, base and stage, sim-core's prediction for the same
 //! base pose ([`prediction`]) and the difference, joint-angle time series, a touch raster,
 //! segment health, stage and servo state, and the controls (with the daemon's token). The
@@ -13,7 +15,8 @@
 //!
 //! The chain panel draws only [`frame::ChainFrame`], whatever the source: live samples and
 //! recorded polls become frames through [`rig::RigGeometry`], a sweep's steps through
-//! [`sweep::frame_from_step`]. A sweep's wall map ([`mapping`]: the contact points the
+//! [`sweep::frame_from_step`], a follow run's through [`follow::FollowRunState::frame_at`]
+//! (with the robot's body and the path of its moving, turning base). A sweep's wall map ([`mapping`]: the contact points the
 //! robot estimates, the wall passed shaded by how well they cover it) is drawn over the walls.
 //!
 //! # Example: a history and its frame
