@@ -194,7 +194,7 @@ pub struct PreviewHistory {
 /// the point `l` ahead of the POR along the body's normal, `dd/dt` the backward difference
 /// of successive `d` (zero at the first step) and `u` held over each step (module docs).
 /// It is the closed loop itself ([`super::Follow::without_antenna`] with the
-/// [`Estimator::IdealPreview`](super::Estimator::IdealPreview)), recording `d - d_set`. A
+/// [`Estimator::IdealPreview`]), recording `d - d_set`. A
 /// run with a non-positive or non-finite step or duration, or one the loop refuses (a step
 /// outside its range), records nothing.
 pub fn simulate_ideal_preview(
