@@ -376,3 +376,24 @@ fn follow_objectives_refuse_what_does_not_fit() {
         assert!(err.contains(why), "{text}: {err}");
     }
 }
+
+#[test]
+fn the_example_follow_studies_and_optimization_read() {
+    let dir = common::examples_dir();
+    let v_max =
+        antenna_cli::study::Study::from_path(&dir.join("studies/follow_v_max.toml")).unwrap();
+    assert!(v_max.is_follow());
+    assert_eq!(v_max.len(), 7);
+    assert_eq!(v_max.columns(), V_MAX_COLUMNS);
+    let options = v_max.v_max.unwrap();
+    assert_eq!(options.speeds_m_per_s.len(), 20);
+    assert_eq!(options.distance_m, 1.5);
+    let gains =
+        antenna_cli::study::Study::from_path(&dir.join("studies/follow_gains.toml")).unwrap();
+    assert_eq!(gains.len(), 18);
+    assert_eq!(gains.columns(), FOLLOW_COLUMNS);
+    let spec =
+        antenna_cli::optimize::OptimizeSpec::from_path(&dir.join("optimize/follow_rms.toml"))
+            .unwrap();
+    assert_eq!(spec.objective.name(), "follow-rms");
+}

@@ -17,7 +17,9 @@ use crate::{Failure, check_plot_file};
 /// Search the joint stiffness profile that maximizes a task's metric over a set of sweeps.
 ///
 /// The file's `[optimize]` table names the base scenes, the objective (`preview-mean`,
-/// `mapping-error` or `flip-free-preview`, averaged over the scenes, maximized), the
+/// `mapping-error` or `flip-free-preview`, averaged over the scenes, maximized; on follow
+/// scenes `follow-v-max`, the highest speed in m/s with a `[v_max]` table, or `follow-rms`,
+/// the RMS distance error in m, minimized, with the scene's robot and gains), the
 /// parameters (`per-joint` or `exponential-taper`), the stiffness bounds, the wires (`any`
 /// or `available`), the method (argmin's `nelder-mead` or `particle-swarm`), the budget of
 /// sweeps and the seed. The seven named profiles of the thesis's Table 4.1 are swept first and
@@ -39,7 +41,8 @@ use crate::{Failure, check_plot_file};
   antenna optimize examples/optimize/wall_following.toml --json -o best.json --plot best.svg
   antenna optimize examples/optimize/wall_following.toml --scene-out best.toml && antenna sweep best.toml
   antenna optimize examples/optimize/wall_following.toml --log run.jsonl            # Ctrl-C, then:
-  antenna optimize examples/optimize/wall_following.toml --log run.jsonl --resume")]
+  antenna optimize examples/optimize/wall_following.toml --log run.jsonl --resume
+  antenna optimize examples/optimize/follow_rms.toml --scene-out best.toml && antenna follow best.toml")]
 pub(crate) struct OptimizeArgs {
     /// The optimization file (TOML: `[optimize]`; see docs/optimize.md).
     file: PathBuf,
