@@ -149,6 +149,8 @@ const MEASURED: RGBColor = RGBColor(0, 90, 200);
 const PREDICTED: RGBColor = RGBColor(230, 120, 0);
 const TOUCHED: RGBColor = RGBColor(220, 0, 60);
 const WALL: RGBColor = RGBColor(90, 90, 90);
+/// A follow run's body and path.
+const BODY: RGBColor = RGBColor(60, 60, 60);
 
 fn draw_figure<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
@@ -169,7 +171,12 @@ fn draw_chain<DB: DrawingBackend>(
     predicted: Option<&ChainFrame>,
 ) -> Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
-    let (min, max) = measured.bounds_m();
+    // A follow run's figure shows the robot and its antenna, not the whole path.
+    let (min, max) = if measured.body.is_some() {
+        measured.local_bounds_m()
+    } else {
+        measured.bounds_m()
+    };
     let mm = |v: f64| v * 1e3;
     let span = (max[0] - min[0]).max(max[1] - min[1]).max(0.05) * 0.55;
     let centre = [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0];
@@ -198,6 +205,28 @@ fn draw_chain<DB: DrawingBackend>(
                 WALL.stroke_width(3),
             ))
             .map_err(e)?;
+    }
+    if measured.body.is_some() && measured.path_m.len() >= 2 {
+        chart
+            .draw_series(LineSeries::new(
+                measured.path_m.iter().map(|p| (mm(p[0]), mm(p[1]))),
+                BODY.mix(0.5).stroke_width(1),
+            ))
+            .map_err(e)?;
+    }
+    if let Some(body) = &measured.body {
+        let colour = if body.collided { TOUCHED } else { BODY };
+        let mut outline: Vec<(f64, f64)> = body
+            .corners_m
+            .iter()
+            .map(|p| (mm(p[0]), mm(p[1])))
+            .collect();
+        outline.extend(outline.first().copied());
+        chart
+            .draw_series(LineSeries::new(outline, colour.stroke_width(2)))
+            .map_err(e)?
+            .label("body")
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour));
     }
     if let Some(p) = predicted {
         chart

@@ -434,7 +434,7 @@ pub fn parse_follow_text(text: &str, path: &Path) -> Result<FollowRunState, Moni
             "the link lengths and the footprint must be finite",
         ));
     }
-    let (walls, walls_note) = walls_of(&start);
+    let (walls, walls_note) = walls_of(&start, path);
     let mut state: Option<FollowRunState> = None;
     let mut pending_start = Some((start, walls, walls_note));
     let mut summary_at: Option<usize> = None;
@@ -525,16 +525,29 @@ pub fn parse_follow_text(text: &str, path: &Path) -> Result<FollowRunState, Moni
     Ok(state)
 }
 
-/// The walls of a `start` line's scene text (a points file relative to the scene as named),
-/// or why there are none.
-fn walls_of(start: &FollowStart) -> (Vec<Wall>, Option<String>) {
+/// The walls of a `start` line's scene text, or why there are none. A wall's points file is
+/// looked for relative to the scene as the start line names it (from the working folder, as
+/// `antenna follow` was run), then relative to the folder of the follow file `path`.
+fn walls_of(start: &FollowStart, path: &Path) -> (Vec<Wall>, Option<String>) {
     if start.scene_toml.trim().is_empty() {
         return (
             Vec::new(),
             Some("the start line holds no scene text".to_owned()),
         );
     }
-    match Scene::parse(&start.scene_toml, &start.scene) {
+    let first = Scene::parse(&start.scene_toml, &start.scene);
+    let scene_folder = Path::new(&start.scene)
+        .parent()
+        .unwrap_or_else(|| Path::new(""));
+    let beside_file = path
+        .parent()
+        .map(|folder| folder.join(scene_folder))
+        .filter(|_| scene_folder.is_relative());
+    let parsed = match (first, beside_file) {
+        (Err(_), Some(folder)) => Scene::parse_in(&start.scene_toml, &start.scene, &folder),
+        (first, _) => first,
+    };
+    match parsed {
         Ok(scene) => (scene.walls, None),
         Err(e) => (
             Vec::new(),

@@ -285,4 +285,24 @@ mod tests {
         let limited = run_sweep(self::scene().0, 5).unwrap();
         assert_eq!(limited.frames.len(), 6);
     }
+
+    /// A base moving in any direction draws its track: the stage along x is one case.
+    #[test]
+    fn a_base_moving_across_the_track_has_its_path() {
+        let (mut scene, _) = scene();
+        scene.base_start_m = Vector2::new(0.01, -0.02);
+        scene.motion.velocity_m_per_s = Vector2::new(0.0167, 0.01);
+        assert_eq!(track_m(&scene), None);
+        let path = base_path_m(&scene);
+        assert_eq!(path.len(), 2);
+        assert_eq!(path[0], [0.01, -0.02]);
+        assert!((path[1][0] - (0.01 + 0.0167 * 0.2)).abs() < 1e-15);
+        assert!((path[1][1] - (-0.02 + 0.01 * 0.2)).abs() < 1e-15);
+        let frames = run_sweep(scene, 3).unwrap();
+        for frame in &frames.frames {
+            assert_eq!(frame.path_m, path);
+            let (min, max) = frame.bounds_m();
+            assert!(min[1] <= -0.02 && max[1] >= -0.018, "{min:?} {max:?}");
+        }
+    }
 }

@@ -157,6 +157,17 @@ fn a_follow_scene_runs_from_the_bar_and_its_jsonl_plays_the_same_steps() {
         assert_eq!(state.frame_at(cursor).unwrap(), shown);
     }
     expect_label(&mut harness, "status: ok");
+    // The exports work as for a recording: the figure of the robot at the cursor.
+    harness.get_by_label("Export PNG").click();
+    harness.step();
+    let exports = harness.state().exports().to_vec();
+    assert_eq!(exports.len(), 1, "{:?}", harness.state().message());
+    assert!(std::fs::metadata(&exports[0].path).unwrap().len() > 1000);
+    harness.get_by_label("Export CSV").click();
+    harness.step();
+    let exports = harness.state().exports().to_vec();
+    assert_eq!(exports.len(), 2, "{:?}", harness.state().message());
+    assert!(exports[1].rows.unwrap() >= 2);
 
     // Dropped on the window: opened too.
     let copy = dir.join("dropped.jsonl");
