@@ -108,6 +108,29 @@ fn a_follow_study_over_speeds_and_kp_has_a_row_per_combination() {
         assert!((0.0..=1.0).contains(&share));
     }
 
+    // A row is `antenna follow`'s run of the scene with the row's values.
+    let text = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replace("speed_m_per_s = 0.3", "speed_m_per_s = 0.4")
+        .replace("duration_s = 10.0", "duration_s = 0.3");
+    let single = scratch("follow_study_single.toml", &text);
+    let out = run(&["follow", &single, "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let summary: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    for key in [
+        "status",
+        "steps",
+        "travel_m",
+        "rms_error_m",
+        "max_error_m",
+        "collisions",
+        "contact_share",
+        "estimate_share",
+        "estimate_rms_error_m",
+    ] {
+        assert_eq!(all[3][key], summary[key], "{key}");
+    }
+
     // The two shards together are the rows, each once.
     let mut sharded = Vec::new();
     for shard in ["1/2", "2/2"] {
