@@ -12,9 +12,12 @@
 //! let mut scene = Scene::from_path(std::path::Path::new(path))?;
 //! scene.follow.as_mut().expect("a follow scene").config.settings.duration_s = 0.2;
 //! let mut run = FollowRun::start(&scene)?;
-//! while let Some(step) = run.next_line() {
-//!     step?;
+//! let mut lines = 0;
+//! while let Some(Ok(_line)) = run.next_line() {
+//!     lines += 1;
 //! }
+//! assert_eq!(lines, 20);
+//! assert!(run.failure().is_none());
 //! assert_eq!(run.summary_line().status, "ok");
 //! # Ok(())
 //! # }

@@ -76,7 +76,10 @@ impl VMaxOptions {
             return Err("speeds_m_per_s: needs at least one speed, each positive".to_string());
         }
         if !(self.distance_m.is_finite() && self.distance_m > 0.0) {
-            return Err(format!("distance_m: must be positive, not {}", self.distance_m));
+            return Err(format!(
+                "distance_m: must be positive, not {}",
+                self.distance_m
+            ));
         }
         if !(self.tolerance_m_per_s.is_finite() && self.tolerance_m_per_s > 0.0) {
             return Err(format!(

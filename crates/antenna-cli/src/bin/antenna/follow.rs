@@ -40,7 +40,7 @@ const FLUSH_EVERY: Duration = Duration::from_millis(200);
   antenna follow examples/follow/straight_wall.toml --jsonl > run.jsonl
   antenna follow examples/follow/straight_wall.toml --plot run.svg")]
 pub(crate) struct FollowArgs {
-    /// The follow scene (TOML, with [robot], [controller], [follow]; see
+    /// The follow scene (TOML, with `[robot]`, `[controller]`, `[follow]`; see
     /// docs/scene-format.md).
     scene: PathBuf,
     /// Print the summary as one JSON object.
