@@ -94,6 +94,7 @@ impl FollowRunState {
         walls: Vec<Wall>,
         walls_note: Option<String>,
         centre_m: PointM,
+        capacity: usize,
     ) -> Self {
         let links = start.link_lengths_m.len();
         let reach_m: f64 = start.link_lengths_m.iter().sum::<f64>()
@@ -114,7 +115,10 @@ impl FollowRunState {
                 .file_stem()
                 .map_or_else(|| "follow".to_owned(), |s| s.to_string_lossy().into_owned()),
             from_file,
-            history: History::new(links.saturating_sub(1), start.steps.max(1) + 1),
+            history: History::new(
+                links.saturating_sub(1),
+                capacity.max(start.steps).max(1) + 1,
+            ),
             start,
             walls,
             walls_note,
@@ -401,6 +405,8 @@ pub fn read_follow_file(path: &Path) -> Result<FollowRunState, MonitorError> {
 /// # Errors
 /// As [`read_follow_file`].
 pub fn parse_follow_text(text: &str, path: &Path) -> Result<FollowRunState, MonitorError> {
+    // Every step kept, however many steps the start line announced.
+    let lines_total = text.lines().count();
     let mut lines = text
         .lines()
         .enumerate()
@@ -460,6 +466,7 @@ pub fn parse_follow_text(text: &str, path: &Path) -> Result<FollowRunState, Moni
                         walls,
                         note,
                         step.pose_m,
+                        lines_total,
                     ));
                 }
                 let Some(state) = state.as_mut() else {
@@ -505,6 +512,7 @@ pub fn parse_follow_text(text: &str, path: &Path) -> Result<FollowRunState, Moni
                         walls,
                         note,
                         [0.0, 0.0],
+                        lines_total,
                     ));
                 }
                 if let Some(state) = state.as_mut() {
@@ -517,7 +525,7 @@ pub fn parse_follow_text(text: &str, path: &Path) -> Result<FollowRunState, Moni
     let mut state = match (state, pending_start) {
         (Some(state), _) => state,
         (None, Some((start, walls, note))) => {
-            FollowRunState::new(path, true, start, walls, note, [0.0, 0.0])
+            FollowRunState::new(path, true, start, walls, note, [0.0, 0.0], lines_total)
         }
         (None, None) => return Err(at_line(path, 1, "no start line")),
     };
@@ -630,6 +638,7 @@ impl FollowWorker {
             scene.walls.clone(),
             None,
             [pose.x, pose.y],
+            0,
         );
         let shared = Arc::new(Mutex::new(state));
         let cancel = Arc::new(AtomicBool::new(false));
@@ -911,6 +920,17 @@ mod tests {
         assert!(ok.summary.is_none());
         assert!(ok.walls.is_empty() && ok.walls_note.is_some());
         assert_eq!(ok.frame_at(0.01).unwrap().joints_m.len(), 3);
+        // More steps than the start line announced: every one kept, in the history too.
+        let announced_one = [
+            line(FollowLine::Start(FollowStart {
+                steps: 1,
+                ..start.clone()
+            })),
+            good[1].clone(),
+            good[2].clone(),
+        ];
+        let more = parse_follow_text(&announced_one.join("\n"), path).unwrap();
+        assert_eq!((more.steps.len(), more.history.len()), (2, 2));
 
         let error = |text: String| parse_follow_text(&text, path).unwrap_err().to_string();
         let e = error(format!(
