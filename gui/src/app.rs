@@ -399,6 +399,20 @@ impl MonitorApp {
         }
     }
 
+    /// Moves the cursor to `t_s` (as the scrub slider does), stopping playback; the view
+    /// stays where this puts it.
+    pub fn scrub_to(&mut self, t_s: f64) {
+        let latest = match &self.source {
+            Source::Live(c) => c.lock().history.latest_t_s(),
+            Source::Trial(t) => t.history.latest_t_s(),
+            Source::Sweep(w) => w.lock().history.latest_t_s(),
+            Source::Follow(w) => w.lock().history.latest_t_s(),
+            Source::Idle => None,
+        };
+        self.playing = None;
+        self.view.scrub(t_s, latest);
+    }
+
     /// The view (window, cursor, following).
     pub fn view(&self) -> &ViewState {
         &self.view

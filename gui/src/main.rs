@@ -51,6 +51,10 @@ struct Args {
     /// seconds, or ended; at most 10 s longer): for screenshots.
     #[arg(long, value_name = "S")]
     wait_for_history_s: Option<f64>,
+    /// After the wait, put the cursor at this time, seconds (for screenshots of a run's
+    /// middle).
+    #[arg(long, value_name = "S", hide = true)]
+    at_s: Option<f64>,
     /// Window size in points, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x800")]
     size: String,
@@ -99,6 +103,12 @@ fn main() -> Result<()> {
             "antenna-monitor: no data within {} s; opening anyway",
             s + 10.0
         );
+    }
+    if let Some(t_s) = args.at_s {
+        if !t_s.is_finite() {
+            bail!("--at-s must be finite, got {t_s}");
+        }
+        app.scrub_to(t_s);
     }
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
