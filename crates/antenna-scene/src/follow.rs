@@ -40,6 +40,7 @@ pub(crate) struct RawFollow {
     pose_m: Option<Spanned<Vec<f64>>>,
     heading_deg: Option<Spanned<f64>>,
     lost_after_s: Option<Spanned<f64>>,
+    lost_beyond_m: Option<Spanned<f64>>,
     settling_window_m: Option<Spanned<f64>>,
     settling_band_m: Option<Spanned<f64>>,
     antenna_step_m: Option<Spanned<f64>>,
@@ -230,6 +231,7 @@ impl RawFollow {
             self.pose_m.as_ref().map(|v| ("pose_m", v.span())),
             f("heading_deg", &self.heading_deg),
             f("lost_after_s", &self.lost_after_s),
+            f("lost_beyond_m", &self.lost_beyond_m),
             f("settling_window_m", &self.settling_window_m),
             f("settling_band_m", &self.settling_band_m),
             f("antenna_step_m", &self.antenna_step_m),
@@ -262,6 +264,9 @@ impl RawFollow {
             s.heading_rad = finite(source, FOLLOW, "heading_deg", h)?.to_radians();
         }
         s.lost_after_s = pos("lost_after_s", &self.lost_after_s, s.lost_after_s)?;
+        if let Some(b) = &self.lost_beyond_m {
+            s.lost_beyond_m = Some(positive(source, FOLLOW, "lost_beyond_m", b)?);
+        }
         if let Some(w) = &self.settling_window_m {
             s.settling_window_m = non_negative(source, FOLLOW, "settling_window_m", w)?;
         }

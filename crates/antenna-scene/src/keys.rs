@@ -144,6 +144,7 @@ pub const FOLLOW_KEYS: &[&str] = &[
     "pose_m",
     "heading_deg",
     "lost_after_s",
+    "lost_beyond_m",
     "settling_window_m",
     "settling_band_m",
     "antenna_step_m",

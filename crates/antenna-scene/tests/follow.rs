@@ -460,7 +460,8 @@ fn unknown_keys_list_the_tables_keys() {
         e,
         format!(
             "{} unknown key `speed_m_per_s` in [follow]; allowed: duration_s, step_s, pose_m, \
-             heading_deg, lost_after_s, settling_window_m, settling_band_m, antenna_step_m",
+             heading_deg, lost_after_s, lost_beyond_m, settling_window_m, settling_band_m, \
+             antenna_step_m",
             at(&text, "speed_m_per_s = 1.0")
         )
     );

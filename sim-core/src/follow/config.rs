@@ -177,6 +177,10 @@ pub struct FollowSettings {
     pub heading_rad: f64,
     /// With no estimate for this long, the run ends `lost`, seconds.
     pub lost_after_s: f64,
+    /// Farther than this from every wall (the point of rotation's true distance), the run
+    /// ends `lost`, m (`None`: three times the setpoint). A fast robot that drifts away
+    /// keeps a stale estimate for a while; the judge does not wait for it.
+    pub lost_beyond_m: Option<f64>,
     /// The error statistics start after this much travel, m.
     pub settling_window_m: f64,
     /// The run has settled once the true error stays within this band, m.
@@ -194,6 +198,7 @@ impl Default for FollowSettings {
             pose_m: Vector2::new(0.0, 0.12),
             heading_rad: 0.0,
             lost_after_s: 2.0,
+            lost_beyond_m: None,
             settling_window_m: 0.5,
             settling_band_m: 0.01,
             antenna_step_m: 0.002,
@@ -221,6 +226,14 @@ impl FollowConfig {
         (self.settings.duration_s / self.settings.step_s)
             .round()
             .max(0.0) as usize
+    }
+
+    /// The distance beyond which a run is lost: `lost_beyond_m`, or three times the
+    /// setpoint.
+    pub fn lost_beyond_m(&self) -> f64 {
+        self.settings
+            .lost_beyond_m
+            .unwrap_or(3.0 * self.controller.setpoint_m)
     }
 
     /// The delay in whole steps: `round(delay_s / step_s)`, halves rounded up.
@@ -376,6 +389,18 @@ impl FollowConfig {
                 return bad("follow", key, must("positive", v));
             }
         }
+        if let Some(beyond) = s.lost_beyond_m
+            && !(positive(beyond) && beyond > c.setpoint_m)
+        {
+            return bad(
+                "follow",
+                "lost_beyond_m",
+                format!(
+                    "must be greater than the setpoint ({} m), not {beyond}",
+                    c.setpoint_m
+                ),
+            );
+        }
         if !non_negative(s.settling_window_m) {
             return bad(
                 "follow",
@@ -422,7 +447,10 @@ mod tests {
         };
         assert!(matches!(
             c.validate(),
-            Err(FollowError::Invalid { key: "antenna_loads_body", .. })
+            Err(FollowError::Invalid {
+                key: "antenna_loads_body",
+                ..
+            })
         ));
         let mut c = FollowConfig::default();
         c.settings.step_s = 0.0001;

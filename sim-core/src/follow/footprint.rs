@@ -138,7 +138,8 @@ mod tests {
         for c in &corners {
             assert!(corner.signed_distance(c).gap_m > 0.0, "{c:?}");
         }
-        let (_, depth) = overlap(std::slice::from_ref(&corner), &v(0.0, 0.0), 0.0, footprint).unwrap();
+        let (_, depth) =
+            overlap(std::slice::from_ref(&corner), &v(0.0, 0.0), 0.0, footprint).unwrap();
         let expected = 0.004 / 2f64.sqrt();
         assert!((depth - expected).abs() < 1e-12, "{depth} vs {expected}");
         // Moved 5 mm away from it: clear.

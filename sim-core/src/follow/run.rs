@@ -320,7 +320,10 @@ impl Follow {
         } else {
             self.without_estimate_s + h
         };
-        if self.without_estimate_s > s.lost_after_s + 1e-12 {
+        let drifted = record
+            .wall_distance_m
+            .is_none_or(|d| d > self.config.lost_beyond_m());
+        if self.without_estimate_s > s.lost_after_s + 1e-12 || drifted {
             self.ended = Some(FollowStatus::Lost);
             return Some(Ok(record));
         }

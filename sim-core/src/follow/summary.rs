@@ -9,7 +9,8 @@ pub enum FollowStatus {
     Ok,
     /// The body's footprint overlapped a wall at least once.
     Collided,
-    /// No estimate for `[follow] lost_after_s`: the run ended there.
+    /// No estimate for `[follow] lost_after_s`, or the robot farther than `lost_beyond_m`
+    /// from every wall: the run ended there.
     Lost,
     /// The antenna's solver refused a step: the run ended there (`kind` is
     /// `"no-convergence"`, `"jammed"`, `"uncertified"` or `"solver-error"`).

@@ -3,7 +3,6 @@
 //! do not see the body's heading (a scene turned rigidly gives the same estimates); the
 //! contact-line and bend estimators follow a straight wall with the thesis's antenna.
 
-
 #![allow(clippy::unwrap_used)]
 
 use nalgebra::{Rotation2, Vector2};
@@ -173,4 +172,21 @@ fn the_bend_estimator_has_a_calibration_table_that_grows_with_distance() {
     assert!(table.rows.len() >= 5, "{table:?}");
     let (_, summary) = run_all(run);
     assert!(summary.estimate_share > 0.5, "{summary:?}");
+}
+
+#[test]
+fn a_robot_drifting_away_is_lost_beyond_three_setpoints_though_it_still_has_an_estimate() {
+    let mut config = ideal_config(1.0);
+    config.controller.kp_n = 0.0;
+    config.controller.kd_n_s = 0.0;
+    config.settings.heading_rad = -0.3;
+    let (steps, summary) =
+        run_all(Follow::without_antenna(vec![straight_wall(0.2)], &config).unwrap());
+    assert_eq!(summary.status.name(), "lost");
+    let last = steps.last().unwrap();
+    assert!(last.estimate.is_some());
+    assert!(last.wall_distance_m.unwrap() > 0.3);
+    // It ended at the first step past 0.3 m: the one before was within.
+    assert!(steps[steps.len() - 2].wall_distance_m.unwrap() <= 0.3);
+    assert!(summary.duration_s < config.settings.lost_after_s);
 }

@@ -275,6 +275,8 @@ impl FollowPlot {
     fn draw_errors<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), String> {
         let text = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
         let t_end = self.errors.last().map_or(1.0, |e| e.0.max(1e-3));
+        // Ticks with enough decimals to tell a short run's apart.
+        let t_decimals = if t_end < 2.0 { 2 } else { 1 };
         let values = self
             .errors
             .iter()
@@ -301,7 +303,7 @@ impl FollowPlot {
             .configure_mesh()
             .x_desc("t (s)")
             .y_desc("error (mm)")
-            .x_label_formatter(&|v| tick(*v, 1))
+            .x_label_formatter(&|v| tick(*v, t_decimals))
             .y_label_formatter(&|v| tick(*v, 0))
             .light_line_style(WHITE)
             .draw()
