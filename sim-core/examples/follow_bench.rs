@@ -58,11 +58,15 @@ fn scene(config: &FollowConfig) -> Result<SweepScene, Box<dyn std::error::Error>
     })
 }
 
-/// One closed-loop run: its time and the antenna's poses and joint angles per step.
-fn follow(
-    scene: &SweepScene,
-    config: &FollowConfig,
-) -> Result<(f64, Vec<BasePose>, Vec<Vec<f64>>, String), Box<dyn std::error::Error>> {
+/// One closed-loop run: its time, the antenna's poses and joint angles per step, its status.
+struct Run {
+    seconds: f64,
+    poses: Vec<BasePose>,
+    thetas: Vec<Vec<f64>>,
+    status: String,
+}
+
+fn follow(scene: &SweepScene, config: &FollowConfig) -> Result<Run, Box<dyn std::error::Error>> {
     let mut run = Follow::new(scene, &SensorSettings::IDEAL, config)?;
     let mut poses = Vec::with_capacity(run.steps());
     let mut thetas = Vec::with_capacity(run.steps());
@@ -142,11 +146,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut status = String::new();
     let mut identical = true;
     for _ in 0..rounds {
-        let (seconds, poses, thetas, s) = follow(&scene, &config)?;
-        loop_s.push(seconds);
-        steps = poses.len();
-        status = s;
-        let (seconds, same) = replay(&scene, &config, &poses, &thetas)?;
+        let run = follow(&scene, &config)?;
+        loop_s.push(run.seconds);
+        steps = run.poses.len();
+        status = run.status;
+        let (seconds, same) = replay(&scene, &config, &run.poses, &run.thetas)?;
         replay_s.push(seconds);
         identical &= same;
     }
