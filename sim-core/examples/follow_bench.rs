@@ -81,13 +81,12 @@ fn follow(scene: &SweepScene, config: &FollowConfig) -> Result<Run, Box<dyn std:
             thetas.push(step.theta_rad);
         }
     }
-    let seconds = started.elapsed().as_secs_f64();
-    Ok((
-        seconds,
+    Ok(Run {
+        seconds: started.elapsed().as_secs_f64(),
         poses,
         thetas,
-        run.summary().status.name().to_string(),
-    ))
+        status: run.summary().status.name().to_string(),
+    })
 }
 
 /// The replay of `poses` through `step_to_pose`, in the loop's pieces; its time and whether
