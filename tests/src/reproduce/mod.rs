@@ -8,6 +8,7 @@
 //! wall frequency) in code.
 
 pub mod flipping;
+pub mod follow;
 pub mod mapping;
 pub mod tip_forces;
 pub mod wall_following;
@@ -53,6 +54,14 @@ pub enum ReproduceError {
     /// A wall could not be built.
     #[error(transparent)]
     Wall(#[from] sim_core::WallError),
+    /// A closed-loop run could not start.
+    #[error("{label}: {source}")]
+    Follow {
+        /// Which run.
+        label: String,
+        /// What went wrong.
+        source: sim_core::follow::FollowError,
+    },
     /// A sweep failed.
     #[error("{label}: {source}")]
     Sweep {

@@ -13,6 +13,7 @@ mod contact_newton_iterations;
 mod crate_boundaries;
 mod docs;
 mod reproduce_flipping;
+mod reproduce_follow;
 mod reproduce_mapping;
 mod reproduce_tip_forces;
 mod reproduce_wall_following;
