@@ -28,7 +28,8 @@
 //!   antenna placed by the follow scene's default approach, at rest, or tip on the wall;
 //! - the run: 0.5-2 s (the soak: 1-4 s) at 0.01 s, `lost_after_s` 0.1-2 s.
 //!
-//! [`run_follow_case`] runs a case in this process; [`run_follow_cases`] runs many on every
+//! With the ideal preview, the body alone (`Follow::without_antenna`) is run first and held to
+//! the same contract. [`run_follow_case`] runs a case in this process; [`run_follow_cases`] runs many on every
 //! core, each in a child process with a time limit (the contact suite's machinery,
 //! [`super::parallel`]); [`follow_table`] writes the table of statuses.
 
@@ -62,7 +63,7 @@ use crate::reproduce::TABLE_4_1_PROFILES;
 pub const FOLLOW_LINK_COUNTS: [usize; 4] = [4, 9, 18, 36];
 /// Mixed into the seed so that follow cases draw from streams of their own.
 const FOLLOW_STREAM: u64 = 0x666f_6c6c_6f77;
-/// The step of every run, seconds.
+/// The step of every run, seconds (the `[follow]` default).
 pub const FOLLOW_STEP_S: f64 = 0.01;
 /// The speeds, m/s (log-uniform).
 pub const SPEED_RANGE_M_PER_S: (f64, f64) = (0.05, 2.0);
@@ -310,8 +311,7 @@ impl FollowCase {
                 WallSide::Right
             },
             // Only a template body takes a moment (a wheeled one's rate is commanded).
-            antenna_loads_body: rng.random_bool(0.4)
-                && matches!(body, BodyModel::Template { .. }),
+            antenna_loads_body: rng.random_bool(0.4) && matches!(body, BodyModel::Template { .. }),
         };
         let controller = draw_controller(rng);
         // The wall, in the left-wall frame: the point of rotation at the origin.
@@ -378,9 +378,9 @@ impl FollowCase {
             heading_rad,
             footprint_m,
         );
+        // The default step (FOLLOW_STEP_S), and the defaults of keys added later.
         let settings = FollowSettings {
             duration_s,
-            step_s: FOLLOW_STEP_S,
             pose_m: Vector2::zeros(),
             heading_rad,
             lost_after_s: rng.random_range(0.1..=2.0),
@@ -391,6 +391,7 @@ impl FollowCase {
             } else {
                 rng.random_range(0.001..=0.005)
             },
+            ..FollowSettings::default()
         };
         let placement_kind = [
             FollowPlacement::DefaultApproach,
@@ -842,40 +843,36 @@ fn violation(message: String) -> FollowOutcome {
     FollowOutcome::Violation { message }
 }
 
-fn drive(case: &FollowCase, steps: &mut usize, echo_progress: bool) -> FollowOutcome {
-    let started = Follow::new(&case.scene, &case.sensors, &case.config);
+/// The start's contract: refused with [`FollowError::StartsInWall`] exactly where the
+/// independent check says so; a broken one in words.
+fn check_started(case: &FollowCase, started: &Result<Follow, FollowError>) -> Result<(), String> {
     let starts_in_wall = matches!(started, Err(FollowError::StartsInWall { .. }));
-    match (case.start_check, starts_in_wall) {
-        (StartCheck::Inside, false) => {
-            return violation(format!(
-                "the footprint starts inside the wall, yet the start gave {}",
-                match &started {
-                    Ok(_) => "no error".to_string(),
-                    Err(e) => format!("another error: {e}"),
-                }
-            ));
+    match (case.start_check, starts_in_wall, started) {
+        (StartCheck::Inside, false, _) => Err(format!(
+            "the footprint starts inside the wall, yet the start gave {}",
+            match started {
+                Ok(_) => "no error".to_string(),
+                Err(e) => format!("another error: {e}"),
+            }
+        )),
+        (StartCheck::Clear, true, Err(e)) => Err(format!(
+            "the footprint starts at least {CLEAR_MARGIN_M} m clear of the wall, yet the \
+             start refused: {e}"
+        )),
+        (_, _, Err(e @ FollowError::Invalid { .. })) => {
+            Err(format!("a valid description refused: {e}"))
         }
-        (StartCheck::Clear, true) => {
-            return violation(format!(
-                "the footprint starts at least {CLEAR_MARGIN_M} m clear of the wall, yet the \
-                 start refused: {}",
-                started.err().map(|e| e.to_string()).unwrap_or_default()
-            ));
-        }
-        _ => {}
+        _ => Ok(()),
     }
-    let mut run = match started {
-        Ok(run) => run,
-        Err(e @ FollowError::Invalid { .. }) => {
-            return violation(format!("a valid description refused: {e}"));
-        }
-        Err(e) => {
-            return FollowOutcome::Refused {
-                kind: start_error_kind(&e).to_string(),
-                message: e.to_string(),
-            };
-        }
-    };
+}
+
+/// Runs `run` to its end, checking every step and the summary: the status's name and the
+/// refusal that ended it, if one did; a broken contract in words. `steps` counts the steps.
+fn run_to_end(
+    run: &mut Follow,
+    steps: &mut usize,
+    echo_progress: bool,
+) -> Result<(&'static str, Option<String>), String> {
     let planned = run.steps();
     let mut refusal = None;
     while let Some(step) = run.next_step() {
@@ -883,10 +880,10 @@ fn drive(case: &FollowCase, steps: &mut usize, echo_progress: bool) -> FollowOut
             Ok(step) => {
                 *steps += 1;
                 if let Some(what) = non_finite(&step) {
-                    return violation(format!("step {}: not finite: {what}", *steps - 1));
+                    return Err(format!("step {}: not finite: {what}", *steps - 1));
                 }
                 if *steps > planned {
-                    return violation(format!("more steps than the {planned} planned"));
+                    return Err(format!("more steps than the {planned} planned"));
                 }
                 if echo_progress && steps.is_multiple_of(10) {
                     println!("{PROGRESS}{steps}");
@@ -895,7 +892,7 @@ fn drive(case: &FollowCase, steps: &mut usize, echo_progress: bool) -> FollowOut
             Err(e) => {
                 let message = e.to_string();
                 if let Some(next) = run.next_step() {
-                    return violation(format!(
+                    return Err(format!(
                         "after step {}'s refusal ({message}) the run went on ({})",
                         *steps,
                         match next {
@@ -911,9 +908,9 @@ fn drive(case: &FollowCase, steps: &mut usize, echo_progress: bool) -> FollowOut
     }
     let summary = run.summary();
     let status = summary.status.name();
-    if !STATUS_NAMES.contains(&status) {
-        return violation(format!("status {status:?} is not one of {STATUS_NAMES:?}"));
-    }
+    let Some(status) = STATUS_NAMES.iter().copied().find(|s| *s == status) else {
+        return Err(format!("status {status:?} is not one of {STATUS_NAMES:?}"));
+    };
     for (name, v) in [
         ("rms_error_m", summary.rms_error_m),
         ("max_error_m", summary.max_error_m),
@@ -925,24 +922,56 @@ fn drive(case: &FollowCase, steps: &mut usize, echo_progress: bool) -> FollowOut
         ("travel_m", Some(summary.travel_m)),
     ] {
         if v.is_some_and(|v| !v.is_finite()) {
-            return violation(format!("the summary's {name} is not finite: {v:?}"));
+            return Err(format!("the summary's {name} is not finite: {v:?}"));
         }
     }
     let ended_early = refusal.is_some() || status == "lost";
     if !ended_early && *steps != planned {
-        return violation(format!(
+        return Err(format!(
             "status {status} after {} of {planned} steps",
             *steps
         ));
     }
     if refusal.is_some() && matches!(status, "ok" | "lost") {
-        return violation(format!(
+        return Err(format!(
             "a refusal ended the run, yet its status is {status}"
         ));
     }
-    FollowOutcome::Ran {
-        status: status.to_string(),
-        refusal,
+    Ok((status, refusal))
+}
+
+/// Runs `case`: with the ideal preview, first the body alone (`Follow::without_antenna`,
+/// the same contract), then the run with its antenna, whose outcome it is.
+fn drive(case: &FollowCase, steps: &mut usize, echo_progress: bool) -> FollowOutcome {
+    if let Estimator::IdealPreview { .. } = case.config.controller.estimator {
+        let alone = Follow::without_antenna(case.scene.walls.clone(), &case.config);
+        let checked = check_started(case, &alone).and_then(|()| match alone {
+            Ok(mut run) => run_to_end(&mut run, &mut 0, false).map(|_| ()),
+            Err(_) => Ok(()),
+        });
+        if let Err(message) = checked {
+            return violation(format!("without the antenna: {message}"));
+        }
+    }
+    let started = Follow::new(&case.scene, &case.sensors, &case.config);
+    if let Err(message) = check_started(case, &started) {
+        return violation(message);
+    }
+    let mut run = match started {
+        Ok(run) => run,
+        Err(e) => {
+            return FollowOutcome::Refused {
+                kind: start_error_kind(&e).to_string(),
+                message: e.to_string(),
+            };
+        }
+    };
+    match run_to_end(&mut run, steps, echo_progress) {
+        Ok((status, refusal)) => FollowOutcome::Ran {
+            status: status.to_string(),
+            refusal,
+        },
+        Err(message) => violation(message),
     }
 }
 
