@@ -13,7 +13,7 @@
 //! - `cargo test -p antenna-tests --test stress_follow -- --nocapture`: the CI sample (a
 //!   fixed seed), with its table.
 //! - `ANTENNA_SOAK=1 cargo test -p antenna-tests --release --test stress_follow --
-//!   --nocapture`: at least 2,000 runs (`ANTENNA_SOAK_RUNS`, default 2000) from
+//!   --nocapture`: 2,000 runs (`ANTENNA_SOAK_RUNS`, default 2000) from
 //!   `ANTENNA_SOAK_SEED` (default below), 1-4 s each, the table, every failure.
 //! - `ANTENNA_STRESS_REPLAY=ci:SEED:INDEX[,INDEX...]` (or `soak:...`): reruns those cases
 //!   alone, in this process and without a time limit, and prints what happened; with
@@ -46,7 +46,7 @@ const KNOWN_CI_FAILURES: &[(u64, &str)] = &[];
 
 /// The soak's default seed.
 const SOAK_SEED: u64 = 4_747;
-/// The soak's default (and least) size.
+/// The soak's default size.
 const SOAK_RUNS: u64 = 2_000;
 
 fn env_u64(name: &str) -> Option<u64> {
@@ -110,26 +110,28 @@ fn replay(spec: &str) {
 const MAIN_TEST: &str = "follow_runs_end_in_a_typed_status";
 
 /// Per-run time limits, `base + per link-solve * N * antenna solves` up to a most. As in the
-/// contact suite, the limit catches a run that hangs; a failing step may take a while before
-/// it refuses (ci:20261206:37, N = 4, spends 4.2 s in a release build on its first 4 steps,
-/// 17 s in the test profile on a loaded machine). The soak's limits: in a release build 10 s
-/// plus 0.1 ms per link and solve of the antenna, at most 60 s; in the test profile 20 s plus
-/// 0.3 ms, at most 120 s. The CI sample's are five times those.
+/// contact suite, the limit catches a run that hangs. Some runs are slow without hanging: a
+/// solve of the antenna carried along a turning base can take over a millisecond per link
+/// (soak:4747:392, N = 18, 307 steps: 21 s in a release build with the cores shared), and a
+/// failing step may take seconds before it refuses (ci:20261206:37, N = 4: 4.2 s in a release
+/// build on its first 4 steps). The soak's limits: in a release build 20 s plus 1 ms per link
+/// and solve of the antenna, at most 60 s; in the test profile 30 s plus 3 ms, at most 120 s.
+/// The CI sample's are twice those.
 fn time_limit(optimized: bool, sample: Sample) -> TimeLimit {
     let scale = match sample {
-        Sample::Ci => 5.0,
+        Sample::Ci => 2.0,
         Sample::Soak => 1.0,
     };
     let tight = if optimized {
         TimeLimit {
-            base_s: 10.0,
-            per_link_step_s: 1e-4,
+            base_s: 20.0,
+            per_link_step_s: 1e-3,
             max_s: 60.0,
         }
     } else {
         TimeLimit {
-            base_s: 20.0,
-            per_link_step_s: 3e-4,
+            base_s: 30.0,
+            per_link_step_s: 3e-3,
             max_s: 120.0,
         }
     };
@@ -154,9 +156,7 @@ fn follow_runs_end_in_a_typed_status() {
     let (seed, count, sample) = if soak {
         (
             env_u64("ANTENNA_SOAK_SEED").unwrap_or(SOAK_SEED),
-            env_u64("ANTENNA_SOAK_RUNS")
-                .unwrap_or(SOAK_RUNS)
-                .max(SOAK_RUNS),
+            env_u64("ANTENNA_SOAK_RUNS").unwrap_or(SOAK_RUNS),
             Sample::Soak,
         )
     } else {
