@@ -26,8 +26,8 @@
 use std::time::Instant;
 
 use antenna_tests::stress::follow::{
-    FollowCase, FollowOutcome, FollowPlacement, FollowRecord, StartCheck, follow_child_main,
-    follow_table, run_follow_cases, run_follow_index,
+    FollowCase, FollowOutcome, FollowPlacement, FollowRecord, RK4_STABILITY_LIMIT, StartCheck,
+    follow_child_main, follow_table, run_follow_cases, run_follow_index,
 };
 use antenna_tests::stress::{
     CHILD_ENV, ChildCommand, Sample, TimeLimit, WallKind, default_threads,
@@ -36,8 +36,8 @@ use sim_core::follow::{BodyModel, Estimator, Follow, FollowError, WallSide};
 
 /// The CI sample's seed.
 const CI_SEED: u64 = 20_261_206;
-/// The CI sample's size: 128 runs took 19 s in the test profile on two cores with the
-/// machine's load at 3 (64 took 34 s with its load at 5.5), about 30-60 s on two shared cores.
+/// The CI sample's size: 128 runs took 12-19 s in the test profile on two cores with the
+/// machine's load at 2-3 (64 took 34 s with its load at 5.5): about 30-60 s on two shared cores.
 const CI_RUNS: u64 = 128;
 /// The CI sample's runs that break the contract as of this commit, with why: left out of
 /// the CI run so that any other failure fails it (the soak and `ANTENNA_STRESS_REPLAY` still
@@ -205,6 +205,15 @@ fn follow_runs_end_in_a_typed_status() {
         println!("\nFailures ({}):", failures.len());
         for r in &failures {
             println!("- {}\n  {}", r.outcome_line(), r.replay);
+            let unstable = FollowCase::generate(r.seed, r.index, r.sample)
+                .ok()
+                .and_then(|c| c.rk4_unstable());
+            if let Some(z) = unstable {
+                println!(
+                    "  (the template body's RK4 step is unstable here: b h / J = {z:.2} > \
+                     {RK4_STABILITY_LIMIT})"
+                );
+            }
         }
     }
     assert!(

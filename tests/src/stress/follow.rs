@@ -67,6 +67,9 @@ const FOLLOW_STREAM: u64 = 0x666f_6c6c_6f77;
 pub const FOLLOW_STEP_S: f64 = 0.01;
 /// The speeds, m/s (log-uniform).
 pub const SPEED_RANGE_M_PER_S: (f64, f64) = (0.05, 2.0);
+/// Where classic RK4 stops being stable on the negative real axis: `|R(z)| = 1` at
+/// `z = -2.785` (R the method's amplification `1 + z + z^2/2 + z^3/6 + z^4/24`).
+pub const RK4_STABILITY_LIMIT: f64 = 2.785;
 /// The share of cases whose point of rotation starts inside the wall.
 pub const INSIDE_SHARE: f64 = 0.1;
 
@@ -536,6 +539,22 @@ impl FollowCase {
             },
             self.wall.describe()
         )
+    }
+
+    /// `b h / J` of a template body where it is beyond the stability limit of classic RK4 on
+    /// the negative real axis ([`RK4_STABILITY_LIMIT`]): there the step turns a small turning
+    /// rate into a larger one of the opposite sign, and the body spins up without bound.
+    pub fn rk4_unstable(&self) -> Option<f64> {
+        match self.config.robot.body {
+            BodyModel::Template {
+                inertia_kg_m2,
+                damping_n_m_s_per_rad,
+            } => {
+                let z = damping_n_m_s_per_rad * self.config.settings.step_s / inertia_kg_m2;
+                (z > RK4_STABILITY_LIMIT).then_some(z)
+            }
+            BodyModel::Wheeled { .. } => None,
+        }
     }
 
     /// The estimator's name.
