@@ -978,7 +978,14 @@ fn v_max_text(cell: &Cell, protocol: &follow::Protocol) -> String {
         text.push_str(&format!(" ({f})"));
     }
     if !v.monotone {
-        text.push_str(" *");
+        let again = cell
+            .v_max
+            .runs
+            .iter()
+            .filter(|(_, s)| s == "ok")
+            .map(|(speed, _)| *speed)
+            .fold(f64::NEG_INFINITY, f64::max);
+        text.push_str(&format!(" *{again:.2}"));
     }
     text
 }
@@ -1196,7 +1203,7 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
          solver through every step) and still follows: over its last {:.1} m the true \
          distance stays within {:.0} mm of the setpoint; an `ok` run that does not is \
          `drifted`. v_max: every speed of a grid ({} m/s), then bisection to {:.2} m/s below \
-         the first that fails (`*`: a faster grid speed was good again). The estimator's \
+         the first that fails (`*s`: a faster grid speed, at most s, was good again). The estimator's \
          window is {:.0} mm of travel (at least two samples): a window fixed in time lags \
          by half its length times the speed, which at 2 m/s would put the estimate's \
          preview a metre behind the robot whatever the antenna.\n",
@@ -1271,18 +1278,22 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
     let mut verdicts = String::new();
     for &h in &hair_variants {
         let mut best_walls = Vec::new();
+        let mut tied_walls = Vec::new();
         let mut strict = 0;
         for w in FollowWall::ALL {
             let fe_v = speed(cell(&fe, w, h));
-            let others = profiles
+            let others: Vec<f64> = profiles
                 .iter()
                 .filter(|p| **p != fe)
                 .map(|p| speed(cell(p, w, h)))
-                .fold(0.0, f64::max);
-            if fe_v >= others {
+                .collect();
+            let best_other = others.iter().copied().fold(0.0, f64::max);
+            if others.iter().all(|&v| v == fe_v) {
+                tied_walls.push(w.name());
+            } else if fe_v >= best_other {
                 best_walls.push(w.name());
             }
-            if fe_v > others {
+            if fe_v > best_other {
                 strict += 1;
             }
         }
@@ -1290,19 +1301,23 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
             .iter()
             .filter(|&&w| speed(cell(&fe, w, h)) > speed(cell(&StiffnessProfile::Constant, w, h)))
             .count();
-        writeln!(
-            verdicts,
-            "- {}: fast-exponential has the highest v_max (ties included) on {} of 5 walls \
-             ({}), alone on {}; it beats the constant profile on {} of 5.",
-            h.name(),
-            best_walls.len(),
-            if best_walls.is_empty() {
+        let list = |names: &[&str]| {
+            if names.is_empty() {
                 "none".to_string()
             } else {
-                best_walls.join(", ")
-            },
-            strict,
-            constant_beaten
+                names.join(", ")
+            }
+        };
+        writeln!(
+            verdicts,
+            "- {}: fast-exponential has the highest v_max on {} of 5 walls ({}; alone on \
+             {strict}); on {} every profile has the same ({}); it beats the constant profile \
+             on {constant_beaten} of 5.",
+            h.name(),
+            best_walls.len(),
+            list(&best_walls),
+            tied_walls.len(),
+            list(&tied_walls),
         )?;
     }
     let hairs_help = FollowWall::ALL
@@ -1323,32 +1338,35 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
         "**What holds** (computed from the tables below):\n\n{verdicts}"
     )?;
     writeln!(md, "{hair_tables}")?;
-    writeln!(
-        md,
-        "\n**Why: the preview and the estimates at {} m/s, no hairs** (the estimates' mean \
-         forward coordinate from the point of rotation, cm / the share of steps with an \
-         estimate)\n",
-        protocol.common_speed_m_per_s
-    )?;
-    let mut header = String::from("| profile |");
-    let mut rule = String::from("|---|");
-    for w in FollowWall::ALL {
-        header.push_str(&format!(" {} |", w.name()));
-        rule.push_str("---|");
-    }
-    writeln!(md, "{header}\n{rule}")?;
-    for p in &profiles {
-        let mut row = format!("| {} |", p.name());
+    for &h in &hair_variants {
+        writeln!(
+            md,
+            "\n**Why: the preview and the estimates at {} m/s, {}** (the estimates' mean \
+             forward coordinate from the point of rotation, cm / the share of steps with an \
+             estimate)\n",
+            protocol.common_speed_m_per_s,
+            h.name()
+        )?;
+        let mut header = String::from("| profile |");
+        let mut rule = String::from("|---|");
         for w in FollowWall::ALL {
-            let run = &cell(p, w, Hairs::None).common;
-            row.push_str(&format!(
-                " {} / {:.0} % |",
-                run.mean_preview_m
-                    .map_or("-".to_string(), |l| format!("{:.1}", l * 100.0)),
-                run.estimate_share * 100.0
-            ));
+            header.push_str(&format!(" {} |", w.name()));
+            rule.push_str("---|");
         }
-        writeln!(md, "{row}")?;
+        writeln!(md, "{header}\n{rule}")?;
+        for p in &profiles {
+            let mut row = format!("| {} |", p.name());
+            for w in FollowWall::ALL {
+                let run = &cell(p, w, h).common;
+                row.push_str(&format!(
+                    " {} / {:.0} % |",
+                    run.mean_preview_m
+                        .map_or("-".to_string(), |l| format!("{:.1}", l * 100.0)),
+                    run.estimate_share * 100.0
+                ));
+            }
+            writeln!(md, "{row}")?;
+        }
     }
     // The template's prediction: a longer preview, a higher v_max.
     let mut rank_lines = Vec::new();
@@ -1377,11 +1395,13 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
     writeln!(
         md,
         "**Verdict: the claim is refuted as stated in this model, its mechanism reproduced.**\n\n\
-         - *Reproduced*: a decreasing profile makes wall following possible where the constant \
-         one does not. Without hairs the constant antenna follows on no wall at any speed: it \
-         lies nearly straight along the wall, it has an estimate on only a quarter of the \
+         - *Reproduced without hairs*: a decreasing profile makes wall following possible \
+         where the constant one does not. Without hairs the constant antenna fails at the slowest speed on every wall \
+         (only on the straight wall does a faster grid speed follow again, `*`): it lies nearly straight along the wall, it has an estimate on only a quarter of the \
          steps, and between estimates the search turn (toward the wall) draws the robot in, \
-         so it runs some 30 mm inside the setpoint (`drifted`).\n\
+         so it runs some 30 mm inside the setpoint (`drifted`). With hairs mapped at their \
+         tips it follows too (the straight wall up to the grid's top, the 30 deg wall faster \
+         than the fast-exponential antenna).\n\
          - *Reproduced*: the fast-exponential antenna follows most precisely: of the runs that \
          follow at 0.5 m/s, it has the lowest RMS error on the straight and both inward walls, \
          with and without hairs.\n\
@@ -1397,8 +1417,10 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
          exponential one. The antenna meets the wall tip first and, on a wall it can slide \
          along, stays bent forward, where a stiffer tip keeps the contacts further ahead (the \
          preview table). The thesis's 4.2.1 antenna was dragged bent backward (section 1), \
-         where the exponential profile previews furthest; a robot whose antenna flips back \
-         (section 2: distal hairs on a rough wall) would test that case.\n\
+         where the exponential profile previews furthest. With distal hairs on the rough \
+         walls the order barely changes (the second preview table: the fast-exponential \
+         antenna's preview is still among the shortest), and neither does the order of the \
+         speeds on the inward walls.\n\
          - *Not tested*: the 90 deg convex corner is lost by every profile at every speed: the \
          contact-line estimator needs a line and at the corner the antenna touches one point, \
          the corner; the search turn (30 deg/s) then cannot bring the robot round. That is the \
@@ -1428,20 +1450,14 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
         let index = |p: &StiffnessProfile| profiles.iter().position(|q| q == p).unwrap() as f64;
         let mut v_series: Vec<Series> = Vec::new();
         let mut rms_series: Vec<Series> = Vec::new();
-        for w in FollowWall::ALL {
-            v_series.push((
-                w.name().to_string(),
-                profiles
-                    .iter()
-                    .map(|p| (index(p), speed(cell(p, w, Hairs::None))))
-                    .collect(),
-            ));
-            rms_series.push((
+        let mut hair_rms: Vec<Series> = Vec::new();
+        let rms_of = |w: FollowWall, h: Hairs| -> Series {
+            (
                 w.name().to_string(),
                 profiles
                     .iter()
                     .map(|p| {
-                        let run = &cell(p, w, Hairs::None).common;
+                        let run = &cell(p, w, h).common;
                         (
                             index(p),
                             if run.good() {
@@ -1452,7 +1468,18 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
                         )
                     })
                     .collect(),
+            )
+        };
+        for w in FollowWall::ALL {
+            v_series.push((
+                w.name().to_string(),
+                profiles
+                    .iter()
+                    .map(|p| (index(p), speed(cell(p, w, Hairs::None))))
+                    .collect(),
             ));
+            rms_series.push(rms_of(w, Hairs::None));
+            hair_rms.push(rms_of(w, Hairs::DistalRough));
         }
         let mut hair_v: Vec<Series> = Vec::new();
         for w in FollowWall::ALL {
@@ -1493,19 +1520,33 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
             ],
         )?;
         let rms_title = format!(
-            "RMS error at {} m/s, no hairs (gaps: the run was not good)",
+            "RMS error at {} m/s, no hairs, smooth walls (gaps: the run was not good)",
+            protocol.common_speed_m_per_s
+        );
+        let hair_rms_title = format!(
+            "RMS error at {} m/s, distal hairs, rough walls (gaps: the run was not good)",
             protocol.common_speed_m_per_s
         );
         draw_panels(
             &docs().join("figures/reproduce_follow_rms.svg"),
-            &[Panel {
-                title: &rms_title,
-                x_label: &x_label,
-                y_label: "RMS error (mm)",
-                series: rms_series,
-                points: false,
-                lines: 0,
-            }],
+            &[
+                Panel {
+                    title: &rms_title,
+                    x_label: &x_label,
+                    y_label: "RMS error (mm)",
+                    series: rms_series,
+                    points: false,
+                    lines: 0,
+                },
+                Panel {
+                    title: &hair_rms_title,
+                    x_label: &x_label,
+                    y_label: "RMS error (mm)",
+                    series: hair_rms,
+                    points: false,
+                    lines: 0,
+                },
+            ],
         )?;
         let walls: Vec<_> = FollowWall::ALL
             .iter()
