@@ -206,6 +206,10 @@ impl Default for FollowSettings {
     }
 }
 
+/// The largest `b h / J` of a template body (`b` its damping, `J` its inertia, `h` the
+/// step): RK4 is stable on `domega/dt = -(b / J) omega` up to 2.785; this keeps a margin.
+pub const RK4_DAMPING_LIMIT: f64 = 2.5;
+
 /// The smallest and largest `step_s`.
 pub const STEP_S_RANGE: [f64; 2] = [0.0005, 0.05];
 
@@ -370,6 +374,28 @@ impl FollowConfig {
                 ),
             );
         }
+        if let BodyModel::Template {
+            inertia_kg_m2,
+            damping_n_m_s_per_rad,
+        } = r.body
+        {
+            // RK4 on `domega/dt = -(b / J) omega` is stable for `(b / J) h` up to 2.785
+            // (its stability region on the negative real axis); a margin keeps the turning
+            // rate from ringing near it.
+            let ratio = damping_n_m_s_per_rad * s.step_s / inertia_kg_m2;
+            if ratio > RK4_DAMPING_LIMIT {
+                return bad(
+                    "follow",
+                    "step_s",
+                    format!(
+                        "{} s is too long for this body: RK4 needs damping x step / inertia \
+                         below {RK4_DAMPING_LIMIT} (here {ratio:.3}); take step_s below {:.3e} s",
+                        s.step_s,
+                        RK4_DAMPING_LIMIT * inertia_kg_m2 / damping_n_m_s_per_rad
+                    ),
+                );
+            }
+        }
         if !(s.pose_m.x.is_finite() && s.pose_m.y.is_finite()) {
             return bad("follow", "pose_m", "must be two finite numbers".to_string());
         }
@@ -439,6 +465,19 @@ mod tests {
             c.validate(),
             Err(FollowError::Invalid { key: "kp_n", .. })
         ));
+        let mut c = FollowConfig::default();
+        c.robot.body = BodyModel::Template {
+            inertia_kg_m2: 1e-5,
+            damping_n_m_s_per_rad: 4e-3,
+        };
+        match c.validate() {
+            Err(FollowError::Invalid {
+                key: "step_s",
+                reason,
+                ..
+            }) => assert!(reason.contains("below 6.250e-3 s"), "{reason}"),
+            other => panic!("{other:?}"),
+        }
         let mut c = FollowConfig::default();
         c.robot.antenna_loads_body = true;
         c.robot.body = BodyModel::Wheeled {
