@@ -26,8 +26,8 @@
 use std::time::Instant;
 
 use antenna_tests::stress::follow::{
-    FollowCase, FollowOutcome, FollowPlacement, FollowRecord, RK4_STABILITY_LIMIT, StartCheck,
-    follow_child_main, follow_table, run_follow_cases, run_follow_index,
+    FollowCase, FollowOutcome, FollowPlacement, FollowRecord, StartCheck, follow_child_main,
+    follow_table, run_follow_cases, run_follow_index,
 };
 use antenna_tests::stress::{
     CHILD_ENV, ChildCommand, Sample, TimeLimit, WallKind, default_threads,
@@ -205,15 +205,6 @@ fn follow_runs_end_in_a_typed_status() {
         println!("\nFailures ({}):", failures.len());
         for r in &failures {
             println!("- {}\n  {}", r.outcome_line(), r.replay);
-            let unstable = FollowCase::generate(r.seed, r.index, r.sample)
-                .ok()
-                .and_then(|c| c.rk4_unstable());
-            if let Some(z) = unstable {
-                println!(
-                    "  (the template body's RK4 step is unstable here: b h / J = {z:.2} > \
-                     {RK4_STABILITY_LIMIT})"
-                );
-            }
         }
     }
     assert!(

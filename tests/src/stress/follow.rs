@@ -13,9 +13,10 @@
 //!   +15 deg, smooth with `mu` in 0-1 or rough (hair tips anchor) with holding forces of
 //!   1-100 mN;
 //! - the robot: 0.05-2 m/s, a footprint of 6-20 x 3-10 cm, the template body (`J`
-//!   2e-5-2e-3 kg m^2, `b` 0 or 4e-4-4e-2 N m s/rad) or a wheeled one (rate limit 30-720
-//!   deg/s, acceleration 100-10,000 deg/s^2), the wall on the left or the right (a mirror
-//!   image of a left-wall case), `antenna_loads_body` on 40 % of the template bodies;
+//!   2e-5-2e-3 kg m^2, `b` 0 or 4e-4-4e-2 N m s/rad with `b h / J` within what RK4 takes)
+//!   or a wheeled one (rate limit 30-720 deg/s, acceleration 100-10,000 deg/s^2), the wall
+//!   on the left or the right (a mirror image of a left-wall case), `antenna_loads_body` on
+//!   40 % of the template bodies;
 //! - the controller: the contact-line (window 0.05-1 s), bend or ideal-preview (0-0.3 m)
 //!   estimator, gains zero a tenth of the time, large a tenth, else log-uniform about the
 //!   example's, a delay of 0 or up to 0.05 s, a search turn of 0-90 deg/s, a setpoint of
@@ -41,6 +42,7 @@ use std::time::Instant;
 use nalgebra::{Rotation2, Vector2};
 use rand::Rng;
 use rand::rngs::StdRng;
+use sim_core::follow::config::RK4_DAMPING_LIMIT;
 use sim_core::follow::{
     BodyModel, Controller, Estimator, Follow, FollowConfig, FollowError, FollowSettings,
     FollowStep, Robot, STATUS_NAMES, WallSide,
@@ -67,9 +69,6 @@ const FOLLOW_STREAM: u64 = 0x666f_6c6c_6f77;
 pub const FOLLOW_STEP_S: f64 = 0.01;
 /// The speeds, m/s (log-uniform).
 pub const SPEED_RANGE_M_PER_S: (f64, f64) = (0.05, 2.0);
-/// Where classic RK4 stops being stable on the negative real axis: `|R(z)| = 1` at
-/// `z = -2.785` (R the method's amplification `1 + z + z^2/2 + z^3/6 + z^4/24`).
-pub const RK4_STABILITY_LIMIT: f64 = 2.785;
 /// The share of cases whose point of rotation starts inside the wall.
 pub const INSIDE_SHARE: f64 = 0.1;
 
@@ -158,14 +157,18 @@ fn gain(rng: &mut StdRng, normal: (f64, f64), large: (f64, f64)) -> f64 {
     }
 }
 
+/// A body: the template (its damping within what RK4 at [`FOLLOW_STEP_S`] takes,
+/// [`RK4_DAMPING_LIMIT`]) or a wheeled one.
 fn draw_body(rng: &mut StdRng) -> BodyModel {
     if rng.random_bool(0.7) {
+        let inertia_kg_m2 = log_uniform(rng, 2e-5, 2e-3);
+        let most = (0.98 * RK4_DAMPING_LIMIT * inertia_kg_m2 / FOLLOW_STEP_S).min(4e-2);
         BodyModel::Template {
-            inertia_kg_m2: log_uniform(rng, 2e-5, 2e-3),
+            inertia_kg_m2,
             damping_n_m_s_per_rad: if rng.random_bool(0.1) {
                 0.0
             } else {
-                log_uniform(rng, 4e-4, 4e-2)
+                log_uniform(rng, 4e-4, most)
             },
         }
     } else {
@@ -539,22 +542,6 @@ impl FollowCase {
             },
             self.wall.describe()
         )
-    }
-
-    /// `b h / J` of a template body where it is beyond the stability limit of classic RK4 on
-    /// the negative real axis ([`RK4_STABILITY_LIMIT`]): there the step turns a small turning
-    /// rate into a larger one of the opposite sign, and the body spins up without bound.
-    pub fn rk4_unstable(&self) -> Option<f64> {
-        match self.config.robot.body {
-            BodyModel::Template {
-                inertia_kg_m2,
-                damping_n_m_s_per_rad,
-            } => {
-                let z = damping_n_m_s_per_rad * self.config.settings.step_s / inertia_kg_m2;
-                (z > RK4_STABILITY_LIMIT).then_some(z)
-            }
-            BodyModel::Wheeled { .. } => None,
-        }
     }
 
     /// The estimator's name.
