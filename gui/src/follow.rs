@@ -26,12 +26,11 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError, TryLockError};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
-use antenna_data::follow::{FollowLine, FollowStart, FollowStepLine, FollowSummaryLine};
 use antenna_scene::Scene;
-use nalgebra::Vector2;
-use sim_core::follow::{
-    BodyModel, Command, Follow, FollowError, FollowStatus, FollowStep, FollowSummary,
+use antenna_scene::follow_lines::{
+    FollowLine, FollowStart, FollowStepLine, FollowSummaryLine, step_line, summary_line,
 };
+use sim_core::follow::{BodyModel, Follow, FollowError};
 use sim_core::sweep::SweepScene;
 use sim_core::{SensorSettings, Wall};
 
@@ -322,61 +321,6 @@ pub fn antenna_joints_m(base_m: PointM, theta_rad: &[f64], link_lengths_m: &[f64
         points.push(at);
     }
     points
-}
-
-/// A step of sim-core's loop as its JSON line (the same fields `antenna follow --jsonl`
-/// writes): `error_m` is the true distance minus `setpoint_m`.
-pub fn step_line(step: &FollowStep, setpoint_m: f64) -> FollowStepLine {
-    let pair = |v: Vector2<f64>| [v.x, v.y];
-    let (u_n_m, turn_command_rad_per_s) = match step.command {
-        Command::Moment(u) => (Some(u), None),
-        Command::TurnRate(w) => (None, Some(w)),
-    };
-    FollowStepLine {
-        t_s: step.t_s,
-        pose_m: pair(step.pose_m),
-        heading_rad: step.heading_rad,
-        omega_rad_per_s: step.omega_rad_per_s,
-        u_n_m,
-        turn_command_rad_per_s,
-        antenna_moment_n_m: step.antenna_moment_n_m,
-        wall_distance_m: step.wall_distance_m,
-        error_m: step.wall_distance_m.map(|d| d - setpoint_m),
-        estimate_m: step.estimate.map(|e| e.distance_m),
-        estimate_angle_rad: step.estimate.and_then(|e| e.angle_rad),
-        estimate_preview_m: step.estimate.map(|e| e.preview_m),
-        no_estimate: step.no_estimate.map(|n| n.reason().to_owned()),
-        true_distance_at_preview_m: step.true_distance_at_preview_m,
-        contacts: step.contacts,
-        touch: step.touch.clone(),
-        collided: step.collided,
-        base_m: step.base_m.map(pair),
-        theta_rad: step.theta_rad.clone(),
-        estimated_points_m: step.estimated_points_m.iter().map(|p| pair(*p)).collect(),
-    }
-}
-
-/// A run's summary as its JSON line.
-pub fn summary_line(summary: &FollowSummary, wall_time_s: f64) -> FollowSummaryLine {
-    FollowSummaryLine {
-        status: summary.status.name().to_owned(),
-        detail: match &summary.status {
-            FollowStatus::Solver { message, .. } => Some(message.clone()),
-            _ => None,
-        },
-        steps: summary.steps,
-        duration_s: summary.duration_s,
-        travel_m: summary.travel_m,
-        rms_error_m: summary.rms_error_m,
-        max_error_m: summary.max_error_m,
-        settling_distance_m: summary.settling_distance_m,
-        collisions: summary.collisions,
-        first_collision_s: summary.first_collision_s,
-        contact_share: summary.contact_share,
-        estimate_share: summary.estimate_share,
-        estimate_rms_error_m: summary.estimate_rms_error_m,
-        wall_time_s,
-    }
 }
 
 /// The error a follow file's line `line` (1-based) gives.

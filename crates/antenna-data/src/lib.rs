@@ -1,8 +1,5 @@
-//! What `antennad` (and `antenna follow`) write for others to read, with no dependency on the
-//! daemon itself:
+//! What `antennad` writes for others to read, with no dependency on the daemon itself:
 //!
-//! - [`follow`]: the JSON lines of `antenna follow` (a simulated closed-loop run), which the
-//!   monitor plays back,
 //! - [`record`]: trial recordings, one MCAP file per trial (schemas, messages, the writer and
 //!   the reader), and
 //! - [`stream`]: the live stream and control protocol, newline-delimited JSON over TCP
@@ -29,6 +26,5 @@
 //! # Ok::<(), antenna_data::record::RecordError>(())
 //! ```
 
-pub mod follow;
 pub mod record;
 pub mod stream;

@@ -16,7 +16,9 @@
 //! [`Scene::follow_parts`] gives what the closed loop runs: the sweep scene, the configuration
 //! and the sensors. An error the run finds when it starts is put at its key by
 //! [`FollowScene::locate`]. The body carries the antenna: `[base]`, `[sweep]`, `[tip_pin]` and
-//! `[antenna] base_angle_deg` are refused there, and `[start]` defaults to an approach.
+//! `[antenna] base_angle_deg` are refused there, and `[start]` defaults to an approach. What a
+//! follow run writes, its JSON lines, is [`follow_lines`] (made from sim-core's run there, for
+//! the CLI and the monitor alike).
 //!
 //! Every error names the file, the key and, where the parser knows it, the line and column;
 //! see [`SceneError`]. Unknown keys are errors that list the keys allowed in their table.
@@ -148,6 +150,7 @@ pub mod csv_lines;
 pub mod error;
 pub mod failure;
 pub mod follow;
+pub mod follow_lines;
 pub mod hairs;
 pub mod keys;
 pub mod motion;

@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::support::{expect_label, harness, step_until, temp_dir};
-use antenna_data::follow::FollowLine;
 use antenna_monitor::follow::FollowRunState;
 use antenna_monitor::{AppOptions, MonitorApp};
+use antenna_scene::follow_lines::FollowLine;
 use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -211,22 +211,24 @@ fn a_follow_file_with_a_bad_line_names_it_and_leaves_the_monitor_as_it_was() {
     // A bad line after a good start: named by its number.
     let text = format!(
         "{}\n{{\"type\": \"step\", \"t_s\": }}\n",
-        serde_json::to_string(&FollowLine::Start(antenna_data::follow::FollowStart {
-            scene: "s.toml".into(),
-            scene_toml: String::new(),
-            note: String::new(),
-            estimator: "contact-line".into(),
-            body: "template".into(),
-            wall_side: "left".into(),
-            speed_m_per_s: 0.3,
-            setpoint_m: 0.1,
-            steps: 1,
-            step_s: 0.01,
-            delay_steps: 0,
-            footprint_m: [0.12, 0.06],
-            links: 2,
-            link_lengths_m: vec![0.04, 0.04],
-        }))
+        serde_json::to_string(&FollowLine::Start(
+            antenna_scene::follow_lines::FollowStart {
+                scene: "s.toml".into(),
+                scene_toml: String::new(),
+                note: String::new(),
+                estimator: "contact-line".into(),
+                body: "template".into(),
+                wall_side: "left".into(),
+                speed_m_per_s: 0.3,
+                setpoint_m: 0.1,
+                steps: 1,
+                step_s: 0.01,
+                delay_steps: 0,
+                footprint_m: [0.12, 0.06],
+                links: 2,
+                link_lengths_m: vec![0.04, 0.04],
+            }
+        ))
         .unwrap()
     );
     std::fs::write(&file, text).unwrap();

@@ -1,5 +1,5 @@
 //! `antenna follow`: a follow scene's closed-loop run (sim-core's [`Follow`]) with the JSON
-//! lines of antenna-data's [`follow`](antenna_data::follow) module, a summary and a plot
+//! lines of antenna-scene's [`follow_lines`](antenna_scene::follow_lines), a summary and a plot
 //! ([`plot`]). [`FollowRun::start`] turns a scene into a run; [`run_summary`] runs one to its
 //! end for the studies and the optimizer.
 //!
@@ -28,11 +28,13 @@ pub mod v_max;
 
 use std::time::Instant;
 
-use antenna_data::follow::{FollowStart, FollowStepLine, FollowSummaryLine};
+use antenna_scene::follow_lines::{
+    FollowStart, FollowStepLine, FollowSummaryLine, step_line, summary_line,
+};
 use antenna_scene::{Scene, SceneError};
 use sim_core::Wall;
 use sim_core::follow::{
-    BodyModel, Command, Follow, FollowConfig, FollowError, FollowStatus, FollowStep, FollowSummary,
+    BodyModel, Follow, FollowConfig, FollowError, FollowStatus, FollowStep, FollowSummary,
 };
 
 /// Why a follow run could not start or ended in the solver: bad input (exit 2) or the
@@ -196,60 +198,6 @@ pub fn body_name(body: &BodyModel) -> &'static str {
     match body {
         BodyModel::Template { .. } => "template",
         BodyModel::Wheeled { .. } => "wheeled",
-    }
-}
-
-/// A step's JSON line.
-pub fn step_line(step: &FollowStep, setpoint_m: f64) -> FollowStepLine {
-    let pair = |v: nalgebra::Vector2<f64>| [v.x, v.y];
-    let (u_n_m, turn_command_rad_per_s) = match step.command {
-        Command::Moment(u) => (Some(u), None),
-        Command::TurnRate(w) => (None, Some(w)),
-    };
-    FollowStepLine {
-        t_s: step.t_s,
-        pose_m: pair(step.pose_m),
-        heading_rad: step.heading_rad,
-        omega_rad_per_s: step.omega_rad_per_s,
-        u_n_m,
-        turn_command_rad_per_s,
-        antenna_moment_n_m: step.antenna_moment_n_m,
-        wall_distance_m: step.wall_distance_m,
-        error_m: step.wall_distance_m.map(|d| d - setpoint_m),
-        estimate_m: step.estimate.map(|e| e.distance_m),
-        estimate_angle_rad: step.estimate.and_then(|e| e.angle_rad),
-        estimate_preview_m: step.estimate.map(|e| e.preview_m),
-        no_estimate: step.no_estimate.map(|n| n.reason().to_string()),
-        true_distance_at_preview_m: step.true_distance_at_preview_m,
-        contacts: step.contacts,
-        touch: step.touch.clone(),
-        collided: step.collided,
-        base_m: step.base_m.map(pair),
-        theta_rad: step.theta_rad.clone(),
-        estimated_points_m: step.estimated_points_m.iter().map(|p| pair(*p)).collect(),
-    }
-}
-
-/// A summary's JSON line.
-pub fn summary_line(summary: &FollowSummary, wall_time_s: f64) -> FollowSummaryLine {
-    FollowSummaryLine {
-        status: summary.status.name().to_string(),
-        detail: match &summary.status {
-            FollowStatus::Solver { message, .. } => Some(message.clone()),
-            _ => None,
-        },
-        steps: summary.steps,
-        duration_s: summary.duration_s,
-        travel_m: summary.travel_m,
-        rms_error_m: summary.rms_error_m,
-        max_error_m: summary.max_error_m,
-        settling_distance_m: summary.settling_distance_m,
-        collisions: summary.collisions,
-        first_collision_s: summary.first_collision_s,
-        contact_share: summary.contact_share,
-        estimate_share: summary.estimate_share,
-        estimate_rms_error_m: summary.estimate_rms_error_m,
-        wall_time_s,
     }
 }
 

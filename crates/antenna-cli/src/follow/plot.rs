@@ -14,7 +14,7 @@ use sim_core::Wall;
 use crate::sweep::plot::{
     Drawing, PlotError, inside_runs, surface_runs, tick, wall_points, write_drawing,
 };
-use antenna_data::follow::FollowStepLine;
+use antenna_scene::follow_lines::FollowStepLine;
 
 /// Figure size, pixels (PNG) or user units (SVG).
 pub const FIGURE_SIZE: (u32, u32) = (1200, 1000);

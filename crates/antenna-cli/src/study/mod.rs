@@ -400,7 +400,12 @@ fn apply_follow_times(
 
 /// A follow axis: its key, its list as written, where its values go, whether they must be
 /// `> 0` (else `>= 0`).
-type FollowAxis<'a> = (&'a str, &'a Option<Spanned<Vec<f64>>>, &'a mut Vec<f64>, bool);
+type FollowAxis<'a> = (
+    &'a str,
+    &'a Option<Spanned<Vec<f64>>>,
+    &'a mut Vec<f64>,
+    bool,
+);
 
 /// A list of values for a follow axis: finite, each `> 0` (`positive`) or `>= 0`.
 fn follow_list(

@@ -6,10 +6,11 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use antenna_cli::follow::plot::FollowPlot;
-use antenna_cli::follow::{FollowFailure, FollowRun, human, step_line};
+use antenna_cli::follow::{FollowFailure, FollowRun, human};
 use antenna_cli::progress;
-use antenna_data::follow::FollowLine;
 use antenna_scene::Scene;
+use antenna_scene::follow_lines::FollowLine;
+use antenna_scene::follow_lines::step_line;
 use anyhow::{Context as _, anyhow};
 use clap::Args;
 

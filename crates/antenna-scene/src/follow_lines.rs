@@ -1,13 +1,16 @@
-//! The lines `antenna follow --jsonl` prints (a closed-loop wall-following run), one JSON
-//! object each, told apart by `type`: a `start` line, one `step` line per step, a `summary`
-//! line. Every field is documented in `docs/follow.md`. The monitor reads them back through
-//! [`read_follow_lines`].
+//! The lines `antenna follow --jsonl` prints (a closed-loop wall-following run of a follow
+//! scene), one JSON object each, told apart by `type`: a `start` line, one `step` line per
+//! step, a `summary` line. Every field is documented in `docs/follow.md`. [`step_line`] and
+//! [`summary_line`] make them from sim-core's run, for the CLI and the monitor alike; the
+//! monitor reads a file of them back through [`read_follow_lines`].
 //!
 //! Frames: the ground frame is the scene's; `heading_rad` counter-clockwise; `omega_rad_per_s`
 //! and `u_n_m` positive turning away from the wall; estimates in the body frame (x ahead, y
 //! toward the wall).
 
+use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
+use sim_core::follow::{Command, FollowStatus, FollowStep, FollowSummary};
 
 /// One line of `antenna follow --jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -160,6 +163,60 @@ pub fn read_follow_lines(text: &str) -> Result<Vec<FollowLine>, FollowReadError>
             })
         })
         .collect()
+}
+
+/// A step of sim-core's loop as its line: `error_m` is the true distance minus `setpoint_m`.
+pub fn step_line(step: &FollowStep, setpoint_m: f64) -> FollowStepLine {
+    let pair = |v: Vector2<f64>| [v.x, v.y];
+    let (u_n_m, turn_command_rad_per_s) = match step.command {
+        Command::Moment(u) => (Some(u), None),
+        Command::TurnRate(w) => (None, Some(w)),
+    };
+    FollowStepLine {
+        t_s: step.t_s,
+        pose_m: pair(step.pose_m),
+        heading_rad: step.heading_rad,
+        omega_rad_per_s: step.omega_rad_per_s,
+        u_n_m,
+        turn_command_rad_per_s,
+        antenna_moment_n_m: step.antenna_moment_n_m,
+        wall_distance_m: step.wall_distance_m,
+        error_m: step.wall_distance_m.map(|d| d - setpoint_m),
+        estimate_m: step.estimate.map(|e| e.distance_m),
+        estimate_angle_rad: step.estimate.and_then(|e| e.angle_rad),
+        estimate_preview_m: step.estimate.map(|e| e.preview_m),
+        no_estimate: step.no_estimate.map(|n| n.reason().to_string()),
+        true_distance_at_preview_m: step.true_distance_at_preview_m,
+        contacts: step.contacts,
+        touch: step.touch.clone(),
+        collided: step.collided,
+        base_m: step.base_m.map(pair),
+        theta_rad: step.theta_rad.clone(),
+        estimated_points_m: step.estimated_points_m.iter().map(|p| pair(*p)).collect(),
+    }
+}
+
+/// A run's summary as its line, with the run's wall-clock time.
+pub fn summary_line(summary: &FollowSummary, wall_time_s: f64) -> FollowSummaryLine {
+    FollowSummaryLine {
+        status: summary.status.name().to_string(),
+        detail: match &summary.status {
+            FollowStatus::Solver { message, .. } => Some(message.clone()),
+            _ => None,
+        },
+        steps: summary.steps,
+        duration_s: summary.duration_s,
+        travel_m: summary.travel_m,
+        rms_error_m: summary.rms_error_m,
+        max_error_m: summary.max_error_m,
+        settling_distance_m: summary.settling_distance_m,
+        collisions: summary.collisions,
+        first_collision_s: summary.first_collision_s,
+        contact_share: summary.contact_share,
+        estimate_share: summary.estimate_share,
+        estimate_rms_error_m: summary.estimate_rms_error_m,
+        wall_time_s,
+    }
 }
 
 #[cfg(test)]
