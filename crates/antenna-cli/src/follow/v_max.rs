@@ -102,16 +102,33 @@ pub fn v_max(
     config: &FollowConfig,
     options: &VMaxOptions,
 ) -> Result<VMax, FollowError> {
-    let mut speeds = options.speeds_m_per_s.clone();
+    search(&options.speeds_m_per_s, options.tolerance_m_per_s, |v| {
+        let mut c = *config;
+        c.robot.speed_m_per_s = v;
+        c.settings.duration_s = options.distance_m / v;
+        Ok(run_summary(scene, sensors, &c)?.status.name().to_string())
+    })
+}
+
+/// The search itself, for any judgement of a speed: `status_at(v)` runs at `v` and returns
+/// the run's status (`"ok"` is good). The grid (`speeds_m_per_s`, sorted and deduplicated,
+/// positive speeds only) is run in full, then the boundary below its first failing speed is
+/// bisected to `tolerance_m_per_s` (`infinity`: no bisection).
+///
+/// # Errors
+/// The first error of `status_at`.
+pub fn search<E>(
+    speeds_m_per_s: &[f64],
+    tolerance_m_per_s: f64,
+    mut status_at: impl FnMut(f64) -> Result<String, E>,
+) -> Result<VMax, E> {
+    let mut speeds = speeds_m_per_s.to_vec();
     speeds.retain(|v| v.is_finite() && *v > 0.0);
     speeds.sort_by(f64::total_cmp);
     speeds.dedup();
     let mut runs = Vec::new();
-    let mut run_at = |v: f64| -> Result<String, FollowError> {
-        let mut c = *config;
-        c.robot.speed_m_per_s = v;
-        c.settings.duration_s = options.distance_m / v;
-        let status = run_summary(scene, sensors, &c)?.status.name().to_string();
+    let mut run_at = |v: f64| -> Result<String, E> {
+        let status = status_at(v)?;
         runs.push(SpeedRun {
             speed_m_per_s: v,
             status: status.clone(),
@@ -123,17 +140,14 @@ pub fn v_max(
         .map(|&v| run_at(v))
         .collect::<Result<_, _>>()?;
     let first_bad = statuses.iter().position(|s| s != "ok");
-    let monotone = match first_bad {
-        Some(i) => statuses[i..].iter().all(|s| s != "ok"),
-        None => true,
-    };
+    let monotone = first_bad.is_none_or(|i| statuses[i..].iter().all(|s| s != "ok"));
     let (v_max_m_per_s, failure) = match first_bad {
         None => (speeds.last().copied(), None),
         Some(0) => (None, Some(statuses[0].clone())),
         Some(i) => {
             let (mut good, mut bad) = (speeds[i - 1], speeds[i]);
             let mut failure = statuses[i].clone();
-            while bad - good > options.tolerance_m_per_s {
+            while bad - good > tolerance_m_per_s {
                 let mid = 0.5 * (good + bad);
                 let status = run_at(mid)?;
                 if status == "ok" {
@@ -152,4 +166,45 @@ pub fn v_max(
         monotone,
         runs,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A judgement good below 1.234 m/s (and, with a hole, bad at 0.5 too).
+    fn judge(hole: bool) -> impl FnMut(f64) -> Result<String, ()> {
+        move |v| {
+            Ok(if v < 1.234 && !(hole && v == 0.5) {
+                "ok".to_string()
+            } else {
+                "collided".to_string()
+            })
+        }
+    }
+
+    #[test]
+    fn the_search_bisects_below_the_first_failing_grid_speed() {
+        let found = search(&[2.0, 0.5, 1.0, 0.5, -1.0], 0.001, judge(false)).unwrap();
+        let v = found.v_max_m_per_s.unwrap();
+        assert!(v < 1.234 && v > 1.234 - 0.001, "{v}");
+        assert_eq!(found.failure.as_deref(), Some("collided"));
+        assert!(found.monotone);
+        // The grid (sorted, deduplicated, positive) ran first, in order.
+        let grid: Vec<f64> = found.runs.iter().take(3).map(|r| r.speed_m_per_s).collect();
+        assert_eq!(grid, [0.5, 1.0, 2.0]);
+    }
+
+    #[test]
+    fn a_good_speed_above_a_failing_one_is_flagged_and_the_top_is_a_lower_bound() {
+        let found = search(&[0.25, 0.5, 1.0], f64::INFINITY, judge(true)).unwrap();
+        assert_eq!(found.v_max_m_per_s, Some(0.25));
+        assert!(!found.monotone);
+        assert_eq!(found.runs.len(), 3);
+        let all_good = search(&[0.25, 1.0], 0.01, judge(false)).unwrap();
+        assert_eq!(all_good.v_max_m_per_s, Some(1.0));
+        assert_eq!(all_good.failure, None);
+        let none = search(&[1.5, 2.0], 0.01, judge(false)).unwrap();
+        assert_eq!(none.v_max_m_per_s, None);
+    }
 }
