@@ -209,6 +209,9 @@ pub struct Protocol {
     pub final_band_m: f64,
     /// The speed of the RMS comparison, m/s.
     pub common_speed_m_per_s: f64,
+    /// The controller's search turn (with no estimate, toward the wall), deg/s (`None`:
+    /// the scene's, 30 deg/s).
+    pub search_turn_rate_deg_per_s: Option<f64>,
 }
 
 impl Protocol {
@@ -224,6 +227,7 @@ impl Protocol {
             final_stretch_m: 0.3,
             final_band_m: 0.02,
             common_speed_m_per_s: 0.5,
+            search_turn_rate_deg_per_s: None,
         }
     }
 
@@ -291,6 +295,9 @@ pub fn run_at(
     config.settings.duration_s = protocol.distance_m / speed_m_per_s;
     if let Estimator::ContactLine { window_s } = &mut config.controller.estimator {
         *window_s = protocol.window_s(speed_m_per_s, case.sensors.sample_rate_hz);
+    }
+    if let Some(rate) = protocol.search_turn_rate_deg_per_s {
+        config.controller.search_turn_rate_rad_per_s = rate.to_radians();
     }
     let label = format!("{:.3} m/s", speed_m_per_s);
     let mut follow = Follow::new(&case.scene, &case.sensors, &config).map_err(|source| {
