@@ -39,5 +39,5 @@ pub use config::{
 pub use control::Command;
 pub use error::FollowError;
 pub use estimate::{BendTable, Estimate, NoEstimate};
-pub use run::{Follow, FollowStep, calibrate_bend};
+pub use run::{Follow, FollowStep, MAX_TURN_PER_STEP_RAD, calibrate_bend};
 pub use summary::{FollowStatus, FollowSummary, STATUS_NAMES};

@@ -17,6 +17,11 @@ use crate::sensor::{SensorSettings, Sensors};
 use crate::sweep::{BasePose, Motion, Placement, SweepScene, place_at};
 use crate::{EstimatedContact, Line, SolidSide, Wall, estimate_contacts};
 
+/// The most the body may turn in one step, radians: past it the run ends
+/// [`FollowStatus::Unstable`] (a held command, a delay or a stiff gain has made the loop
+/// unstable at this step; the antenna is not carried through such a turn).
+pub const MAX_TURN_PER_STEP_RAD: f64 = 0.5;
+
 /// One step of a run, in the scene's frame (a right-wall run is mirrored back).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FollowStep {
@@ -339,6 +344,14 @@ impl Follow {
         self.odometry
             .advance(v, self.body.heading_rad - before.heading_rad, h);
         self.step += 1;
+        let turn = (self.body.heading_rad - before.heading_rad).abs();
+        if !(turn <= MAX_TURN_PER_STEP_RAD
+            && self.body.por_m.iter().all(|x| x.is_finite())
+            && self.body.omega_rad_per_s.is_finite())
+        {
+            self.ended = Some(FollowStatus::Unstable);
+            return Some(Ok(record));
+        }
         if let Err(e) = self.move_antenna(t_s + h) {
             let status = if self.stats.collisions > 0 {
                 FollowStatus::Collided

@@ -12,6 +12,10 @@ pub enum FollowStatus {
     /// No estimate for `[follow] lost_after_s`, or the robot farther than `lost_beyond_m`
     /// from every wall: the run ended there.
     Lost,
+    /// The body turned more than [`super::run::MAX_TURN_PER_STEP_RAD`] in one step (or its
+    /// state stopped being finite): the loop is unstable at this step (a command held over
+    /// a step, a delay, a stiff gain), and the run ended there.
+    Unstable,
     /// The antenna's solver refused a step: the run ended there (`kind` is
     /// `"no-convergence"`, `"jammed"`, `"uncertified"` or `"solver-error"`).
     Solver {
@@ -29,6 +33,7 @@ impl FollowStatus {
             FollowStatus::Ok => "ok",
             FollowStatus::Collided => "collided",
             FollowStatus::Lost => "lost",
+            FollowStatus::Unstable => "unstable",
             FollowStatus::Solver { kind, .. } => kind,
         }
     }
@@ -53,6 +58,7 @@ pub const STATUS_NAMES: &[&str] = &[
     "ok",
     "collided",
     "lost",
+    "unstable",
     "no-convergence",
     "jammed",
     "uncertified",

@@ -190,3 +190,22 @@ fn a_robot_drifting_away_is_lost_beyond_three_setpoints_though_it_still_has_an_e
     assert!(steps[steps.len() - 2].wall_distance_m.unwrap() <= 0.3);
     assert!(summary.duration_s < config.settings.lost_after_s);
 }
+
+#[test]
+fn a_loop_unstable_at_its_step_ends_unstable_before_the_body_spins() {
+    // The derivative term held over a step: Kd l h / J = 5 is beyond what a held command
+    // can take, and the turning rate doubles from step to step.
+    let mut config = ideal_config(0.5);
+    config.controller.kd_n_s = 2.0;
+    config.settings.step_s = 0.01;
+    let (steps, summary) =
+        run_all(Follow::without_antenna(vec![straight_wall(0.2)], &config).unwrap());
+    assert_eq!(summary.status.name(), "unstable");
+    assert!(steps.len() < 1500);
+    assert!(
+        steps
+            .windows(2)
+            .all(|w| (w[1].heading_rad - w[0].heading_rad).abs()
+                <= sim_core::follow::MAX_TURN_PER_STEP_RAD)
+    );
+}

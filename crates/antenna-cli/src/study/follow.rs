@@ -104,7 +104,7 @@ pub struct FollowRow {
     pub kd_rad_per_m: Option<f64>,
     /// The sensing-to-actuation delay, s.
     pub delay_s: f64,
-    /// The run's status (`ok`, `collided`, `lost`, or the antenna solver's outcome:
+    /// The run's status (`ok`, `collided`, `lost`, `unstable`, or the antenna solver's outcome:
     /// `no-convergence`, `jammed`, `uncertified`, `solver-error`), or `failed` when the run
     /// could not start (`error` says why). In a v_max study: `ok` when the search ran.
     pub status: String,

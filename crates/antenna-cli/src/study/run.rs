@@ -40,7 +40,9 @@ pub struct RunCounts {
     pub relaxed: usize,
     /// Follow rows whose status is `collided` (the body hit a wall: a physical outcome).
     pub collided: usize,
-    /// Follow rows whose status is `lost` (no estimate for too long: a physical outcome).
+    /// Follow rows whose status is `lost` (no estimate for too long, or too far from the
+    /// wall) or `unstable` (the loop unstable at its step): outcomes of the control, not
+    /// failures of the solver.
     pub lost: usize,
 }
 
@@ -123,7 +125,7 @@ impl InOrder {
                 "ok" => {}
                 "jammed" => counts.jammed += 1,
                 "collided" => counts.collided += 1,
-                "lost" => counts.lost += 1,
+                "lost" | "unstable" => counts.lost += 1,
                 _ => counts.failed += 1,
             }
             if row.relaxed_steps().is_some_and(|r| r > 0) {
