@@ -1399,10 +1399,17 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
                 .iter()
                 .map(|p| (p.name(), speed(corner_cell(p, h))))
                 .fold(("-", 0.0), |a, b| if b.1 > a.1 { b } else { a });
-            if fastest.1 > 0.0 {
+            if fastest.1 > 0.0 && fastest.0 == fe.name() {
                 parts.push(format!(
-                    "{}: the fastest profile is {} ({:.2} m/s), the fast-exponential one follows \
-                     up to {:.2} m/s",
+                    "on the corner with {}, the fast-exponential profile is the fastest \
+                     ({:.2} m/s)",
+                    h.name(),
+                    fastest.1
+                ));
+            } else if fastest.1 > 0.0 {
+                parts.push(format!(
+                    "on the corner with {}, the fastest profile is {} ({:.2} m/s), the \
+                     fast-exponential one follows up to {:.2} m/s",
                     h.name(),
                     fastest.0,
                     fastest.1,
@@ -1420,8 +1427,8 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
                     .filter(|p| !corner_cell(p, h).v_max.monotone)
                     .count();
                 parts.push(format!(
-                    "{}: no profile follows from the slowest speed up (the first failures: {}), \
-                     {again} of 7 follow at some faster grid speed (`*`)",
+                    "on the corner with {}, no profile follows from the slowest speed up (the \
+                     first failures: {}) and {again} of 7 follow at some faster grid speed (`*`)",
                     h.name(),
                     failures.join(", ")
                 ));
@@ -1491,7 +1498,7 @@ fn follow_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error:
          at the corner the antenna touches one point, the corner: the robot comes round it on \
          its search turn alone, too slow at 30 deg/s. With a search turn of {CORNER_SEARCH_DEG_PER_S:.0} \
          deg/s (the table below; the other walls keep 30 deg/s, at which the sinusoid stays \
-         within the solver's reach without hairs) {corner_verdict}\n"
+         within the solver's reach without hairs): {corner_verdict}\n"
     )?;
     writeln!(
         md,
