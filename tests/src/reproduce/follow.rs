@@ -29,6 +29,7 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+use antenna_cli::follow::v_max::search;
 use nalgebra::Vector2;
 use rayon::prelude::*;
 use sim_core::follow::{Estimator, Follow, FollowConfig};
@@ -389,58 +390,35 @@ pub struct VMax {
     pub common: Option<SpeedRun>,
 }
 
-/// The highest speed at which `case` follows (the search of `antenna-cli`'s `v_max`, with
+/// The highest speed at which `case` follows (`antenna-cli`'s v_max [`search`], with
 /// the protocol's judgement of a run): every grid speed, then bisection between the last
 /// good one below the first failing one and that one.
 ///
 /// # Errors
 /// [`ReproduceError::Follow`] when a run cannot start.
 pub fn v_max(case: &FollowCase, protocol: &Protocol) -> Result<VMax, ReproduceError> {
-    let mut speeds = protocol.speeds_m_per_s.clone();
-    speeds.retain(|v| v.is_finite() && *v > 0.0);
-    speeds.sort_by(f64::total_cmp);
-    speeds.dedup();
-    let mut runs = Vec::new();
     let mut common = None;
-    let mut status_at = |v: f64| -> Result<String, ReproduceError> {
-        let run = run_at(case, v, protocol)?;
-        let status = run.status.clone();
-        runs.push((v, status.clone()));
-        if v == protocol.common_speed_m_per_s {
-            common = Some(run);
-        }
-        Ok(status)
-    };
-    let statuses: Vec<String> = speeds
-        .iter()
-        .map(|&v| status_at(v))
-        .collect::<Result<_, _>>()?;
-    let first_bad = statuses.iter().position(|s| s != "ok");
-    let monotone = first_bad.is_none_or(|i| statuses[i..].iter().all(|s| s != "ok"));
-    let (v_max_m_per_s, failure) = match first_bad {
-        None => (speeds.last().copied(), None),
-        Some(0) => (None, Some(statuses[0].clone())),
-        Some(i) => {
-            let (mut good, mut bad) = (speeds[i - 1], speeds[i]);
-            let mut failure = statuses[i].clone();
-            while bad - good > protocol.tolerance_m_per_s {
-                let mid = 0.5 * (good + bad);
-                let status = status_at(mid)?;
-                if status == "ok" {
-                    good = mid;
-                } else {
-                    bad = mid;
-                    failure = status;
-                }
+    let found = search(
+        &protocol.speeds_m_per_s,
+        protocol.tolerance_m_per_s,
+        |v| -> Result<String, ReproduceError> {
+            let run = run_at(case, v, protocol)?;
+            let status = run.status.clone();
+            if v == protocol.common_speed_m_per_s {
+                common = Some(run);
             }
-            (Some(good), Some(failure))
-        }
-    };
+            Ok(status)
+        },
+    )?;
     Ok(VMax {
-        v_max_m_per_s,
-        failure,
-        monotone,
-        runs,
+        v_max_m_per_s: found.v_max_m_per_s,
+        failure: found.failure,
+        monotone: found.monotone,
+        runs: found
+            .runs
+            .into_iter()
+            .map(|r| (r.speed_m_per_s, r.status))
+            .collect(),
         common,
     })
 }
