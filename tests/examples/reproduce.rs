@@ -1,6 +1,6 @@
 //! Runs the thesis's experiments on sim-core, draws their figures in `docs/figures/` and writes
-//! `docs/reproduction.md` (`scripts/reproduce`; about a minute on 2 cores, most of it the
-//! 4.2.2 sweeps).
+//! `docs/reproduction.md` (`scripts/reproduce`; about 4 minutes on 2 cores, most of it
+//! section 5, the closed loop; `reproduce follow` runs that section alone).
 //!
 //! ```text
 //! cargo run -p antenna-tests --release --example reproduce            # everything
