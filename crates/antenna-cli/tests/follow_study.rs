@@ -162,7 +162,8 @@ fn v_max_on_the_straight_wall_is_finite_monotone_and_reproducible() {
         "follow_v_max.toml",
         &format!(
             "[study]\nscene = \"{}\"\n\n[axes]\nprofiles = [\"constant\", \"fast-exponential\"]\n\n\
-             [v_max]\nspeeds_m_per_s = [0.5, 1.0]\ndistance_m = 0.15\ntolerance_m_per_s = 0.1\n",
+             [v_max]\nspeeds_m_per_s = [0.5, 1.0]\ndistance_m = 0.15\ntolerance_m_per_s = 0.1\n\
+             final_band_m = 0.05\n",
             example("follow/straight_wall.toml")
         ),
     );
@@ -329,7 +330,8 @@ fn optimize_maximizes_the_follow_v_max() {
     let report = optimize(
         "v_max",
         "follow-v-max",
-        "[v_max]\nspeeds_m_per_s = [0.5, 1.0]\ndistance_m = 0.1\ntolerance_m_per_s = 0.25\n",
+        "[v_max]\nspeeds_m_per_s = [0.5, 1.0]\ndistance_m = 0.1\ntolerance_m_per_s = 0.25\n\
+         final_band_m = 0.05\n",
     );
     assert_eq!(report["objective"], "follow-v-max");
     let best = report["objective_value"].as_f64().unwrap();
@@ -343,7 +345,7 @@ fn optimize_maximizes_the_follow_v_max() {
             &format!(
                 "[optimize]\nscenes = [\"{scene}\"]\nobjective = \"follow-v-max\"\n\
                  parameters = \"exponential-taper\"\nbudget = 9\n\
-                 [v_max]\nspeeds_m_per_s = [0.5]\ndistance_m = 0.05\n"
+                 [v_max]\nspeeds_m_per_s = [0.5]\ndistance_m = 0.05\nfinal_band_m = 0.05\n"
             ),
         );
         let out = run(&["optimize", &file, "--jobs", "2"]);

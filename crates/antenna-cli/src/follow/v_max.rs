@@ -5,15 +5,15 @@
 //! never reach the corner.
 //!
 //! A speed is good when its run's status is `"ok"` (no collision, not lost, the solver
-//! through every step). `v_max_m_per_s` is the boundary below the **first** failing grid
+//! through every step) and the robot still follows at the end: over the last `final_stretch_m`
+//! of its travel the true distance stays within `final_band_m` of the setpoint; an `"ok"` run
+//! that does not is `"drifted"`. `v_max_m_per_s` is the boundary below the **first** failing grid
 //! speed, so every grid speed below it is good; where a faster grid speed is good again, the
 //! result says so (`monotone: false`).
 
 use sim_core::SensorSettings;
-use sim_core::follow::{FollowConfig, FollowError};
+use sim_core::follow::{Follow, FollowConfig, FollowError};
 use sim_core::sweep::SweepScene;
-
-use super::run_summary;
 
 /// How the search goes.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,15 +24,22 @@ pub struct VMaxOptions {
     pub distance_m: f64,
     /// The bisection stops when the bracket is this narrow, m/s.
     pub tolerance_m_per_s: f64,
+    /// The stretch at the end of each run over which it must still follow, m of travel.
+    pub final_stretch_m: f64,
+    /// How near the setpoint the true distance must stay there, m.
+    pub final_band_m: f64,
 }
 
 impl Default for VMaxOptions {
-    /// 0.1 to 2.0 m/s in steps of 0.1, 1.5 m, 0.01 m/s.
+    /// 0.1 to 2.0 m/s in steps of 0.1, 1.5 m, 0.01 m/s; within 20 mm of the setpoint over
+    /// the last 0.3 m.
     fn default() -> Self {
         VMaxOptions {
             speeds_m_per_s: (1..=20).map(|k| 0.1 * k as f64).collect(),
             distance_m: 1.5,
             tolerance_m_per_s: 0.01,
+            final_stretch_m: 0.3,
+            final_band_m: 0.02,
         }
     }
 }
@@ -87,8 +94,50 @@ impl VMaxOptions {
                 self.tolerance_m_per_s
             ));
         }
+        for (key, v) in [
+            ("final_stretch_m", self.final_stretch_m),
+            ("final_band_m", self.final_band_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{key}: must be positive, not {v}"));
+            }
+        }
         Ok(())
     }
+}
+
+/// The status of a run at `speed_m_per_s` over the options' distance: the run's status, or
+/// `"drifted"` for an `"ok"` run that does not stay within the band over the final stretch.
+///
+/// # Errors
+/// [`FollowError`] when the run cannot start.
+pub fn judged_status(
+    scene: &SweepScene,
+    sensors: &SensorSettings,
+    config: &FollowConfig,
+    options: &VMaxOptions,
+    speed_m_per_s: f64,
+) -> Result<String, FollowError> {
+    let mut c = *config;
+    c.robot.speed_m_per_s = speed_m_per_s;
+    c.settings.duration_s = options.distance_m / speed_m_per_s;
+    let mut follow = Follow::new(scene, sensors, &c)?;
+    let stretch_from_m = options.distance_m - options.final_stretch_m;
+    let mut following = true;
+    while let Some(step) = follow.next_step() {
+        let Ok(step) = step else { break };
+        if speed_m_per_s * step.t_s >= stretch_from_m {
+            following &= step
+                .wall_distance_m
+                .is_some_and(|d| (d - c.controller.setpoint_m).abs() <= options.final_band_m);
+        }
+    }
+    let status = follow.summary().status.name().to_string();
+    Ok(if status == "ok" && !following {
+        "drifted".to_string()
+    } else {
+        status
+    })
 }
 
 /// The search for a follow scene's parts (the scene's speed and duration are replaced).
@@ -103,10 +152,7 @@ pub fn v_max(
     options: &VMaxOptions,
 ) -> Result<VMax, FollowError> {
     search(&options.speeds_m_per_s, options.tolerance_m_per_s, |v| {
-        let mut c = *config;
-        c.robot.speed_m_per_s = v;
-        c.settings.duration_s = options.distance_m / v;
-        Ok(run_summary(scene, sensors, &c)?.status.name().to_string())
+        judged_status(scene, sensors, config, options, v)
     })
 }
 
@@ -206,5 +252,24 @@ mod tests {
         assert_eq!(all_good.failure, None);
         let none = search(&[1.5, 2.0], 0.01, judge(false)).unwrap();
         assert_eq!(none.v_max_m_per_s, None);
+    }
+
+    #[test]
+    fn an_ok_run_that_ends_off_the_setpoint_is_drifted() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/follow/straight_wall.toml"
+        );
+        let scene = antenna_scene::Scene::from_path(std::path::Path::new(path)).unwrap();
+        let (sweep, config, sensors) = scene.follow_parts().unwrap();
+        // 0.2 m at 0.3 m/s: the robot, started 20 mm off the setpoint, has not settled.
+        let options = |final_band_m| VMaxOptions {
+            distance_m: 0.2,
+            final_band_m,
+            ..VMaxOptions::default()
+        };
+        let status = |band| judged_status(&sweep, &sensors, &config, &options(band), 0.3).unwrap();
+        assert_eq!(status(0.005), "drifted");
+        assert_eq!(status(0.05), "ok");
     }
 }

@@ -31,6 +31,8 @@ pub struct RawVMax {
     speeds_m_per_s: Option<Spanned<Vec<f64>>>,
     distance_m: Option<Spanned<f64>>,
     tolerance_m_per_s: Option<Spanned<f64>>,
+    final_stretch_m: Option<Spanned<f64>>,
+    final_band_m: Option<Spanned<f64>>,
 }
 
 impl RawVMax {
@@ -71,6 +73,12 @@ impl RawVMax {
         }
         if let Some(t) = &self.tolerance_m_per_s {
             options.tolerance_m_per_s = positive(source, V_MAX, "tolerance_m_per_s", t)?;
+        }
+        if let Some(f) = &self.final_stretch_m {
+            options.final_stretch_m = positive(source, V_MAX, "final_stretch_m", f)?;
+        }
+        if let Some(b) = &self.final_band_m {
+            options.final_band_m = positive(source, V_MAX, "final_band_m", b)?;
         }
         options
             .validate()
