@@ -107,8 +107,8 @@ pub struct FollowStepLine {
 /// The `summary` line (`antenna follow --json` prints it alone).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FollowSummaryLine {
-    /// `"ok"`, `"collided"`, `"lost"`, `"unstable"`, or the solver's outcome (`"no-convergence"`,
-    /// `"jammed"`, `"uncertified"`, `"solver-error"`).
+    /// `"ok"`, `"collided"`, `"lost"`, `"unstable"`, or the solver's outcome
+    /// (`"no-convergence"`, `"jammed"`, `"uncertified"`, `"solver-error"`).
     pub status: String,
     /// The solver's message where it ended the run.
     pub detail: Option<String>,
