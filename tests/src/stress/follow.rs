@@ -931,14 +931,16 @@ fn run_to_end(
             return Err(format!("the summary's {name} is not finite: {v:?}"));
         }
     }
-    let ended_early = refusal.is_some() || status == "lost";
+    // Lost and unstable runs end early by design (the robot is off the wall, or the loop
+    // turned the body more than sim-core's MAX_TURN_PER_STEP_RAD in a step).
+    let ended_early = refusal.is_some() || matches!(status, "lost" | "unstable");
     if !ended_early && *steps != planned {
         return Err(format!(
             "status {status} after {} of {planned} steps",
             *steps
         ));
     }
-    if refusal.is_some() && matches!(status, "ok" | "lost") {
+    if refusal.is_some() && matches!(status, "ok" | "lost" | "unstable") {
         return Err(format!(
             "a refusal ended the run, yet its status is {status}"
         ));
