@@ -209,3 +209,23 @@ fn a_loop_unstable_at_its_step_ends_unstable_before_the_body_spins() {
                 <= sim_core::follow::MAX_TURN_PER_STEP_RAD)
     );
 }
+
+#[test]
+fn with_antenna_loads_body_the_antennas_moment_turns_the_body() {
+    let mut config = FollowConfig::default();
+    config.settings.duration_s = 1.0;
+    config.settings.pose_m = Vector2::new(0.0, 0.10);
+    let scene = antenna_scene(vec![straight_wall(0.2)], config.robot.mount_angle_rad);
+    let (free, _) = run_all(Follow::new(&scene, &SensorSettings::IDEAL, &config).unwrap());
+    let mut loaded_config = config;
+    loaded_config.robot.antenna_loads_body = true;
+    let (loaded, _) = run_all(Follow::new(&scene, &SensorSettings::IDEAL, &loaded_config).unwrap());
+    // The wall pushes the antenna back and away: about the point of rotation, a moment
+    // that turns the body away from the wall (positive), reported either way.
+    let moment = free[0].antenna_moment_n_m;
+    assert!(moment > 0.0, "{moment}");
+    assert_eq!(loaded[0].antenna_moment_n_m, moment);
+    // Only the loaded body turns by it: the same first command, then different paths.
+    assert_eq!(free[0].command, loaded[0].command);
+    assert!(loaded[1].omega_rad_per_s > free[1].omega_rad_per_s);
+}
