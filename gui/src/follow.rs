@@ -10,8 +10,9 @@
 //! - a `--jsonl` file of `antenna follow` ([`read_follow_file`]): read at once; a line that
 //!   is not a follow line, or out of order, is an error naming the file and the line;
 //! - a follow scene (`[robot]`, `[controller]`, `[follow]`; [`FollowWorker::start_scene`]):
-//!   run by sim-core's [`Follow`] on its own thread, each [`FollowStep`] turned into its line
-//!   ([`step_line`]) and handed to the UI when it is not drawing, as a sweep's steps are.
+//!   run by sim-core's [`Follow`] on its own thread, each
+//!   [`FollowStep`](sim_core::follow::FollowStep) turned into its line ([`step_line`],
+//!   antenna-scene's) and handed to the UI when it is not drawing, as a sweep's steps are.
 //!
 //! Each step is also one sample of a [`History`] (joint `k` as segment `k`, the sensed touch
 //! bits), so the joint angles, the touch raster, the scrub slider, **Play** and the exports
