@@ -11,9 +11,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use sim_core::Wall;
 
-use crate::sweep::plot::{
-    Drawing, PlotError, inside_runs, surface_runs, tick, wall_points, write_drawing,
-};
+use crate::sweep::plot::{Drawing, PlotError, draw_walls, tick, write_drawing};
 use antenna_scene::follow_lines::FollowStepLine;
 
 /// Figure size, pixels (PNG) or user units (SVG).
@@ -26,8 +24,6 @@ const ANTENNA: RGBColor = RGBColor(0, 90, 200);
 const ESTIMATED: RGBColor = RGBColor(230, 120, 0);
 const PATH: RGBColor = RGBColor(0, 150, 90);
 const COLLISION: RGBColor = RGBColor(220, 0, 60);
-const WALL: RGBColor = RGBColor(90, 90, 90);
-const ROUGH_WALL: RGBColor = RGBColor(150, 90, 20);
 
 #[derive(Debug, Clone)]
 struct Snapshot {
@@ -203,21 +199,7 @@ impl FollowPlot {
             .light_line_style(WHITE)
             .draw()
             .map_err(text)?;
-        let diagonal = ((x.end - x.start).powi(2) + (y.end - y.start).powi(2)).sqrt();
-        for wall in walls {
-            let points = wall_points(wall, &x, &y, diagonal);
-            for run in inside_runs(&points, &x, &y) {
-                for (rough, piece) in surface_runs(wall, run) {
-                    let colour = if rough { ROUGH_WALL } else { WALL };
-                    chart
-                        .draw_series(LineSeries::new(
-                            piece.iter().map(|p| (p.x, p.y)),
-                            colour.stroke_width(2),
-                        ))
-                        .map_err(text)?;
-                }
-            }
-        }
+        draw_walls(&mut chart, walls, &x, &y).map_err(text)?;
         chart
             .draw_series(LineSeries::new(
                 self.path_m.iter().map(|p| (p.x, p.y)),

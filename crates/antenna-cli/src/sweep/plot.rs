@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Vector2;
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use sim_core::{Surface, Wall, WallShape};
 
@@ -263,34 +264,7 @@ impl SweepPlot {
             .light_line_style(WHITE)
             .draw()
             .map_err(text)?;
-        let diagonal = ((x.end - x.start).powi(2) + (y.end - y.start).powi(2)).sqrt();
-        for wall in walls {
-            let points = wall_points(wall, &x, &y, diagonal);
-            for run in inside_runs(&points, &x, &y) {
-                for piece in surface_runs(wall, run) {
-                    let colour = if piece.0 { ROUGH_WALL } else { SMOOTH_WALL };
-                    chart
-                        .draw_series(LineSeries::new(
-                            piece.1.iter().map(|p| (p.x, p.y)),
-                            colour.stroke_width(2),
-                        ))
-                        .map_err(text)?;
-                }
-                // Hatches into the solid side.
-                let hatch_m = 0.012 * diagonal;
-                let stride = (run.len() / 60).max(1);
-                for p in run.iter().step_by(stride) {
-                    let normal = wall.signed_distance(p).normal;
-                    let q = p - normal * hatch_m;
-                    chart
-                        .draw_series(LineSeries::new(
-                            [(p.x, p.y), (q.x, q.y)],
-                            SMOOTH_WALL.mix(0.5),
-                        ))
-                        .map_err(text)?;
-                }
-            }
-        }
+        draw_walls(&mut chart, walls, &x, &y).map_err(text)?;
         chart
             .draw_series(LineSeries::new(
                 self.samples.iter().map(|s| (s.base_m.x, s.base_m.y)),
@@ -578,13 +552,46 @@ fn runs(samples: &[Sample], value: impl Fn(&Sample) -> Option<f64>) -> Vec<Vec<(
     out
 }
 
-/// Points along a wall's curve covering a view of size `diagonal` around its centre.
-pub(crate) fn wall_points(
-    wall: &Wall,
+/// Draws `walls` on a top view's `chart` of ranges `x` and `y`: each wall's curve within the
+/// view (rough stretches brown, smooth ones grey) with hatches into its solid side.
+///
+/// # Errors
+/// plotters' error.
+pub(crate) fn draw_walls<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    walls: &[Wall],
     x: &Range<f64>,
     y: &Range<f64>,
-    diagonal: f64,
-) -> Vec<Vector2<f64>> {
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let diagonal = ((x.end - x.start).powi(2) + (y.end - y.start).powi(2)).sqrt();
+    for wall in walls {
+        let points = wall_points(wall, x, y, diagonal);
+        for run in inside_runs(&points, x, y) {
+            for (rough, piece) in surface_runs(wall, run) {
+                let colour = if rough { ROUGH_WALL } else { SMOOTH_WALL };
+                chart.draw_series(LineSeries::new(
+                    piece.iter().map(|p| (p.x, p.y)),
+                    colour.stroke_width(2),
+                ))?;
+            }
+            // Hatches into the solid side.
+            let hatch_m = 0.012 * diagonal;
+            let stride = (run.len() / 60).max(1);
+            for p in run.iter().step_by(stride) {
+                let normal = wall.signed_distance(p).normal;
+                let q = p - normal * hatch_m;
+                chart.draw_series(LineSeries::new(
+                    [(p.x, p.y), (q.x, q.y)],
+                    SMOOTH_WALL.mix(0.5),
+                ))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Points along a wall's curve covering a view of size `diagonal` around its centre.
+fn wall_points(wall: &Wall, x: &Range<f64>, y: &Range<f64>, diagonal: f64) -> Vec<Vector2<f64>> {
     let centre = Vector2::new(0.5 * (x.start + x.end), 0.5 * (y.start + y.end));
     let samples = 600.0;
     let along = |p0: Vector2<f64>, t: Vector2<f64>| {
@@ -636,7 +643,7 @@ pub(crate) fn wall_points(
 }
 
 /// The runs of consecutive points inside the view.
-pub(crate) fn inside_runs<'p>(
+fn inside_runs<'p>(
     points: &'p [Vector2<f64>],
     x: &Range<f64>,
     y: &Range<f64>,
@@ -663,7 +670,7 @@ pub(crate) fn inside_runs<'p>(
 
 /// Splits a run of wall points where the surface changes between smooth and rough; `true`
 /// marks a rough piece.
-pub(crate) fn surface_runs(wall: &Wall, run: &[Vector2<f64>]) -> Vec<(bool, Vec<Vector2<f64>>)> {
+fn surface_runs(wall: &Wall, run: &[Vector2<f64>]) -> Vec<(bool, Vec<Vector2<f64>>)> {
     let mut out: Vec<(bool, Vec<Vector2<f64>>)> = Vec::new();
     for p in run {
         let rough = matches!(
