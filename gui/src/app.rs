@@ -1160,17 +1160,12 @@ impl MonitorApp {
                 (text, false)
             }
         });
-        let untouched = self.sweep_view.as_ref() == Some(&self.view);
-        let span = state.history.first_t_s().zip(state.history.latest_t_s());
-        if let (true, Some((first, latest))) = (untouched, span) {
-            let cursor = if state.error().is_some() {
-                latest
-            } else {
-                first
-            };
-            self.view.show_range(first, latest, cursor);
-        }
-        self.sweep_view = None;
+        show_finished_run(
+            &mut self.view,
+            &mut self.sweep_view,
+            &state.history,
+            state.error().is_some(),
+        );
     }
 
     /// As [`Self::follow_sweep`] for a follow scene's closed-loop run: kept in view as a
@@ -1211,17 +1206,12 @@ impl MonitorApp {
                 (text, false)
             }
         });
-        let untouched = self.sweep_view.as_ref() == Some(&self.view);
-        let span = state.history.first_t_s().zip(state.history.latest_t_s());
-        if let (true, Some((first, latest))) = (untouched, span) {
-            let cursor = if state.error().is_some() {
-                latest
-            } else {
-                first
-            };
-            self.view.show_range(first, latest, cursor);
-        }
-        self.sweep_view = None;
+        show_finished_run(
+            &mut self.view,
+            &mut self.sweep_view,
+            &state.history,
+            state.error().is_some(),
+        );
     }
 
     /// Moves the cursor of a playing recording on by the time since the last frame times
@@ -1294,6 +1284,24 @@ impl MonitorApp {
         self.exports.push(record.clone());
         Ok(record)
     }
+}
+
+/// A simulated run (a sweep or a follow run) has ended: while the user has not moved `view`
+/// since the app last set it (`sweep_view`), the whole run in view, the cursor at its start,
+/// or at its last step if it `stopped` early; the app lets go of the view.
+fn show_finished_run(
+    view: &mut ViewState,
+    sweep_view: &mut Option<ViewState>,
+    history: &History,
+    stopped: bool,
+) {
+    let untouched = sweep_view.as_ref() == Some(&*view);
+    if let (true, Some((first, latest))) =
+        (untouched, history.first_t_s().zip(history.latest_t_s()))
+    {
+        view.show_range(first, latest, if stopped { latest } else { first });
+    }
+    *sweep_view = None;
 }
 
 /// While the user has not moved `view` since the app last set it (`sweep_view`): the whole
