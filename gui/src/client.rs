@@ -570,7 +570,9 @@ fn on_message(
                 note,
             });
         }
-        StreamMessage::Lagged { dropped } => state.lagged_dropped += dropped,
+        StreamMessage::Lagged { dropped, .. } => state.lagged_dropped += dropped,
+        // Shown by the monitor's estimate view (issue #48; added by its own change).
+        StreamMessage::Estimate(_) => {}
         StreamMessage::Reply(reply) => {
             let command = reply
                 .id

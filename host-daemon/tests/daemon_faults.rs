@@ -91,7 +91,7 @@ fn nack_storms_pec_errors_and_a_stuck_counter_are_marked_and_nothing_is_lost() {
                     }
                 }
             }
-            StreamMessage::Lagged { dropped } => panic!("{dropped} dropped for a reader"),
+            StreamMessage::Lagged { dropped, .. } => panic!("{dropped} dropped for a reader"),
             _ => {}
         }
     }

@@ -34,6 +34,10 @@ pub struct Config {
     pub trials: Vec<TrialConfig>,
     /// The simulated rig (used when the bus is `sim`).
     pub sim: SimConfig,
+    /// The live wall estimate.
+    pub estimate: EstimateConfig,
+    /// The Foxglove WebSocket server.
+    pub foxglove: FoxgloveConfig,
 }
 
 impl Default for Config {
@@ -47,6 +51,8 @@ impl Default for Config {
             recording: RecordingConfig::default(),
             trials: vec![TrialConfig::default()],
             sim: SimConfig::default(),
+            estimate: EstimateConfig::default(),
+            foxglove: FoxgloveConfig::default(),
         }
     }
 }
@@ -418,5 +424,112 @@ impl Config {
             self.servo.angle_b_deg.to_radians(),
             self.servo.pulse_b_us,
         )
+    }
+}
+
+/// The `[estimate]` table: the live wall estimate antennad makes from the calibrated joint
+/// angles and touch bits with `antenna follow`'s estimators (`sim_core::follow`), in the
+/// carriage frame: origin at the base pivot, x along the stage's travel, y toward the wall.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EstimateConfig {
+    /// `"contact-line"` (default: the mapped contact points of the last `window_s` carried by
+    /// the stage's odometry, a line fitted through them: distance and angle), `"bend"` (the
+    /// point of bend through a calibration table that antennad builds from the scene when it
+    /// starts: distance only), `"ideal-preview"` (the simulated rig's true wall along the
+    /// carriage's normal at the base pivot: the check, refused with hardware) or `"none"`.
+    pub estimator: EstimatorName,
+    /// The contact-line estimator's window, seconds (default 0.5).
+    pub window_s: f64,
+    /// Estimates per second (default 100), at most `bus.poll_hz`; every poll feeds the
+    /// window, an estimate is made from the newest poll when one is due.
+    pub rate_hz: f64,
+    /// Which side of the stage's travel the wall is on: `"left"` (default) or `"right"`.
+    pub wall_side: WallSideName,
+}
+
+impl Default for EstimateConfig {
+    fn default() -> Self {
+        Self {
+            estimator: EstimatorName::ContactLine,
+            window_s: 0.5,
+            rate_hz: 100.0,
+            wall_side: WallSideName::Left,
+        }
+    }
+}
+
+/// An estimator's name in `[estimate] estimator`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EstimatorName {
+    /// The contact-line estimator.
+    ContactLine,
+    /// The bend estimator.
+    Bend,
+    /// The true wall (simulated rig only).
+    IdealPreview,
+    /// No estimate.
+    None,
+}
+
+impl EstimatorName {
+    /// As written in the file.
+    pub fn name(self) -> &'static str {
+        match self {
+            EstimatorName::ContactLine => "contact-line",
+            EstimatorName::Bend => "bend",
+            EstimatorName::IdealPreview => "ideal-preview",
+            EstimatorName::None => "none",
+        }
+    }
+}
+
+/// The wall's side of the stage's travel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WallSideName {
+    /// Left of the direction of travel (counter-clockwise from it).
+    Left,
+    /// Right of it.
+    Right,
+}
+
+/// The `[foxglove]` table: a Foxglove WebSocket server (view-only: no client publishing, no
+/// services; control stays on the token-protected `[server]` port).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FoxgloveConfig {
+    /// Whether the server runs. Left out: on for the simulated rig, off when any hardware is
+    /// configured ([`Config::foxglove_enabled`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub enabled: Option<bool>,
+    /// Address and port to listen on (default `127.0.0.1:8765`); loopback unless you mean
+    /// otherwise: anyone who reaches it sees the antenna.
+    pub listen: String,
+    /// A port that cannot be bound stops antennad from starting (default `true`); `false`:
+    /// a warning and no Foxglove.
+    pub required: bool,
+    /// The 3D channels' rate (transforms and scene), per second (default 50), at most
+    /// `bus.poll_hz`.
+    pub scene_hz: f64,
+}
+
+impl Default for FoxgloveConfig {
+    fn default() -> Self {
+        Self {
+            enabled: None,
+            listen: "127.0.0.1:8765".to_owned(),
+            required: true,
+            scene_hz: 50.0,
+        }
+    }
+}
+
+impl Config {
+    /// Whether the Foxglove server runs: `[foxglove] enabled`, or left out, whether the rig
+    /// is all simulated.
+    pub fn foxglove_enabled(&self) -> bool {
+        self.foxglove.enabled.unwrap_or(!self.has_hardware())
     }
 }

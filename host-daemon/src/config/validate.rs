@@ -149,6 +149,7 @@ impl Config {
                 ),
             );
         }
+        self.validate_estimate_and_foxglove()?;
         let recording = &self.recording;
         if !(recording.sync_interval_s.is_finite() && recording.sync_interval_s >= 0.0) {
             return fail(
@@ -256,6 +257,59 @@ impl Config {
             );
         }
         self.validate_sensors()
+    }
+
+    /// `[estimate]` and `[foxglove]`: ranges against the poll rate, the ideal preview on the
+    /// simulated rig only, the listen address.
+    fn validate_estimate_and_foxglove(&self) -> Result<(), (String, String)> {
+        let fail = |key: &str, message: String| Err((key.to_owned(), message));
+        let poll_hz = self.bus.poll_hz;
+        let estimate = &self.estimate;
+        if !(estimate.window_s.is_finite() && estimate.window_s > 0.0 && estimate.window_s <= 60.0)
+        {
+            return fail(
+                "estimate.window_s",
+                format!("must be in (0, 60] seconds, got {}", estimate.window_s),
+            );
+        }
+        if !(estimate.rate_hz.is_finite() && estimate.rate_hz > 0.0 && estimate.rate_hz <= poll_hz)
+        {
+            return fail(
+                "estimate.rate_hz",
+                format!(
+                    "must be in (0, bus.poll_hz = {poll_hz}], got {}",
+                    estimate.rate_hz
+                ),
+            );
+        }
+        if estimate.estimator == super::EstimatorName::IdealPreview && self.has_hardware() {
+            return fail(
+                "estimate.estimator",
+                "\"ideal-preview\" reads the simulated rig's true wall: only with the bus, the \
+                 stage and the servo all \"sim\""
+                    .to_owned(),
+            );
+        }
+        let foxglove = &self.foxglove;
+        if foxglove.listen.parse::<std::net::SocketAddr>().is_err() {
+            return fail(
+                "foxglove.listen",
+                format!("not an address:port, got {:?}", foxglove.listen),
+            );
+        }
+        if !(foxglove.scene_hz.is_finite()
+            && foxglove.scene_hz > 0.0
+            && foxglove.scene_hz <= poll_hz)
+        {
+            return fail(
+                "foxglove.scene_hz",
+                format!(
+                    "must be in (0, bus.poll_hz = {poll_hz}], got {}",
+                    foxglove.scene_hz
+                ),
+            );
+        }
+        Ok(())
     }
 
     /// Reads the token from `server.token_file` or `server.token_env`: the failing key and

@@ -18,7 +18,7 @@
 //! let token = ControlToken::new("s3cret-s3cret-s3cret").expect("long enough");
 //! let server = StreamServer::bind("127.0.0.1:0", token, Arc::new(RecordingHandler::new()))
 //!     .expect("bind");
-//! let queued = server.publish(&StreamMessage::Lagged { dropped: 0 });
+//! let queued = server.publish(&StreamMessage::Lagged { dropped: 0, samples_dropped: 0 });
 //! assert_eq!(queued, 0); // nobody is connected yet
 //! server.shutdown();
 //! ```

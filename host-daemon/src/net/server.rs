@@ -107,6 +107,8 @@ struct Client {
     connected_at: Instant,
     /// Messages dropped since the last one queued for this client.
     dropped: u64,
+    /// How many of those were samples (the `seq` gap the client sees).
+    samples_dropped: u64,
     /// When a message was first dropped, if the queue has not drained to half since.
     lagging_since: Option<Instant>,
     /// Set once the server has shut this connection down; it is reaped soon after.
@@ -246,6 +248,7 @@ impl StreamServer {
             return 0;
         };
         let line: Arc<[u8]> = line.into();
+        let samples = matches!(message, StreamMessage::Samples { .. });
         let mut queued = 0;
         for client in self.shared.clients().iter_mut() {
             if client.disconnected {
@@ -254,21 +257,25 @@ impl StreamServer {
             if client.dropped > 0 {
                 let notice = StreamMessage::Lagged {
                     dropped: client.dropped,
+                    samples_dropped: client.samples_dropped,
                 };
                 let Ok(notice) = encode_line(&notice) else {
                     continue;
                 };
                 match self.try_queue(client, notice.into()) {
-                    Ok(()) => client.dropped = 0,
+                    Ok(()) => {
+                        client.dropped = 0;
+                        client.samples_dropped = 0;
+                    }
                     Err(_) => {
-                        self.lag(client);
+                        self.lag(client, samples);
                         continue;
                     }
                 }
             }
             match self.try_queue(client, Arc::clone(&line)) {
                 Ok(()) => queued += 1,
-                Err(TrySendError::Full(())) => self.lag(client),
+                Err(TrySendError::Full(())) => self.lag(client, samples),
                 Err(TrySendError::Disconnected(())) => {} // reaped by the accept thread
             }
         }
@@ -298,8 +305,9 @@ impl StreamServer {
 
     /// Counts a dropped message; disconnects the client once it has been lagging for the
     /// write timeout (`shutdown` is a non-blocking system call; the writer then ends).
-    fn lag(&self, client: &mut Client) {
+    fn lag(&self, client: &mut Client, samples: bool) {
         client.dropped += 1;
+        client.samples_dropped += u64::from(samples);
         let since = *client.lagging_since.get_or_insert_with(Instant::now);
         if since.elapsed() > self.write_timeout {
             let _ = client.stream.shutdown(Shutdown::Both);
@@ -549,6 +557,7 @@ fn start_client(
         stream,
         connected_at: Instant::now(),
         dropped: 0,
+        samples_dropped: 0,
         lagging_since: None,
         disconnected: false,
         writer,

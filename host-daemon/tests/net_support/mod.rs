@@ -124,7 +124,7 @@ pub fn follow_exactly(client: &mut Client, stop_at: u64) -> (u64, u64) {
     loop {
         match client.next_message() {
             StreamMessage::Hello { .. } => {}
-            StreamMessage::Lagged { dropped } => {
+            StreamMessage::Lagged { dropped, .. } => {
                 assert!(dropped > 0);
                 pending_dropped += dropped;
                 dropped_total += dropped;

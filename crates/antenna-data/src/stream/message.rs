@@ -53,13 +53,55 @@ pub enum StreamMessage {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         polling: Option<PollingStatus>,
     },
+    /// The wall as the antenna sees it: `antenna follow`'s estimator run by the daemon on
+    /// the calibrated joint angles and touch bits (added in 0.1 under protocol 1's additive
+    /// rule: older clients skip a type they do not know). Frame: origin at the base pivot, x
+    /// along the stage's travel, y toward the wall (`[estimate] wall_side`).
+    Estimate(EstimateMessage),
     /// Sent before the next message when messages were dropped for this (slow) client.
     Lagged {
         /// How many messages were dropped since the last one this client received.
         dropped: u64,
+        /// How many of them were [`StreamMessage::Samples`]: the gap in `seq` the client
+        /// sees next (added in 0.1; absent from older daemons' lines, read as 0).
+        #[serde(default)]
+        samples_dropped: u64,
     },
     /// The answer to one control request, sent only to the client that made it.
     Reply(ControlReply),
+}
+
+/// One live wall estimate ([`StreamMessage::Estimate`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EstimateMessage {
+    /// The newest poll the estimate used: its [`StreamMessage::Samples`] `seq`.
+    pub seq: u64,
+    /// That poll's time, nanoseconds on the daemon's clock.
+    pub t_ns: u64,
+    /// When the estimate was made, nanoseconds on the daemon's clock (`estimated_ns - t_ns`
+    /// is the estimator's own delay).
+    pub estimated_ns: u64,
+    /// `"contact-line"`, `"bend"` or `"ideal-preview"` (`[estimate] estimator`).
+    pub estimator: String,
+    /// The wall's distance from the x axis, metres, at `preview_m` along it; `None` when
+    /// there is no estimate (`reason` says why).
+    pub distance_m: Option<f64>,
+    /// The wall's angle to the x axis, radians (the wall `y = distance_m + (x - preview_m)
+    /// tan(angle_rad)`); `None` from the bend estimator or with no estimate.
+    pub angle_rad: Option<f64>,
+    /// Where along x the distance holds, metres ahead of the base pivot.
+    pub preview_m: Option<f64>,
+    /// Why there is no estimate, e.g. `"no contact in the window"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// The simulated rig only: the true wall's distance at `preview_m` (at the base pivot
+    /// when there is no estimate) along the y axis, metres, from the pose the physics was
+    /// solved at for that poll.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub true_distance_m: Option<f64>,
+    /// The simulated rig only: the true wall's angle to the x axis there, radians.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub true_angle_rad: Option<f64>,
 }
 
 /// The rig as configured, sent in [`StreamMessage::Hello`] and kept in every recording's

@@ -23,8 +23,8 @@ mod request;
 
 pub use framing::{LineRead, MAX_LINE_BYTES, encode_line, read_line_capped};
 pub use message::{
-    ControlReply, ErrorCode, PROTOCOL_VERSION, PollingStatus, RigInfo, SegmentSample,
-    SegmentStatus, StreamMessage,
+    ControlReply, ErrorCode, EstimateMessage, PROTOCOL_VERSION, PollingStatus, RigInfo,
+    SegmentSample, SegmentStatus, StreamMessage,
 };
 pub use request::{
     COMMAND_NAMES, ControlCommand, ControlRequest, Request, RequestEnvelope, STOP_ALL, StageTarget,
