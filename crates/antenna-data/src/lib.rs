@@ -21,8 +21,9 @@
 //! assert_eq!(TrialReader::read(&path)?.segments.len(), 1);
 //! # std::fs::remove_file(&path).ok();
 //!
-//! let line = encode_line(&StreamMessage::Lagged { dropped: 3, samples_dropped: 2 }).expect("encodes");
-//! assert_eq!(line, b"{\"type\":\"lagged\",\"dropped\":3}\n");
+//! let lagged = StreamMessage::Lagged { dropped: 3, samples_dropped: 2 };
+//! let line = encode_line(&lagged).expect("encodes");
+//! assert_eq!(line, b"{\"type\":\"lagged\",\"dropped\":3,\"samples_dropped\":2}\n");
 //! # Ok::<(), antenna_data::record::RecordError>(())
 //! ```
 
