@@ -30,6 +30,7 @@ pub mod auth_throttle;
 mod connection;
 mod control;
 mod fake_handler;
+pub mod foxglove;
 mod server;
 mod server_log;
 

@@ -8,6 +8,7 @@ use super::trial::ActiveTrial;
 use super::{DaemonOptions, Log, TrialOutcome};
 use crate::config::Config;
 use crate::hardware::poll::{PollError, SegmentHealth};
+use crate::net::foxglove::FoxgloveLive;
 use crate::net::{ControlToken, StreamServer};
 use crate::service::acquisition::{
     AcquisitionEvent, FirmwareReading, HealthChange, PollRecord, Shared,
@@ -62,6 +63,8 @@ pub(super) struct Hub {
     pub(super) clock: TrialClock,
     pub(super) calibrations: Vec<Calibration>,
     pub(super) server: Option<StreamServer>,
+    /// The Foxglove WebSocket server, if it runs.
+    pub(super) foxglove: Option<FoxgloveLive>,
     pub(super) log: Log,
     pub(super) trial: Option<ActiveTrial>,
     pub(super) trial_state: Arc<Mutex<Option<String>>>,
@@ -216,6 +219,16 @@ impl Hub {
         }
         if let Some(server) = self.server.take() {
             server.shutdown();
+        }
+    }
+
+    /// Sends `message` to every stream client (TCP and Foxglove); never blocks on a socket.
+    pub(super) fn publish(&mut self, message: &StreamMessage) {
+        if let Some(server) = &self.server {
+            server.publish(message);
+        }
+        if let Some(foxglove) = &mut self.foxglove {
+            foxglove.publish(message);
         }
     }
 
@@ -413,8 +426,8 @@ impl Hub {
         if !self.rig_status.servo.load(Ordering::Relaxed) {
             self.base_rad = None;
         }
-        if let Some(server) = &self.server {
-            server.publish(&StreamMessage::Samples {
+        if self.server.is_some() || self.foxglove.is_some() {
+            self.publish(&StreamMessage::Samples {
                 seq: poll.seq,
                 t_ns: poll.t_ns,
                 segments: poll
@@ -456,7 +469,9 @@ impl Hub {
 
     pub(super) fn publish_status(&mut self) {
         self.status_due = Instant::now() + Duration::from_secs(1);
-        let Some(server) = &self.server else { return };
+        if self.server.is_none() && self.foxglove.is_none() {
+            return;
+        }
         let mut notes = Vec::new();
         if !self.rig_status.stage.load(Ordering::Relaxed) {
             notes.push("stage unavailable".to_owned());
@@ -485,7 +500,7 @@ impl Hub {
         if let Some(note) = self.note.take() {
             notes.push(note);
         }
-        server.publish(&StreamMessage::Status {
+        self.publish(&StreamMessage::Status {
             t_ns: now_ns,
             trial: self.trial.as_ref().map(|t| t.name.clone()),
             segments: self.health.clone(),

@@ -225,6 +225,7 @@ impl Daemon {
             options: options.clone(),
             clock,
             server,
+            foxglove: None,
             log: log.clone(),
             trial: None,
             trial_state: Arc::clone(&trial_state),
