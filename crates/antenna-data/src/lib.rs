@@ -1,9 +1,11 @@
 //! What `antennad` writes for others to read, with no dependency on the daemon itself:
 //!
 //! - [`record`]: trial recordings, one MCAP file per trial (schemas, messages, the writer and
-//!   the reader), and
+//!   the reader),
 //! - [`stream`]: the live stream and control protocol, newline-delimited JSON over TCP
-//!   (`docs/stream-protocol.md`).
+//!   (`docs/stream-protocol.md`), and
+//! - [`foxglove`]: the antenna in Foxglove's standard schemas (its frames and a 3D scene),
+//!   which the recordings carry and antennad's live Foxglove server sends.
 //!
 //! `antennad` (`host-daemon`) writes both; `antenna export` (`antenna-cli`) and
 //! `antenna-monitor` read them through this crate.
@@ -27,5 +29,6 @@
 //! # Ok::<(), antenna_data::record::RecordError>(())
 //! ```
 
+pub mod foxglove;
 pub mod record;
 pub mod stream;
