@@ -6,10 +6,14 @@ crash), `scipy.io.loadmat` on the MAT-file, and the `csv` module on the CSV file
 Usage: check_export.py EXPECTED.json
 
 EXPECTED.json (written by crates/antenna-cli/tests/export_python.rs) names the files and holds
-the values that were recorded: t_s, seq, address, angle_rad and touch (polls x segments, null
-for a missing sample), stage_t_s, stage_position_m, servo_t_s, base_angle_rad, trial, config,
-notes, started_unix_ns, truncated_mcap and truncated_polls. Exits non-zero with a message on the first
-mismatch. Needs scipy and mcap (scripts/setup installs them).
+the values that were recorded: t_s, seq, address, angle_rad, angle_counts and touch (polls x
+segments, null for a missing sample), the flags ok, nack, pec_error, bus_error and stale (polls
+x segments), stage_t_s, stage_position_m, servo_t_s, base_angle_rad, trial, config, notes,
+started_unix_ns, truncated_mcap and truncated_polls; `whole` (a second trial whose doubles are
+all whole numbers, its base angle all zero) and `empty_mat` (a trial with no polls). The MAT-files
+are read with scipy's default `loadmat(path)`, no options, and every variable's dtype is checked.
+Exits non-zero with a message on the first mismatch. Needs scipy and mcap (scripts/setup
+installs them).
 """
 
 import csv
@@ -105,8 +109,27 @@ def check_truncated_mcap(e):
     print(f"check_export: truncated MCAP ok ({len(polls)} polls)")
 
 
+# The class each MAT-file variable loads as with scipy's default loadmat (no options): doubles
+# stay float64 even when every value is whole (the writer never stores them as integer types);
+# counters, addresses, raw counts and touch bits are integers; logical flags load as uint8.
+MAT_DTYPES = {
+    "t_s": np.float64, "seq": np.uint64, "address": np.uint8, "angle_rad": np.float64,
+    "angle_counts": np.uint16, "touch": np.uint8, "ok": np.uint8, "nack": np.uint8,
+    "pec_error": np.uint8, "bus_error": np.uint8, "stale": np.uint8,
+    "stage_t_s": np.float64, "stage_position_m": np.float64, "servo_t_s": np.float64,
+    "base_angle_rad": np.float64, "started_unix_s": np.float64, "started_unix_ns": np.uint64,
+}
+
+
+def check_dtypes(m, label):
+    for name, dtype in MAT_DTYPES.items():
+        check(name in m, f"{label}: no variable {name}")
+        check(m[name].dtype == dtype, f"{label}: {name} is {m[name].dtype}, not {dtype.__name__}")
+
+
 def check_mat(e):
-    m = scipy.io.loadmat(e["mat"], mat_dtype=True)
+    m = scipy.io.loadmat(e["mat"])
+    check_dtypes(m, "MAT")
     n, s = len(e["t_s"]), len(e["address"])
     expected_shapes = {
         "t_s": (n, 1), "seq": (n, 1), "address": (1, s), "angle_rad": (n, s), "angle_counts": (n, s),
@@ -114,31 +137,63 @@ def check_mat(e):
         "bus_error": (n, s), "stale": (n, s),
         "stage_t_s": (len(e["stage_t_s"]), 1), "stage_position_m": (len(e["stage_t_s"]), 1),
         "servo_t_s": (len(e["servo_t_s"]), 1), "base_angle_rad": (len(e["servo_t_s"]), 1),
-        "started_unix_s": (1, 1),
+        "started_unix_s": (1, 1), "started_unix_ns": (1, 1),
     }
     for name, shape in expected_shapes.items():
-        check(name in m, f"MAT: no variable {name}")
         check(m[name].shape == shape, f"MAT: {name} has shape {m[name].shape}, expected {shape}")
-        check(m[name].dtype == np.float64, f"MAT: {name} is {m[name].dtype}, not double")
     check(np.array_equal(m["t_s"][:, 0], np.array(e["t_s"])), "MAT: t_s")
-    check(np.array_equal(m["seq"][:, 0], np.array(e["seq"], dtype=float)), "MAT: seq")
-    check(np.array_equal(m["address"][0], np.array(e["address"], dtype=float)), "MAT: address")
+    check(np.array_equal(m["seq"][:, 0], np.array(e["seq"], dtype=np.uint64)), "MAT: seq")
+    check(np.array_equal(m["address"][0], np.array(e["address"])), "MAT: address")
     angle = np.array([[np.nan if v is None else v for v in row] for row in e["angle_rad"]])
     check(np.array_equal(m["angle_rad"], angle, equal_nan=True), "MAT: angle_rad")
-    touch = np.array([[np.nan if v is None else v for v in row] for row in e["touch"]])
-    check(np.array_equal(m["touch"], touch, equal_nan=True), "MAT: touch")
-    check(np.array_equal(np.isnan(m["angle_rad"]), 1.0 - m["ok"] == 1.0), "MAT: ok flags")
+    # Integers have no NaN: a missing sample is 0 there, and ok says which are missing.
+    counts = np.array([[0 if v is None else v for v in row] for row in e["angle_counts"]])
+    check(np.array_equal(m["angle_counts"], counts), "MAT: angle_counts")
+    touch = np.array([[0 if v is None else v for v in row] for row in e["touch"]])
+    check(np.array_equal(m["touch"], touch), "MAT: touch")
+    for flag in ["ok", "nack", "pec_error", "bus_error", "stale"]:
+        check(np.array_equal(m[flag], np.array(e[flag], dtype=np.uint8)), f"MAT: {flag}")
+    check(np.array_equal(np.isnan(m["angle_rad"]), m["ok"] == 0), "MAT: ok flags")
     check(np.array_equal(m["stage_t_s"][:, 0], np.array(e["stage_t_s"])), "MAT: stage_t_s")
     check(np.array_equal(m["stage_position_m"][:, 0], np.array(e["stage_position_m"])),
           "MAT: stage_position_m")
     check(np.array_equal(m["servo_t_s"][:, 0], np.array(e["servo_t_s"])), "MAT: servo_t_s")
     check(np.array_equal(m["base_angle_rad"][:, 0], np.array(e["base_angle_rad"])),
           "MAT: base_angle_rad")
+    check(m["started_unix_ns"][0, 0] == e["started_unix_ns"], "MAT: started_unix_ns")
     check(str(m["trial"][0]) == e["trial"], f"MAT: trial {m['trial']!r}")
     check(str(m["config"][0]) == e["config"], f"MAT: config {m['config']!r}")
+    check(m["truncated"].size == 0, f"MAT: truncated {m['truncated']!r}")
     notes = {str(m["notes"][i, 0][0]): str(m["notes"][i, 1][0]) for i in range(m["notes"].shape[0])}
     check(notes == e["notes"], f"MAT: notes {notes}")
     print(f"check_export: MAT ok ({n} x {s})")
+
+
+def check_mat_whole_numbers(e):
+    """A trial whose doubles are all whole (base angle all zero, stage at whole metres, whole
+    seconds): they load as float64 all the same, so arithmetic on them does not wrap."""
+    w = e["whole"]
+    m = scipy.io.loadmat(w["mat"])
+    check_dtypes(m, "MAT of whole numbers")
+    zeros = m["base_angle_rad"]
+    check(zeros.shape == (w["servo"], 1) and np.all(zeros == 0.0), f"whole: base angle {zeros!r}")
+    check(np.all(zeros - 1 == -1.0), "whole: base_angle_rad - 1 is -1, not 255")
+    check(np.array_equal(m["stage_position_m"][:, 0], np.array(w["stage_position_m"])),
+          "whole: stage_position_m")
+    check(np.array_equal(m["t_s"][:, 0], np.array(w["t_s"])), "whole: t_s")
+    check(np.all(m["t_s"][:1] - 1 == -1.0), "whole: t_s - 1")
+    print(f"check_export: MAT of whole numbers ok ({w['servo']} zero base angles)")
+
+
+def check_mat_empty(e):
+    """A trial with no polls: empty arrays, each of its class."""
+    m = scipy.io.loadmat(e["empty_mat"])
+    check_dtypes(m, "empty MAT")
+    for name in ["t_s", "seq", "stage_t_s", "stage_position_m", "servo_t_s", "base_angle_rad"]:
+        check(m[name].shape == (0, 1), f"empty MAT: {name} has shape {m[name].shape}")
+    for name in ["angle_rad", "angle_counts", "touch", "ok"]:
+        check(m[name].size == 0, f"empty MAT: {name} has shape {m[name].shape}")
+    print("check_export: empty MAT ok")
 
 
 def check_csv(e):
@@ -168,6 +223,8 @@ def main():
     check_mcap(e)
     check_truncated_mcap(e)
     check_mat(e)
+    check_mat_whole_numbers(e)
+    check_mat_empty(e)
     check_csv(e)
     print("check_export: all ok")
 

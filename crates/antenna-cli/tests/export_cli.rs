@@ -1,5 +1,6 @@
 //! `antenna export` from the command line: bad input exits 2 with a message naming the file,
-//! and a trial cut short by a crash exports up to its last flush with a warning.
+//! a trial cut short by a crash exports up to its last flush with a warning, and a write that
+//! fails (a full disk) is an error that leaves no partial file.
 #![allow(clippy::unwrap_used)]
 
 use std::path::PathBuf;
@@ -109,5 +110,78 @@ fn a_trial_killed_before_its_first_poll_exports_empty_arrays() {
         let text = std::fs::read_to_string(&csv).unwrap();
         assert_eq!(text.lines().filter(|l| !l.starts_with('#')).count(), 1);
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A trial of `polls` synthetic polls of 9 segments in `dir`.
+fn trial(dir: &std::path::Path, polls: u64) -> PathBuf {
+    let trial = dir.join("trial.mcap");
+    let mut recorder = TrialRecorder::create(&trial, &synthetic_metadata("full")).unwrap();
+    for i in 0..polls {
+        recorder.record_segments(&synthetic_segments(i, 9)).unwrap();
+    }
+    recorder.finish().unwrap();
+    trial
+}
+
+/// A full disk: `/dev/full` fails every write with ENOSPC, as a full file system does. The
+/// export exits non-zero naming the file and the operating system's error (matrw, used
+/// before, dropped write errors and exited 0).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_disk_is_an_error_naming_the_file() {
+    let dir = dir("full");
+    let trial = trial(&dir, 200);
+    let out = antenna(&[trial.as_os_str(), "--mat".as_ref(), "/dev/full".as_ref()]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("/dev/full") && stderr.contains("No space left on device"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A write that fails half way into a regular file (the file size limit, `ulimit -f`, fails it
+/// with EFBIG as a full disk fails it with ENOSPC; SIGXFSZ ignored so the write returns the
+/// error): an error naming the file, and neither a partial file nor a temporary one is left;
+/// an older export of that name stays as it was.
+#[cfg(unix)]
+#[test]
+fn a_write_that_fails_half_way_leaves_no_partial_file() {
+    let dir = dir("limit");
+    let trial = trial(&dir, 2000);
+    let mat = dir.join("trial.mat");
+    std::fs::write(&mat, "an older export").unwrap();
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg("trap '' XFSZ; ulimit -f 16; exec \"$0\" export \"$1\" --mat \"$2\"")
+        .arg(env!("CARGO_BIN_EXE_antenna"))
+        .arg(&trial)
+        .arg(&mat)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("trial.mat") && stderr.contains("File too large"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read_to_string(&mat).unwrap(), "an older export");
+    let mut left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["trial.mat", "trial.mcap"]);
+
+    // Without the limit the same export succeeds and replaces the older file.
+    let out = antenna(&[trial.as_os_str(), "--mat".as_ref(), mat.as_os_str()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::metadata(&mat).unwrap().len() > 16 * 1024);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,15 +1,18 @@
 //! `antenna export` checked by Python: a synthetic trial is recorded, exported to MAT and
 //! CSV, and `tests/python/check_export.py` reads the MCAP file with the Python `mcap` reader's
-//! `make_reader` (complete, and as `kill -9` leaves it), the MAT-file with `scipy.io.loadmat` and
-//! the CSV with `csv`, comparing every value with what was recorded. Needs python3 with scipy
-//! and mcap: `scripts/setup` installs them.
+//! `make_reader` (complete, and as `kill -9` leaves it), the MAT-file with scipy's default
+//! `scipy.io.loadmat(path)` (no options: every variable's dtype is checked, float64 for doubles
+//! even when all whole, as in a trial whose base angle is all zero, and an empty trial's) and the
+//! CSV with `csv`, comparing every value with what was recorded. Needs python3 with scipy and
+//! mcap: `scripts/setup` installs them.
 #![allow(clippy::unwrap_used)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use antenna_data::record::{
-    TrialRecorder, synthetic_metadata, synthetic_segments, synthetic_servo, synthetic_stage,
+    ServoMessage, StageMessage, TrialRecorder, synthetic_metadata, synthetic_segments,
+    synthetic_servo, synthetic_stage,
 };
 use serde_json::json;
 
@@ -84,7 +87,49 @@ fn python_reads_the_mcap_the_mat_file_and_the_csv_back_exactly() {
     export(&trial, "--mat", &mat);
     export(&trial, "--csv", &csv);
 
+    // Whole numbers in every double: whole seconds, whole metres, a base angle of zero.
+    let whole_trial = dir.join("whole.mcap");
+    let (whole_polls, whole_servo) = (50, 5);
+    let mut recorder = TrialRecorder::create(&whole_trial, &metadata).unwrap();
+    for i in 0..whole_polls {
+        let mut poll = synthetic_segments(i, 3);
+        poll.t_s = i as f64;
+        recorder.record_segments(&poll).unwrap();
+        let t_s = i as f64;
+        recorder
+            .record_stage(&StageMessage {
+                t_s,
+                position_m: t_s,
+            })
+            .unwrap();
+        if i < whole_servo {
+            recorder
+                .record_servo(&ServoMessage {
+                    t_s,
+                    base_angle_rad: 0.0,
+                })
+                .unwrap();
+        }
+    }
+    recorder.finish().unwrap();
+    let whole_mat = dir.join("whole.mat");
+    export(&whole_trial, "--mat", &whole_mat);
+
+    let empty_trial = dir.join("empty.mcap");
+    TrialRecorder::create(&empty_trial, &metadata)
+        .unwrap()
+        .finish()
+        .unwrap();
+    let empty_mat = dir.join("empty.mat");
+    export(&empty_trial, "--mat", &empty_mat);
+
     let messages: Vec<_> = (0..polls).map(|i| synthetic_segments(i, 9)).collect();
+    let per_sample = |f: &dyn Fn(&antenna_data::record::SegmentSample) -> serde_json::Value| {
+        messages
+            .iter()
+            .map(|m| m.segments.iter().map(f).collect::<Vec<_>>())
+            .collect::<Vec<_>>()
+    };
     let stage: Vec<_> = (0..polls.div_ceil(10)).map(synthetic_stage).collect();
     let servo: Vec<_> = (0..polls.div_ceil(20)).map(synthetic_servo).collect();
     let expected = json!({
@@ -103,6 +148,12 @@ fn python_reads_the_mcap_the_mat_file_and_the_csv_back_exactly() {
         "touch": messages.iter()
             .map(|m| m.segments.iter().map(|s| s.touch).collect::<Vec<_>>())
             .collect::<Vec<_>>(),
+        "angle_counts": per_sample(&|s| json!(s.angle_counts)),
+        "ok": per_sample(&|s| json!(s.ok)),
+        "nack": per_sample(&|s| json!(s.nack)),
+        "pec_error": per_sample(&|s| json!(s.pec_error)),
+        "bus_error": per_sample(&|s| json!(s.bus_error)),
+        "stale": per_sample(&|s| json!(s.stale)),
         "stage_t_s": stage.iter().map(|s| s.t_s).collect::<Vec<_>>(),
         "stage_position_m": stage.iter().map(|s| s.position_m).collect::<Vec<_>>(),
         "servo_t_s": servo.iter().map(|s| s.t_s).collect::<Vec<_>>(),
@@ -110,6 +161,13 @@ fn python_reads_the_mcap_the_mat_file_and_the_csv_back_exactly() {
         "trial": metadata.trial,
         "config": metadata.config,
         "notes": metadata.notes,
+        "whole": {
+            "mat": whole_mat,
+            "servo": whole_servo,
+            "t_s": (0..whole_polls).map(|i| i as f64).collect::<Vec<_>>(),
+            "stage_position_m": (0..whole_polls).map(|i| i as f64).collect::<Vec<_>>(),
+        },
+        "empty_mat": empty_mat,
     });
     let sidecar = dir.join("expected.json");
     std::fs::write(&sidecar, serde_json::to_string(&expected).unwrap()).unwrap();
