@@ -10,7 +10,9 @@
 //! carries out the user's view, export and control actions. A sweep is shown whole as it is
 //! solved (the chain at the newest step) until the user moves the view, then played, paused
 //! and scrubbed like a recording; a follow run the same way, with its top view (the robot, its
-//! antenna, the walls, the estimator's points) and its distance error against time.
+//! antenna, the walls, the estimator's points) and its distance error against time. Live, the
+//! daemon's wall estimate at the cursor is drawn over the chain ([`attach_estimate`]) and its
+//! distance plotted against time ([`EstimatePanel`]).
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -21,6 +23,7 @@ use sim_core::CoverageSettings;
 
 use crate::client::{ClientOptions, Command, ConnectionState, LiveClient, ReplyRecord};
 use crate::error::MonitorError;
+use crate::estimate::EstimateHistory;
 use crate::export::{FigureInput, export_csv, export_figure};
 use crate::follow::{FollowRunState, FollowWorker, MAX_FOLLOW_STEPS};
 use crate::frame::{ChainFrame, SegmentState};
@@ -28,8 +31,8 @@ use crate::history::{Health, History};
 use crate::mapping::CoverageCache;
 use crate::panels::chain::WallMap;
 use crate::panels::{
-    ChainPanel, ControlsPanel, FollowErrorPanel, FollowInfoPanel, HealthPanel, JointAnglesPanel,
-    StageInfo, StagePanel, TimelineAction, TimelinePanel, TouchRasterPanel,
+    ChainPanel, ControlsPanel, EstimatePanel, FollowErrorPanel, FollowInfoPanel, HealthPanel,
+    JointAnglesPanel, StageInfo, StagePanel, TimelineAction, TimelinePanel, TouchRasterPanel,
 };
 use crate::prediction::{BasePose, PredictionWorker, predictor_for};
 use crate::recording::{RecordedTrial, open_trial};
@@ -142,6 +145,7 @@ struct Panels {
     timeline: TimelinePanel,
     follow_error: FollowErrorPanel,
     follow_info: FollowInfoPanel,
+    estimate: EstimatePanel,
 }
 
 /// What one frame reads from the source.
@@ -152,6 +156,8 @@ struct DataRef<'a> {
     sweep: Option<&'a SweepRunState>,
     /// A closed-loop run: the chain is its step at the cursor, with the robot.
     follow: Option<&'a FollowRunState>,
+    /// antennad's wall estimates (live).
+    estimates: Option<&'a EstimateHistory>,
     stage_range_m: Option<(f64, f64)>,
     mount_angle_rad: f64,
     addresses: &'a [u8],
@@ -188,6 +194,7 @@ impl MonitorApp {
                 timeline: TimelinePanel::new(options.history_s),
                 follow_error: FollowErrorPanel,
                 follow_info: FollowInfoPanel,
+                estimate: EstimatePanel,
             },
             prediction: None,
             address: options
@@ -597,6 +604,7 @@ impl MonitorApp {
                     rig: state.rig.as_ref(),
                     sweep: None,
                     follow: None,
+                    estimates: Some(&state.estimates),
                     stage_range_m: state.rig.as_ref().and_then(|r| r.stage_range_m),
                     mount_angle_rad: state.rig.as_ref().map_or(0.0, |r| r.base_mount_angle_rad),
                     addresses: &state.segment_addresses,
@@ -625,6 +633,7 @@ impl MonitorApp {
                     rig: Some(&trial.rig),
                     sweep: None,
                     follow: None,
+                    estimates: None,
                     stage_range_m: trial.rig.stage_range_m,
                     mount_angle_rad: trial.rig.base_mount_angle_rad,
                     addresses: &trial.segment_addresses,
@@ -653,6 +662,7 @@ impl MonitorApp {
                     rig: None,
                     sweep: Some(&state),
                     follow: None,
+                    estimates: None,
                     stage_range_m: state.track_m,
                     mount_angle_rad: state.chain.base_angle_rad(),
                     addresses: &[],
@@ -691,6 +701,7 @@ impl MonitorApp {
                     rig: None,
                     sweep: None,
                     follow: Some(&state),
+                    estimates: None,
                     stage_range_m: None,
                     mount_angle_rad: 0.0,
                     addresses: &[],
@@ -827,6 +838,15 @@ impl MonitorApp {
                                     state.lagged_dropped
                                 ));
                             }
+                            if let (n @ 1.., Some(kind)) = &state.unknown_lines {
+                                ui.label(
+                                    RichText::new(format!(
+                                        "skipped {n} line(s) of message types not known \
+                                         here (last: {kind}; from a newer daemon)"
+                                    ))
+                                    .weak(),
+                                );
+                            }
                             ui.label(format!(
                                 "{} samples held, {} received",
                                 state.history.len(),
@@ -923,6 +943,13 @@ impl MonitorApp {
                 .and_then(Result::ok),
             (None, Some(rig), Some(i)) => rig.frame_at(history, i).ok(),
             _ => None,
+        };
+        let measured = match (measured, data.estimates, data.rig) {
+            (Some(mut frame), Some(estimates), Some(rig)) => {
+                attach_estimate(&mut frame, estimates, rig, history);
+                Some(frame)
+            }
+            (measured, ..) => measured,
         };
         let (predicted, prediction_note) = match (data.rig, &measured) {
             (Some(rig), Some(m)) => self.predicted(rig, m),
@@ -1094,6 +1121,8 @@ impl MonitorApp {
                 let height = ui.available_height();
                 let (chain_share, angles_share) = if data.follow.is_some() {
                     (0.45, 0.18)
+                } else if data.estimates.is_some() {
+                    (0.45, 0.2)
                 } else {
                     (0.5, 0.3)
                 };
@@ -1110,6 +1139,13 @@ impl MonitorApp {
                 if let Some(follow) = data.follow {
                     ui.allocate_ui(egui::vec2(width, height * 0.22), |ui| {
                         self.panels.follow_error.ui(ui, follow, &mut self.view);
+                    });
+                }
+                if let Some(estimates) = data.estimates {
+                    ui.allocate_ui(egui::vec2(width, height * 0.17), |ui| {
+                        self.panels
+                            .estimate
+                            .ui(ui, estimates, &mut self.view, latest);
                     });
                 }
                 ui.allocate_ui(egui::vec2(width, height * angles_share), |ui| {
@@ -1283,6 +1319,53 @@ impl MonitorApp {
         };
         self.exports.push(record.clone());
         Ok(record)
+    }
+}
+
+/// Puts on `frame` (live, drawn with `rig` from `history`) the newest of `estimates` made
+/// at or before its instant: the estimated wall in the track frame, from the base pivot where
+/// the stage was at the estimate's poll, along the stage's travel, toward the wall's side
+/// ([`RigGeometry::wall_side`]), spanning the chain; or why there is none.
+pub fn attach_estimate(
+    frame: &mut ChainFrame,
+    estimates: &EstimateHistory,
+    rig: &RigGeometry,
+    history: &History,
+) {
+    let Some(estimate) = estimates.at(frame.t_s) else {
+        frame.estimate_note = Some(if estimates.received() == 0 {
+            "the daemon sends none".to_owned()
+        } else {
+            "none yet at this instant".to_owned()
+        });
+        return;
+    };
+    let stage_position_m = history
+        .index_at(estimate.t_s)
+        .and_then(|i| history.sample(i))
+        .filter(|s| s.seq == Some(estimate.seq))
+        .map_or(frame.stage_position_m, |s| s.stage_position_m);
+    let base_m = rig.base_m(stage_position_m);
+    let direction = rig.travel_direction();
+    // The chain's extent along the travel, from the base pivot, with a margin.
+    let (lo, hi) = frame
+        .joints_m
+        .iter()
+        .map(|p| (p[0] - base_m[0]) * direction[0] + (p[1] - base_m[1]) * direction[1])
+        .fold((0.0_f64, 0.0_f64), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    let margin_m = 0.25 * (hi - lo).max(0.04);
+    frame.estimated_wall = estimate.wall_in_track_m(
+        base_m,
+        direction,
+        rig.wall_side(),
+        (lo - margin_m, hi + margin_m),
+    );
+    if frame.estimated_wall.is_none() {
+        frame.estimate_note = Some(format!(
+            "{} ({})",
+            estimate.reason.as_deref().unwrap_or("no reason given"),
+            estimate.estimator
+        ));
     }
 }
 

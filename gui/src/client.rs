@@ -2,7 +2,11 @@
 //!
 //! The reader thread connects, reads the newline-delimited JSON, appends every `samples`
 //! line to the shared [`History`] (bounded: the user's history window times the poll rate),
-//! keeps the latest `status`, counts `lagged` drops and files `reply` lines. When the daemon
+//! keeps the latest `status`, the wall estimates of `estimate` lines ([`EstimateHistory`],
+//! bounded by the same window), counts `lagged` drops and files `reply` lines. A line of a
+//! type it does not know (a newer daemon's message, added under the protocol's additive rule)
+//! is skipped and counted ([`LiveState::unknown_lines`]): not an error, and the connection
+//! goes on. When the daemon
 //! goes away it says so in [`ConnectionState::Disconnected`] and reconnects with exponential
 //! backoff. The UI thread only locks [`LiveState`] for as long as it reads it and hands
 //! control requests to a channel that the reader thread writes out: nothing here waits on the
@@ -26,6 +30,7 @@ use antenna_data::stream::{
 };
 
 use crate::error::MonitorError;
+use crate::estimate::{Estimate, EstimateHistory};
 use crate::history::{Health, History, Sample, SegmentReading};
 use crate::rig::RigGeometry;
 
@@ -35,6 +40,9 @@ const TOUCH_BITS_MASK: u8 = 0x0F;
 const REPLIES_KEPT: usize = 64;
 /// How long a read waits before the thread looks at its stop flag and its outgoing queue.
 const READ_POLL: Duration = Duration::from_millis(20);
+/// The server message types this monitor reads (`docs/stream-protocol.md`); a line of
+/// another type is a newer daemon's message and is skipped.
+pub const KNOWN_TYPES: [&str; 6] = ["hello", "samples", "status", "estimate", "lagged", "reply"];
 
 /// How to connect.
 #[derive(Debug, Clone)]
@@ -215,6 +223,12 @@ pub struct LiveState {
     pub connections: u32,
     /// Lines that did not parse (protocol errors), and the last one's error.
     pub bad_lines: (u64, Option<String>),
+    /// Lines of a message type this monitor does not know (a newer daemon's), skipped: how
+    /// many, and the last one's type.
+    pub unknown_lines: (u64, Option<String>),
+    /// The daemon's wall estimates (`estimate` lines), the newest last, bounded by the
+    /// history window.
+    pub estimates: EstimateHistory,
     history_s: f64,
     pending: BTreeMap<u64, &'static str>,
 }
@@ -232,6 +246,8 @@ impl LiveState {
             replies: Vec::new(),
             connections: 0,
             bad_lines: (0, None),
+            unknown_lines: (0, None),
+            estimates: EstimateHistory::new(history_s, (history_s * 1000.0).ceil() as usize),
             history_s,
             pending: BTreeMap::new(),
         }
@@ -246,6 +262,58 @@ impl LiveState {
         let hz = self.rig.as_ref().map_or(1000.0, |r| r.poll_hz);
         (self.history_s * hz).ceil().max(1.0) as usize
     }
+
+    /// Bounds the samples and the estimates by the history window (estimates come at most
+    /// once a poll).
+    fn apply_window(&mut self) {
+        let capacity = self.capacity();
+        self.history.set_capacity(capacity);
+        self.estimates.set_window(self.history_s, capacity);
+    }
+}
+
+/// What one line of the stream is.
+#[derive(Debug)]
+enum Line {
+    /// A message this monitor reads.
+    Message(StreamMessage),
+    /// A message of a type it does not know (its `type`): skipped.
+    Unknown(String),
+    /// Not a message of the protocol (why).
+    Bad(String),
+}
+
+/// Reads one line (without or with its newline).
+fn parse_line(line: &[u8]) -> Line {
+    match serde_json::from_slice::<StreamMessage>(line) {
+        Ok(message) => Line::Message(message),
+        Err(e) => {
+            // Only on failure: is it an object whose `type` names a message not known here?
+            let kind = serde_json::from_slice::<serde_json::Value>(line)
+                .ok()
+                .and_then(|v| v.get("type")?.as_str().map(str::to_owned));
+            match kind {
+                Some(kind) if !KNOWN_TYPES.contains(&kind.as_str()) => Line::Unknown(kind),
+                _ => Line::Bad(e.to_string()),
+            }
+        }
+    }
+}
+
+/// Applies one parsed line to `state`; an error ends the connection.
+fn on_line(state: &mut LiveState, line: Line, greeted: &mut bool) -> Result<(), String> {
+    match line {
+        Line::Message(message) => on_message(state, message, greeted)?,
+        Line::Unknown(kind) => {
+            state.unknown_lines.0 += 1;
+            state.unknown_lines.1 = Some(kind);
+        }
+        Line::Bad(error) => {
+            state.bad_lines.0 += 1;
+            state.bad_lines.1 = Some(error);
+        }
+    }
+    Ok(())
 }
 
 /// The stream client (see the module documentation).
@@ -301,8 +369,7 @@ impl LiveClient {
     pub fn set_history_s(&self, history_s: f64) {
         let mut state = self.lock();
         state.history_s = history_s.max(0.001);
-        let capacity = state.capacity();
-        state.history.set_capacity(capacity);
+        state.apply_window();
     }
 
     /// Sends a control command with `token`; returns its request id. Refused here, with
@@ -463,20 +530,11 @@ fn serve(
         match reader.read_until(b'\n', &mut line) {
             Ok(0) => return "the daemon closed the connection".to_owned(),
             Ok(_) if line.last() == Some(&b'\n') => {
-                let result = serde_json::from_slice::<StreamMessage>(&line);
+                let parsed = parse_line(&line);
                 line.clear();
-                match result {
-                    Ok(message) => {
-                        let mut state = lock();
-                        if let Err(e) = on_message(&mut state, message, &mut greeted) {
-                            return e;
-                        }
-                    }
-                    Err(e) => {
-                        let mut state = lock();
-                        state.bad_lines.0 += 1;
-                        state.bad_lines.1 = Some(e.to_string());
-                    }
+                let mut state = lock();
+                if let Err(e) = on_line(&mut state, parsed, &mut greeted) {
+                    return e;
                 }
             }
             // A partial line: the rest comes with the next read.
@@ -518,8 +576,7 @@ fn on_message(
                 state.history = History::new(segment_count, 1);
             }
             state.rig = Some(geometry);
-            let capacity = state.capacity();
-            state.history.set_capacity(capacity);
+            state.apply_window();
             state.segment_addresses = segment_addresses;
             state.connections += 1;
             state.connection = ConnectionState::Connected { daemon };
@@ -571,8 +628,12 @@ fn on_message(
             });
         }
         StreamMessage::Lagged { dropped, .. } => state.lagged_dropped += dropped,
-        // Shown by the monitor's estimate view (issue #48; added by its own change).
-        StreamMessage::Estimate(_) => {}
+        StreamMessage::Estimate(estimate) => {
+            if !*greeted {
+                return Err("estimate before hello: not an antennad stream".to_owned());
+            }
+            state.estimates.push(Estimate::from(estimate));
+        }
         StreamMessage::Reply(reply) => {
             let command = reply
                 .id
@@ -637,10 +698,103 @@ mod tests {
         let mut state = LiveState::new(1.0);
         let mut greeted = false;
         for line in lines {
-            let message: StreamMessage = serde_json::from_str(line).unwrap();
-            on_message(&mut state, message, &mut greeted).unwrap();
+            on_line(&mut state, parse_line(line.as_bytes()), &mut greeted).unwrap();
         }
         state
+    }
+
+    const HELLO: &str = r#"{"type":"hello","protocol_version":1,"daemon":"antennad 0.1.0","segment_count":2,"segment_addresses":[33,34]}"#;
+
+    fn samples_line(seq: u64) -> String {
+        format!(
+            r#"{{"type":"samples","seq":{seq},"t_ns":{},"segments":[{{"address":33,"angle_rad":0.1,"contact":false,"touch_bits":0,"counter":null,"error":null}},{{"address":34,"angle_rad":0.2,"contact":false,"touch_bits":0,"counter":null,"error":null}}],"stage_position_m":0.1,"base_angle_deg":0.0}}"#,
+            seq * 1_000_000
+        )
+    }
+
+    /// A newer daemon's message type between samples is skipped and counted, not a protocol
+    /// error: the samples after it keep coming in.
+    #[test]
+    fn a_message_type_not_known_is_skipped_and_counted() {
+        let (first, second) = (samples_line(1), samples_line(2));
+        let state = receive(&[HELLO, &first, r#"{"type":"future_thing","x":1}"#, &second]);
+        assert_eq!(state.history.len(), 2);
+        assert_eq!(state.history.sample(1).unwrap().seq, Some(2));
+        assert_eq!(state.unknown_lines, (1, Some("future_thing".to_owned())));
+        assert_eq!(state.bad_lines.0, 0);
+        assert!(matches!(
+            state.connection,
+            ConnectionState::Connected { .. }
+        ));
+    }
+
+    /// A line of a type known here that does not read, a line without a `type` and one that
+    /// is not JSON are protocol errors (counted, the connection goes on), not unknown types.
+    #[test]
+    fn known_types_that_do_not_read_are_bad_lines() {
+        for kind in KNOWN_TYPES {
+            let line = format!(r#"{{"type":"{kind}","seq":"not a number"}}"#);
+            assert!(
+                matches!(parse_line(line.as_bytes()), Line::Bad(_)),
+                "{line}"
+            );
+        }
+        for line in [r#"{"x":1}"#, "not json", r#"{"type":3}"#] {
+            assert!(
+                matches!(parse_line(line.as_bytes()), Line::Bad(_)),
+                "{line}"
+            );
+        }
+        let first = samples_line(1);
+        let state = receive(&[HELLO, &first, r#"{"type":"samples","seq":"x"}"#]);
+        assert_eq!(state.bad_lines.0, 1);
+        assert_eq!(state.unknown_lines.0, 0);
+        assert_eq!(state.history.len(), 1);
+    }
+
+    /// Every message this monitor reads has its type among [`KNOWN_TYPES`].
+    #[test]
+    fn the_known_types_are_the_messages_read() {
+        let estimate = r#"{"type":"estimate","seq":2,"t_ns":2000000,"estimated_ns":2000100,"estimator":"bend","distance_m":0.3,"angle_rad":null,"preview_m":0.05}"#;
+        let lagged = r#"{"type":"lagged","dropped":3}"#;
+        let reply = r#"{"type":"reply","id":1,"ok":true,"message":"ok"}"#;
+        let status = r#"{"type":"status","t_ns":1,"trial":null,"segments":[],"note":null}"#;
+        let first = samples_line(1);
+        for line in [HELLO, first.as_str(), estimate, lagged, reply, status] {
+            let Line::Message(message) = parse_line(line.as_bytes()) else {
+                panic!("{line} does not read");
+            };
+            let value = serde_json::to_value(&message).unwrap();
+            assert!(KNOWN_TYPES.contains(&value["type"].as_str().unwrap()));
+        }
+    }
+
+    /// `estimate` lines are kept, the newest last; one without an estimate says why, and one
+    /// before `hello` ends the connection as samples do.
+    #[test]
+    fn estimates_are_kept_with_their_reason() {
+        let first = samples_line(1);
+        let state = receive(&[
+            HELLO,
+            &first,
+            r#"{"type":"estimate","seq":1,"t_ns":1000000,"estimated_ns":1000050,"estimator":"contact-line","distance_m":null,"angle_rad":null,"preview_m":null,"reason":"no contact in the window","true_distance_m":0.31}"#,
+            r#"{"type":"estimate","seq":1,"t_ns":1000000,"estimated_ns":1000080,"estimator":"contact-line","distance_m":0.3,"angle_rad":0.1,"preview_m":0.05,"true_distance_m":0.31,"true_angle_rad":0.1}"#,
+        ]);
+        assert_eq!(state.estimates.len(), 2);
+        let first = state.estimates.iter().next().unwrap();
+        assert_eq!(first.reason.as_deref(), Some("no contact in the window"));
+        assert!(!first.has_estimate());
+        let latest = state.estimates.latest().unwrap();
+        assert_eq!(latest.distance_m, Some(0.3));
+        assert!((latest.error_m().unwrap() + 0.01).abs() < 1e-12);
+        assert!((latest.t_s - 1e-3).abs() < 1e-15);
+        let mut state = LiveState::new(1.0);
+        let mut greeted = false;
+        let early = parse_line(
+            br#"{"type":"estimate","seq":1,"t_ns":1,"estimated_ns":2,"estimator":"bend","distance_m":0.3,"angle_rad":null,"preview_m":0.0}"#,
+        );
+        let error = on_line(&mut state, early, &mut greeted).unwrap_err();
+        assert!(error.contains("estimate before hello"), "{error}");
     }
 
     /// An older daemon's lines (no `rig` in `hello`; no `touch_bits`, no `stale` in

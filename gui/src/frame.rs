@@ -10,7 +10,8 @@
 //! ([`ChainFrame::path_m`]: a sweep's straight track in any direction, a follow run's path of
 //! the robot so far), and a closed-loop run's frame the robot's body ([`BodyDrawing`]: its
 //! footprint at its pose and heading), the estimator's points and the whole run's extent, so
-//! that sweeps and follow runs draw through the same chain panel.
+//! that sweeps and follow runs draw through the same chain panel. A live frame may carry
+//! antennad's wall estimate ([`ChainFrame::estimated_wall`], [`crate::estimate`]).
 //!
 //! Where a touch switch sits is the frame's to say, the same for every source:
 //! [`ChainFrame::lit_switches`] places each switch that fires at sim-core's place for it,
@@ -19,6 +20,7 @@
 
 use sim_core::{SWITCHES_PER_SEGMENT, TouchLayout};
 
+use crate::estimate::EstimatedWall;
 use crate::history::Health;
 
 /// A point in the track frame, metres: `[x, y]`.
@@ -156,6 +158,11 @@ pub struct ChainFrame {
     /// The whole run's extent `(min, max)` (every pose's footprint and antenna reach), for a
     /// view that fits the run; `None`: fit the frame ([`ChainFrame::bounds_m`]).
     pub run_extent_m: Option<(PointM, PointM)>,
+    /// antennad's live wall estimate at this instant, drawn over the chain (live only).
+    pub estimated_wall: Option<EstimatedWall>,
+    /// Why no estimated wall is drawn, when the source estimates (live: the daemon's reason,
+    /// or that it sends no estimates).
+    pub estimate_note: Option<String>,
 }
 
 /// How far a second frame's joints are from a first's.

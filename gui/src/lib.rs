@@ -7,7 +7,8 @@
 //! scene run by sim-core's loop, or the lines of `antenna follow --jsonl`), keeps a bounded
 //! [`history`] of every poll, and draws ([`panels`])
 //! the chain with its touches, walls, base and stage, sim-core's prediction for the same
-//! base pose ([`prediction`]) and the difference, joint-angle time series, a touch raster,
+//! base pose ([`prediction`]) and the difference, antennad's live wall estimate over the chain
+//! and its distance against time ([`estimate`]), joint-angle time series, a touch raster,
 //! segment health, stage and servo state, and the controls (with the daemon's token). The
 //! view ([`view`]) pauses, zooms and scrubs while acquisition goes on, follows the newest
 //! sample, plays a recording or a sweep, and exports ([`export`]) the visible range to CSV
@@ -64,6 +65,7 @@
 pub mod app;
 pub mod client;
 pub mod error;
+pub mod estimate;
 pub mod export;
 pub mod follow;
 pub mod frame;

@@ -11,6 +11,7 @@ use sim_core::sweep::SweepScene;
 use sim_core::{Chain, Frame, Wall, frame_poses};
 
 use crate::error::MonitorError;
+use crate::estimate::WallSide;
 use crate::frame::{ChainFrame, PointM, SegmentState};
 use crate::history::{Health, History};
 use crate::sweep::wall_polyline_m;
@@ -160,6 +161,37 @@ impl RigGeometry {
         [p.x, p.y]
     }
 
+    /// The unit direction the stage carries the base pivot along (the estimate's x axis).
+    pub fn travel_direction(&self) -> [f64; 2] {
+        [self.direction.x, self.direction.y]
+    }
+
+    /// Which side of the stage's travel the wall is on (the estimate's y axis, antennad's
+    /// `[estimate] wall_side`, which its `hello` does not carry): the side of the scene's
+    /// nearest wall to the base pivot (the stage in the middle of its range), left without a
+    /// wall.
+    pub fn wall_side(&self) -> WallSide {
+        let middle = self.stage_range_m.map(|(lo, hi)| (lo + hi) / 2.0);
+        let base = self.base_m(middle);
+        let base = Vector2::new(base[0], base[1]);
+        let nearest = self
+            .walls
+            .iter()
+            .map(|w| w.signed_distance(&base))
+            .filter(|p| p.gap_m.is_finite())
+            .min_by(|a, b| a.gap_m.abs().total_cmp(&b.gap_m.abs()));
+        let Some(point) = nearest else {
+            return WallSide::Left;
+        };
+        let to_wall = point.closest_m - base;
+        let cross = self.direction.x * to_wall.y - self.direction.y * to_wall.x;
+        if cross < 0.0 {
+            WallSide::Right
+        } else {
+            WallSide::Left
+        }
+    }
+
     /// Segments (flexible joints).
     pub fn segment_count(&self) -> usize {
         self.chain.n()
@@ -293,6 +325,20 @@ pub(crate) mod tests {
             assert!(d.gap_m.abs() < 1e-12);
         }
         assert!(rig.walls[0].signed_distance(&Vector2::new(0.1, 0.0)).gap_m > 0.0);
+    }
+
+    /// The default rig's wall is on the left of the stage's travel (its y > 0); the same
+    /// scene travelling the other way has it on the right.
+    #[test]
+    fn the_wall_side_is_the_scenes() {
+        let rig = default_rig();
+        assert_eq!(rig.travel_direction(), [1.0, 0.0]);
+        assert_eq!(rig.wall_side(), WallSide::Left);
+        let mut reversed = rig.clone();
+        reversed.direction = -reversed.direction;
+        assert_eq!(reversed.wall_side(), WallSide::Right);
+        let bare = RigGeometry::fallback(3).unwrap();
+        assert_eq!(bare.wall_side(), WallSide::Left);
     }
 
     /// A `hello` from before the scene (issue #46) still gives the chain to draw, no walls.

@@ -9,6 +9,11 @@
 //! heading (red while it overlaps a wall), with the estimator's points and the estimated wall
 //! point. Such a view either follows the robot or fits the whole run ([`TopView`]).
 //!
+//! Live, antennad's wall estimate ([`ChainFrame::estimated_wall`]) is drawn over the chain
+//! when **estimate** is ticked: the estimated wall as a bluish green line (dashed when the
+//! estimator gives no angle: drawn parallel to the stage's travel), a cross where its distance
+//! is measured (the preview point), and the reason in the legend when there is no estimate.
+//!
 //! Touches are drawn from the frame alone, so live, recorded and simulated chains show them
 //! the same way: a link whose segment has any touch bit set is drawn red, and each switch
 //! that fires is a dot at its place along the link ([`ChainFrame::lit_switches`]); the
@@ -63,6 +68,8 @@ pub struct ChainPanel {
     pub show_difference: bool,
     /// Draw a sweep's wall map.
     pub show_map: bool,
+    /// Draw antennad's wall estimate (live).
+    pub show_estimate: bool,
     /// A moving robot's view: following it, or the whole run.
     pub top_view: TopView,
 }
@@ -82,6 +89,7 @@ impl Default for ChainPanel {
             show_prediction: true,
             show_difference: true,
             show_map: true,
+            show_estimate: true,
             top_view: TopView::FollowRobot,
         }
     }
@@ -157,6 +165,9 @@ impl ChainPanel {
             }
             ui.checkbox(&mut self.show_prediction, "prediction");
             ui.checkbox(&mut self.show_difference, "difference");
+            if measured.is_some_and(|m| m.estimated_wall.is_some() || m.estimate_note.is_some()) {
+                ui.checkbox(&mut self.show_estimate, "estimate");
+            }
             if let Some(map) = map {
                 if ui.checkbox(&mut self.show_map, "wall map").changed() {
                     ui.ctx().request_repaint();
@@ -277,6 +288,24 @@ impl ChainPanel {
                 to.pos(measured.base_m),
                 ui.visuals().strong_text_color(),
             );
+        }
+        let estimated_wall = measured
+            .estimated_wall
+            .as_ref()
+            .filter(|_| self.show_estimate);
+        if let Some(wall) = estimated_wall {
+            let ends = wall.ends_m.map(|p| to.pos(p));
+            let stroke = Stroke::new(3.0, ESTIMATE_COLOUR);
+            if wall.angle_known {
+                painter.line_segment(ends, stroke);
+            } else {
+                painter.add(Shape::dashed_line(&ends, stroke, 10.0, 6.0));
+            }
+            let at = to.pos(wall.at_m);
+            let r = 6.0;
+            let cross = Stroke::new(2.0, ESTIMATE_COLOUR);
+            painter.line_segment([at + Vec2::new(-r, -r), at + Vec2::new(r, r)], cross);
+            painter.line_segment([at + Vec2::new(-r, r), at + Vec2::new(r, -r)], cross);
         }
         let base = to.pos(measured.base_m);
         if let Some(body) = &measured.body {
@@ -424,6 +453,24 @@ impl ChainPanel {
         }
         if predicted.is_some() {
             legend.push_str(&format!("\norange dashed: predicted ({model})"));
+        }
+        if let Some(wall) = estimated_wall {
+            legend.push_str(&format!(
+                "\ngreen{}: the estimated wall ({}{}), cross: its distance at the preview",
+                if wall.angle_known { "" } else { " dashed" },
+                wall.estimator,
+                if wall.angle_known {
+                    ""
+                } else {
+                    ": no angle, drawn along the travel"
+                }
+            ));
+        } else if let Some(note) = measured
+            .estimate_note
+            .as_ref()
+            .filter(|_| self.show_estimate)
+        {
+            legend.push_str(&format!("\nno wall estimate: {note}"));
         }
         if measured.body.is_some() {
             legend.push_str(

@@ -3,6 +3,7 @@
 
 pub mod chain;
 pub mod controls;
+pub mod estimate;
 pub mod follow_error;
 pub mod follow_info;
 pub mod health;
@@ -13,6 +14,7 @@ pub mod touch_raster;
 
 pub use chain::ChainPanel;
 pub use controls::ControlsPanel;
+pub use estimate::EstimatePanel;
 pub use follow_error::FollowErrorPanel;
 pub use follow_info::FollowInfoPanel;
 pub use health::HealthPanel;

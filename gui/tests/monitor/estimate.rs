@@ -1,0 +1,170 @@
+//! The live wall estimate and message types the monitor does not know, against a fake
+//! antennad: a loopback server that writes a `hello` with the simulated rig's geometry, then
+//! samples, `estimate` lines and a line of a type from the future, as a newer daemon would.
+#![allow(clippy::unwrap_used)]
+
+use std::io::{Read, Write};
+use std::net::TcpListener;
+use std::thread::JoinHandle;
+
+use crate::support::{PATIENCE_S, expect_label, harness, step_until};
+use antenna_data::stream::{EstimateMessage, PROTOCOL_VERSION, SegmentSample, StreamMessage};
+use antenna_monitor::app::attach_estimate;
+use antenna_monitor::client::ConnectionState;
+use antenna_monitor::estimate::WallSide;
+use antenna_monitor::{AppOptions, MonitorApp};
+use host_daemon::service::config::Config;
+
+/// Polls the fake daemon sends.
+const POLLS: u64 = 400;
+/// The stage's position throughout, metres.
+const STAGE_M: f64 = 0.1;
+
+/// One poll of the default rig's 8 segments, straight and untouched, the stage at
+/// [`STAGE_M`].
+fn samples(seq: u64) -> StreamMessage {
+    StreamMessage::Samples {
+        seq,
+        t_ns: seq * 1_000_000,
+        segments: (0x20..0x28)
+            .map(|address| SegmentSample {
+                address,
+                angle_rad: Some(0.0),
+                contact: Some(false),
+                touch_bits: Some(0),
+                counter: Some(seq as u32),
+                error: None,
+                stale: false,
+            })
+            .collect(),
+        stage_position_m: Some(STAGE_M),
+        base_angle_deg: Some(0.0),
+    }
+}
+
+/// The estimate made at poll `seq`: none before poll 100 (with the daemon's reason), then a
+/// wall 350 mm away at 50 mm ahead, at 0.1 rad; the truth 360 mm throughout.
+fn estimate(seq: u64) -> StreamMessage {
+    let known = seq >= 100;
+    StreamMessage::Estimate(EstimateMessage {
+        seq,
+        t_ns: seq * 1_000_000,
+        estimated_ns: seq * 1_000_000 + 20_000,
+        estimator: "contact-line".to_owned(),
+        distance_m: known.then_some(0.35),
+        angle_rad: known.then_some(0.1),
+        preview_m: known.then_some(0.05),
+        reason: (!known).then(|| "no contact in the window".to_owned()),
+        true_distance_m: Some(0.36),
+        true_angle_rad: Some(0.1),
+    })
+}
+
+/// Serves one connection: `hello`, then [`POLLS`] polls with an estimate every 10th and a
+/// `future_thing` line after poll 5; then holds the connection open until the client closes
+/// it. Returns the server's address and its thread.
+fn fake_daemon() -> (String, JoinHandle<()>) {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let thread = std::thread::spawn(move || {
+        let (mut stream, _) = listener.accept().unwrap();
+        let config = Config::default();
+        let hello = StreamMessage::Hello {
+            protocol_version: PROTOCOL_VERSION,
+            daemon: "antennad 9.9.9-future".to_owned(),
+            segment_count: 8,
+            segment_addresses: (0x20..0x28).collect(),
+            rig: Some(host_daemon::service::daemon::rig_info(&config)),
+        };
+        let mut text = serde_json::to_string(&hello).unwrap() + "\n";
+        for seq in 1..=POLLS {
+            text += &(serde_json::to_string(&samples(seq)).unwrap() + "\n");
+            if seq % 10 == 0 {
+                text += &(serde_json::to_string(&estimate(seq)).unwrap() + "\n");
+            }
+            if seq == 5 {
+                text += "{\"type\":\"future_thing\",\"x\":1}\n";
+            }
+        }
+        stream.write_all(text.as_bytes()).unwrap();
+        // Until the monitor goes: read (and drop) whatever it sends.
+        let mut buffer = [0u8; 1024];
+        while matches!(stream.read(&mut buffer), Ok(n) if n > 0) {}
+    });
+    (address, thread)
+}
+
+#[test]
+fn an_unknown_message_type_is_skipped_and_the_estimate_is_shown() {
+    let (address, server) = fake_daemon();
+    let app = MonitorApp::new(AppOptions {
+        connect: Some(address),
+        history_s: 30.0,
+        ..AppOptions::default()
+    });
+    let mut harness = harness(app);
+    step_until(&mut harness, "every poll", PATIENCE_S, |h| {
+        h.state().live().unwrap().lock().history.len() == POLLS as usize
+    });
+    {
+        let state = harness.state().live().unwrap().lock();
+        // The future line was skipped and counted: not a protocol error, no disconnect.
+        assert_eq!(state.unknown_lines, (1, Some("future_thing".to_owned())));
+        assert_eq!(state.bad_lines, (0, None));
+        assert_eq!(state.connections, 1);
+        assert!(matches!(
+            state.connection,
+            ConnectionState::Connected { .. }
+        ));
+        // Every poll after it arrived, in order.
+        let seqs: Vec<u64> = (0..state.history.len())
+            .map(|i| state.history.sample(i).unwrap().seq.unwrap())
+            .collect();
+        assert_eq!(seqs, (1..=POLLS).collect::<Vec<_>>());
+        // Every estimate, the newest last.
+        assert_eq!(state.estimates.len(), (POLLS / 10) as usize);
+        let latest = state.estimates.latest().unwrap();
+        assert_eq!(latest.seq, POLLS);
+        assert_eq!(latest.distance_m, Some(0.35));
+        // The estimated wall over the chain: from the base pivot at the stage's position, x
+        // along the travel, y toward the wall (on the left of the default rig's travel).
+        let rig = state.rig.as_ref().unwrap();
+        assert_eq!(rig.wall_side(), WallSide::Left);
+        let index = state.history.len() - 1;
+        let mut frame = rig.frame_at(&state.history, index).unwrap();
+        attach_estimate(&mut frame, &state.estimates, rig, &state.history);
+        let wall = frame.estimated_wall.clone().unwrap();
+        assert!(wall.angle_known && frame.estimate_note.is_none());
+        assert!(
+            (wall.at_m[0] - (STAGE_M + 0.05)).abs() < 1e-12 && (wall.at_m[1] - 0.35).abs() < 1e-12,
+            "{:?}",
+            wall.at_m
+        );
+        let [a, b] = wall.ends_m;
+        assert!(((b[1] - a[1]) / (b[0] - a[0]) - 0.1f64.tan()).abs() < 1e-9);
+        // The segment spans the chain along the travel.
+        let tip = frame.tip_m().unwrap();
+        assert!(a[0] < STAGE_M && b[0] > tip[0], "{a:?} {b:?} tip {tip:?}");
+        // Before poll 100 there was no estimate: the frame says why.
+        let early = state.history.index_at(0.05).unwrap();
+        let mut frame = rig.frame_at(&state.history, early).unwrap();
+        attach_estimate(&mut frame, &state.estimates, rig, &state.history);
+        assert!(frame.estimated_wall.is_none());
+        let note = frame.estimate_note.unwrap();
+        assert!(note.contains("no contact in the window"), "{note}");
+    }
+    // The panel says the estimate at the cursor (the newest poll, following).
+    expect_label(
+        &mut harness,
+        "wall estimate (contact-line): 350.0 mm, 5.7 deg at 50 mm ahead; true 360.0 mm, error -10.0 mm",
+    );
+    expect_label(&mut harness, "line(s) of message types not known here");
+    // Scrubbed to before the first estimate: the reason.
+    harness.state_mut().scrub_to(0.05);
+    expect_label(
+        &mut harness,
+        "no wall estimate (contact-line): no contact in the window",
+    );
+    drop(harness);
+    server.join().unwrap();
+}
