@@ -31,6 +31,16 @@ pub enum RecordError {
         /// What serde_json said.
         source: serde_json::Error,
     },
+    /// A Foxglove message could not be encoded.
+    #[error("{path}: {topic}: {source}")]
+    Foxglove {
+        /// The trial file.
+        path: PathBuf,
+        /// The channel.
+        topic: String,
+        /// What the encoder said.
+        source: crate::foxglove::EncodeError,
+    },
     /// A time stamp was negative or not finite (or a start time not a Unix time).
     #[error("{path}: time {t_s} s is not a finite time since the trial started")]
     BadTime {

@@ -100,6 +100,43 @@ pub struct PhysicsStepMessage {
     pub joint_angles_rad: Vec<f64>,
 }
 
+/// One wall estimate (`/antenna/estimate`): what the daemon's estimator made of the polls up
+/// to `seq`, in the carriage frame (origin at the base pivot, `x` along the stage's travel,
+/// `y` toward the wall; see [`crate::foxglove::EstimatedWall`]), and on the simulated rig the
+/// true wall at the same instant beside it.
+///
+/// (The Rust field of the angle is `wall_angle_rad`, written `angle_rad`: a struct with both
+/// `distance_m` and `angle_rad` reads as a scene's wall description, which only
+/// `antenna-scene` holds.)
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EstimateMessage {
+    /// Monotonic time since the trial started, s (the same clock as the segments): the newest
+    /// poll's.
+    pub t_s: f64,
+    /// The newest poll's `seq`.
+    pub seq: u64,
+    /// The estimator (`contact-line`, `bend`, `ideal-preview`).
+    pub estimator: String,
+    /// The wall's distance from the travel at `x = preview_m`, m; `None` when there is no
+    /// estimate (`reason` says why).
+    pub distance_m: Option<f64>,
+    /// The wall's angle to the travel, rad; `None` for an estimator that gives none (`bend`)
+    /// or when there is no estimate.
+    #[serde(rename = "angle_rad")]
+    pub wall_angle_rad: Option<f64>,
+    /// Where along the travel the distance is estimated, m from the base pivot.
+    pub preview_m: Option<f64>,
+    /// Why there is no estimate (e.g. no contact in the window).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// The true distance at the same place (the simulated rig only), m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub true_distance_m: Option<f64>,
+    /// The true angle (the simulated rig only), rad.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub true_angle_rad: Option<f64>,
+}
+
 /// Something the daemon said during the trial (`/trial/log`): a stage or servo device
 /// vanishing or coming back, a move refused, a segment's counter stopping, ...
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -1,7 +1,7 @@
 //! Trial recording: every trial to one MCAP file.
 //!
 //! MCAP (the format rosbag2 moved to) is append-only and carries its schemas: the file opens
-//! in Foxglove and PlotJuggler. Channels, all with JSON messages described by JSON schemas:
+//! in Foxglove and PlotJuggler. Channels with JSON messages described by JSON schemas:
 //!
 //! | topic | message | rate |
 //! |---|---|---|
@@ -11,6 +11,21 @@
 //! | `/antenna/servo` | [`ServoMessage`]: `t_s`, `base_angle_rad` | the servo's rate |
 //! | `/sim/physics` | [`PhysicsStepMessage`]: `t_s`, `kind` (`place`/`step`), `stage_m`, the base pose (`base_x_m`, `base_y_m`, `base_angle_rad`) and the `joint_angles_rad` it gave (simulated rig only; added with issue #46, older files have none) | every physics step |
 //! | `/trial/log` | [`LogMessage`]: `t_s`, `text` (a device vanished or came back, a move refused, a counter stopped) | when it happens |
+//! | `/antenna/estimate` | [`EstimateMessage`]: `t_s`, `seq`, `estimator`, the wall's `distance_m`, `angle_rad` and `preview_m` in the carriage frame (or a `reason`), the true ones on the simulated rig | the estimator's rate (added with issue #48) |
+//!
+//! and, beside them, Foxglove's standard schemas (protobuf, [`crate::foxglove`]), so that the
+//! file shows the antenna in 3D and plays it in Foxglove:
+//!
+//! | topic | message | rate |
+//! |---|---|---|
+//! | `/antenna/transforms` | `foxglove.FrameTransforms`: `world` -> `carriage` -> `link_0` -> ... -> `link_n` | [`FoxgloveOptions::scene_hz`] (50 Hz) |
+//! | `/antenna/scene` | `foxglove.SceneUpdate`: the links, their touch switches (red when closed), the walls (every [`WALLS_INTERVAL_S`]), the newest estimated wall | the same |
+//!
+//! The recorder draws them itself, at the first poll due, from the newest poll, stage
+//! position, servo angle and estimate it recorded (the stage and servo at 0 until their
+//! first message) and the chain's model ([`FoxgloveOptions::chain`], else the metadata's rig;
+//! a file with neither has no Foxglove channels). They are derived data: [`TrialReader`]
+//! counts them ([`Trial::foxglove_messages`]) and reads the JSON channels as before.
 //!
 //! Segment polls carry `seq`, the poll's number on the daemon's clock (+1 per poll deadline),
 //! so a reader can tell that none is missing. While the stage's (or servo's) serial device is
@@ -67,14 +82,15 @@ mod writer;
 
 pub use error::RecordError;
 pub use messages::{
-    LogMessage, PhysicsStepKind, PhysicsStepMessage, SegmentSample, SegmentsMessage, ServoMessage,
-    StageMessage, TrialMetadata,
+    EstimateMessage, LogMessage, PhysicsStepKind, PhysicsStepMessage, SegmentSample,
+    SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
 };
 pub use reader::{Trial, TrialReader};
 pub use synthetic::{
-    SYNTHETIC_POLL_PERIOD_S, synthetic_metadata, synthetic_segments, synthetic_servo,
-    synthetic_stage,
+    SYNTHETIC_POLL_PERIOD_S, synthetic_estimate, synthetic_metadata, synthetic_rig,
+    synthetic_segments, synthetic_servo, synthetic_stage,
 };
 pub use writer::{
-    ChunkCompression, FLUSH_INTERVAL_S, RecordCounts, RecorderOptions, TrialRecorder,
+    ChunkCompression, DEFAULT_SCENE_HZ, FLUSH_INTERVAL_S, FoxgloveOptions, RecordCounts,
+    RecorderOptions, TrialRecorder, WALLS_INTERVAL_S,
 };

@@ -8,10 +8,12 @@ use serde::de::DeserializeOwned;
 
 use super::error::RecordError;
 use super::messages::{
-    LogMessage, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+    EstimateMessage, LogMessage, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage,
+    TrialMetadata,
 };
 use super::schema::{
-    LOG_TOPIC, METADATA_TOPIC, PHYSICS_TOPIC, SEGMENTS_TOPIC, SERVO_TOPIC, STAGE_TOPIC,
+    ESTIMATE_TOPIC, LOG_TOPIC, METADATA_TOPIC, PHYSICS_TOPIC, SCENE_TOPIC, SEGMENTS_TOPIC,
+    SERVO_TOPIC, STAGE_TOPIC, TRANSFORMS_TOPIC,
 };
 
 /// A trial read back from its MCAP file.
@@ -30,6 +32,12 @@ pub struct Trial {
     /// Every `/sim/physics` message, in recording order (the simulated rig's; none in files
     /// from hardware or from before it existed).
     pub physics: Vec<PhysicsStepMessage>,
+    /// Every `/antenna/estimate` message, in recording order (none in files without
+    /// estimates or from before they existed).
+    pub estimate: Vec<EstimateMessage>,
+    /// How many `/antenna/transforms` and `/antenna/scene` messages (Foxglove's, protobuf:
+    /// drawn from the other channels, so not decoded here) the file holds.
+    pub foxglove_messages: u64,
     /// `None` for a complete file; otherwise why reading stopped early (a file cut by a crash
     /// ends in a partial record after its last flush). Everything before that point is
     /// returned, CRC-checked.
@@ -104,6 +112,8 @@ impl TrialReader {
                 SERVO_TOPIC => trial.servo.push(decode(path, topic, data)?),
                 LOG_TOPIC => trial.log.push(decode(path, topic, data)?),
                 PHYSICS_TOPIC => trial.physics.push(decode(path, topic, data)?),
+                ESTIMATE_TOPIC => trial.estimate.push(decode(path, topic, data)?),
+                TRANSFORMS_TOPIC | SCENE_TOPIC => trial.foxglove_messages += 1,
                 METADATA_TOPIC => trial.metadata = Some(decode(path, topic, data)?),
                 _ => {}
             }

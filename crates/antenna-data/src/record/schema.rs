@@ -1,5 +1,7 @@
 //! Topic names and the JSON schemas embedded in every trial file (schema encoding
-//! `jsonschema`, message encoding `json`: what Foxglove and PlotJuggler read).
+//! `jsonschema`, message encoding `json`: what Foxglove and PlotJuggler read). The Foxglove
+//! channels ([`TRANSFORMS_TOPIC`], [`SCENE_TOPIC`]) carry Foxglove's own protobuf schemas
+//! instead ([`crate::foxglove::ChannelSchema`]).
 
 use serde_json::{Value, json};
 
@@ -11,14 +13,22 @@ pub const STAGE_TOPIC: &str = "/antenna/stage";
 pub const SERVO_TOPIC: &str = "/antenna/servo";
 /// Topic of [`super::PhysicsStepMessage`] (the simulated rig only).
 pub const PHYSICS_TOPIC: &str = "/sim/physics";
+/// Topic of [`super::EstimateMessage`].
+pub const ESTIMATE_TOPIC: &str = "/antenna/estimate";
+/// Topic of the chain's frames (`foxglove.FrameTransforms`, protobuf; see
+/// [`crate::foxglove::frame_transforms`]).
+pub const TRANSFORMS_TOPIC: &str = "/antenna/transforms";
+/// Topic of the 3D scene (`foxglove.SceneUpdate`, protobuf; see
+/// [`crate::foxglove::scene_update`]).
+pub const SCENE_TOPIC: &str = "/antenna/scene";
 /// Topic of [`super::LogMessage`].
 pub const LOG_TOPIC: &str = "/trial/log";
 /// Topic of [`super::TrialMetadata`].
 pub const METADATA_TOPIC: &str = "/trial/metadata";
 
-/// Schema encoding of every channel.
+/// Schema encoding of every JSON channel.
 pub const SCHEMA_ENCODING: &str = "jsonschema";
-/// Message encoding of every channel.
+/// Message encoding of every JSON channel.
 pub const MESSAGE_ENCODING: &str = "json";
 
 fn nullable(kind: &str, description: &str) -> Value {
@@ -108,6 +118,27 @@ pub fn physics_schema() -> Value {
             }
         },
         "required": ["t_s", "kind", "stage_m", "base_x_m", "base_y_m", "base_angle_rad", "joint_angles_rad"]
+    })
+}
+
+/// The schema of `/antenna/estimate` (name `antenna.Estimate`).
+pub fn estimate_schema() -> Value {
+    json!({
+        "title": "antenna.Estimate",
+        "description": "One wall estimate, in the carriage frame: origin at the base pivot, x along the stage's travel, y toward the wall; the wall is y = distance_m + (x - preview_m) tan(angle_rad)",
+        "type": "object",
+        "properties": {
+            "t_s": { "type": "number", "description": "monotonic time since trial start, s (the newest poll's)" },
+            "seq": { "type": "integer", "description": "the newest poll's seq" },
+            "estimator": { "type": "string", "description": "contact-line, bend or ideal-preview" },
+            "distance_m": nullable("number", "wall distance from the travel at x = preview_m, m"),
+            "angle_rad": nullable("number", "wall angle to the travel, rad (null for bend)"),
+            "preview_m": nullable("number", "where along the travel the distance is, m"),
+            "reason": { "type": "string", "description": "why there is no estimate" },
+            "true_distance_m": { "type": "number", "description": "the true distance (simulated rig), m" },
+            "true_angle_rad": { "type": "number", "description": "the true angle (simulated rig), rad" }
+        },
+        "required": ["t_s", "seq", "estimator", "distance_m", "angle_rad", "preview_m"]
     })
 }
 

@@ -5,7 +5,10 @@ use std::collections::BTreeMap;
 
 use antenna_protocol::Calibration;
 
-use super::messages::{SegmentSample, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata};
+use super::messages::{
+    EstimateMessage, SegmentSample, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+};
+use crate::stream::RigInfo;
 
 /// The poll period of the synthetic trial, s (1 kHz).
 pub const SYNTHETIC_POLL_PERIOD_S: f64 = 0.001;
@@ -72,5 +75,38 @@ pub fn synthetic_metadata(name: &str) -> TrialMetadata {
         config: "[bus]\nkind = \"sim\"\n# synthetic\n".to_string(),
         notes,
         rig: None,
+    }
+}
+
+/// The rig of a synthetic antenna of `segments` segments: links of 40 mm (the base link and
+/// one per segment), mounted at 30 degrees, polled at 1 kHz; no scene.
+pub fn synthetic_rig(segments: usize) -> RigInfo {
+    RigInfo {
+        poll_hz: 1.0 / SYNTHETIC_POLL_PERIOD_S,
+        stage_min_m: 0.0,
+        stage_max_m: 0.3,
+        scene_toml: None,
+        scene_source: None,
+        link_lengths_m: vec![0.04; segments + 1],
+        base_mount_angle_deg: 30.0,
+    }
+}
+
+/// The `i`-th synthetic wall estimate (every 10th poll, 100 Hz): the `contact-line`
+/// estimator's, with no estimate (a reason instead) for every 7th.
+pub fn synthetic_estimate(i: u64) -> EstimateMessage {
+    let seq = i * 10;
+    let t_s = seq as f64 * SYNTHETIC_POLL_PERIOD_S;
+    let found = i % 7 != 3;
+    EstimateMessage {
+        t_s,
+        seq,
+        estimator: "contact-line".to_owned(),
+        distance_m: found.then(|| 0.1 + 0.01 * (t_s * 0.7).sin()),
+        wall_angle_rad: found.then(|| 0.05 * (t_s * 0.3).cos()),
+        preview_m: found.then_some(0.08),
+        reason: (!found).then(|| "no contact in the window".to_owned()),
+        true_distance_m: Some(0.1),
+        true_angle_rad: Some(0.0),
     }
 }

@@ -9,16 +9,23 @@ use mcap::{Compression, WriteOptions, Writer};
 use serde::Serialize;
 use serde_json::Value;
 
+use foxglove::messages::{FrameTransforms, SceneUpdate};
+
 use super::error::RecordError;
 use super::messages::{
-    LogMessage, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage, TrialMetadata,
+    EstimateMessage, LogMessage, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage,
+    TrialMetadata,
 };
 use super::schema::{
-    LOG_TOPIC, MESSAGE_ENCODING, METADATA_TOPIC, PHYSICS_TOPIC, SCHEMA_ENCODING, SEGMENTS_TOPIC,
-    SERVO_TOPIC, STAGE_TOPIC, log_schema, metadata_schema, physics_schema, segments_schema,
-    servo_schema, stage_schema,
+    ESTIMATE_TOPIC, LOG_TOPIC, MESSAGE_ENCODING, METADATA_TOPIC, PHYSICS_TOPIC, SCENE_TOPIC,
+    SCHEMA_ENCODING, SEGMENTS_TOPIC, SERVO_TOPIC, STAGE_TOPIC, TRANSFORMS_TOPIC, estimate_schema,
+    log_schema, metadata_schema, physics_schema, segments_schema, servo_schema, stage_schema,
 };
 use super::sealed_file::SealedFile;
+use crate::foxglove::{
+    ChainModel, ChainPose, ChannelSchema, EstimatedWall, chain_scene_update, encode_into,
+    frame_transforms, scene_update,
+};
 
 /// The default and largest flush interval, s of trial time.
 pub const FLUSH_INTERVAL_S: f64 = 0.1;
@@ -62,6 +69,40 @@ impl Default for RecorderOptions {
     }
 }
 
+/// The default rate of the Foxglove channels (`/antenna/transforms`, `/antenna/scene`), Hz.
+pub const DEFAULT_SCENE_HZ: f64 = 50.0;
+
+/// How often the walls are drawn again in `/antenna/scene`, s of trial time (they do not
+/// move; a viewer keeps them between updates).
+pub const WALLS_INTERVAL_S: f64 = 1.0;
+
+/// What a [`TrialRecorder`] draws in Foxglove's standard schemas (`/antenna/transforms`,
+/// `/antenna/scene`: [`crate::foxglove`]); `Default` gives the documented values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FoxgloveOptions {
+    /// The chain, where it sits and the walls; `None` (the default) takes the links and base
+    /// mount angle from the metadata's rig ([`ChainModel::from_rig`]: the base pivot at the
+    /// origin, the stage travelling along `x`, no walls). With neither, the file has no
+    /// Foxglove channels.
+    pub chain: Option<ChainModel>,
+    /// How often the frames and the scene are recorded, Hz of trial time (default
+    /// [`DEFAULT_SCENE_HZ`]); 0 (or not finite) records none.
+    pub scene_hz: f64,
+    /// The estimated wall is on the left of the stage's travel (default `true`), for drawing
+    /// the estimates of [`TrialRecorder::record_estimate`].
+    pub wall_on_left: bool,
+}
+
+impl Default for FoxgloveOptions {
+    fn default() -> Self {
+        Self {
+            chain: None,
+            scene_hz: DEFAULT_SCENE_HZ,
+            wall_on_left: true,
+        }
+    }
+}
+
 /// How many messages of each kind are recorded, flushed (readable after a crash) or synced
 /// (on the disk).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -76,12 +117,63 @@ pub struct RecordCounts {
     pub log: u64,
     /// `/sim/physics` messages.
     pub physics: u64,
+    /// `/antenna/estimate` messages.
+    pub estimate: u64,
+    /// `/antenna/transforms` messages (Foxglove's frames).
+    pub transforms: u64,
+    /// `/antenna/scene` messages (Foxglove's 3D scene).
+    pub scene: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
 struct Channel {
     id: u16,
     sequence: u32,
+}
+
+/// The Foxglove channels' state: the newest readings, drawn at the scene rate.
+#[derive(Debug)]
+struct SceneRecorder {
+    model: ChainModel,
+    transforms: Channel,
+    scene: Channel,
+    period_s: f64,
+    /// Trial time of the next frames and scene.
+    next_t_s: f64,
+    /// Trial time of the next scene with the walls.
+    next_walls_t_s: f64,
+    wall_on_left: bool,
+    /// The newest stage position (0 until the first: a rig without a stage stays there).
+    stage_m: f64,
+    /// The newest servo angle (0 until the first: a rig without a servo stays there).
+    servo_rad: f64,
+    joint_angles_rad: Vec<Option<f64>>,
+    touch_bits: Vec<Option<u8>>,
+    estimate: Option<EstimatedWall>,
+    buf: Vec<u8>,
+}
+
+impl SceneRecorder {
+    /// Whether a poll at `t_s` is due for the frames and the scene; if so, the next is set.
+    fn due(&mut self, t_s: f64) -> bool {
+        if t_s < self.next_t_s {
+            return false;
+        }
+        self.next_t_s += self.period_s;
+        if self.next_t_s <= t_s {
+            self.next_t_s = t_s + self.period_s;
+        }
+        true
+    }
+
+    /// Whether the scene at `t_s` draws the walls too; if so, the next is set.
+    fn walls_due(&mut self, t_s: f64) -> bool {
+        if t_s < self.next_walls_t_s {
+            return false;
+        }
+        self.next_walls_t_s = t_s + WALLS_INTERVAL_S;
+        true
+    }
 }
 
 /// Records one trial to an MCAP file.
@@ -116,6 +208,10 @@ pub struct TrialRecorder {
     log: Option<Channel>,
     /// Added with the first physics step (the simulated rig's).
     physics: Option<Channel>,
+    /// Added with the first estimate.
+    estimate: Option<Channel>,
+    /// The Foxglove channels (none without a chain model).
+    scene: Option<SceneRecorder>,
     flush_interval_s: f64,
     sync_interval_s: f64,
     last_flush_t_s: f64,
@@ -139,7 +235,8 @@ impl std::fmt::Debug for TrialRecorder {
 }
 
 impl TrialRecorder {
-    /// [`Self::create_with`] with [`RecorderOptions::default`].
+    /// [`Self::create_with`] with [`RecorderOptions::default`] (and
+    /// [`FoxgloveOptions::default`]).
     ///
     /// # Errors
     /// See [`Self::create_with`].
@@ -147,17 +244,36 @@ impl TrialRecorder {
         Self::create_with(path, metadata, RecorderOptions::default())
     }
 
-    /// Creates `path` (which must not exist: an existing file or a planted link is never
-    /// overwritten), writes the header, schemas, channels and `metadata`, and flushes, so
-    /// that even a trial killed at once leaves a readable file.
+    /// [`Self::create_with_foxglove`] with [`FoxgloveOptions::default`]: the Foxglove
+    /// channels at [`DEFAULT_SCENE_HZ`], the chain from the metadata's rig.
     ///
     /// # Errors
-    /// [`RecordError::Io`] if the file exists or cannot be written, [`RecordError::BadTime`]
-    /// for a start time that is not a Unix time.
+    /// See [`Self::create_with_foxglove`].
     pub fn create_with(
         path: impl AsRef<Path>,
         metadata: &TrialMetadata,
         options: RecorderOptions,
+    ) -> Result<Self, RecordError> {
+        Self::create_with_foxglove(path, metadata, options, FoxgloveOptions::default())
+    }
+
+    /// Creates `path` (which must not exist: an existing file or a planted link is never
+    /// overwritten), writes the header, schemas, channels and `metadata`, and flushes, so
+    /// that even a trial killed at once leaves a readable file. With a chain model
+    /// ([`FoxgloveOptions::chain`], or the metadata's rig), the file also has the channels
+    /// `/antenna/transforms` (`foxglove.FrameTransforms`) and `/antenna/scene`
+    /// (`foxglove.SceneUpdate`), protobuf, which the recorder fills itself from the polls,
+    /// stage positions, servo angles and estimates it records, at
+    /// [`FoxgloveOptions::scene_hz`].
+    ///
+    /// # Errors
+    /// [`RecordError::Io`] if the file exists or cannot be written, [`RecordError::BadTime`]
+    /// for a start time that is not a Unix time.
+    pub fn create_with_foxglove(
+        path: impl AsRef<Path>,
+        metadata: &TrialMetadata,
+        options: RecorderOptions,
+        foxglove: FoxgloveOptions,
     ) -> Result<Self, RecordError> {
         let path = path.as_ref().to_path_buf();
         let epoch_ns = metadata
@@ -213,6 +329,34 @@ impl TrialRecorder {
         )?;
         let stage = channel(&mut writer, STAGE_TOPIC, "antenna.Stage", stage_schema())?;
         let servo = channel(&mut writer, SERVO_TOPIC, "antenna.Servo", servo_schema())?;
+        let model = foxglove
+            .chain
+            .clone()
+            .or_else(|| metadata.rig.as_ref().and_then(ChainModel::from_rig));
+        let scene = match model {
+            Some(model) if foxglove.scene_hz.is_finite() && foxglove.scene_hz > 0.0 => {
+                let transforms =
+                    add_foxglove_channel::<FrameTransforms>(&mut writer, &path, TRANSFORMS_TOPIC)?;
+                let scene = add_foxglove_channel::<SceneUpdate>(&mut writer, &path, SCENE_TOPIC)?;
+                let segments = model.segments();
+                Some(SceneRecorder {
+                    model,
+                    transforms,
+                    scene,
+                    period_s: 1.0 / foxglove.scene_hz,
+                    next_t_s: 0.0,
+                    next_walls_t_s: 0.0,
+                    wall_on_left: foxglove.wall_on_left,
+                    stage_m: 0.0,
+                    servo_rad: 0.0,
+                    joint_angles_rad: vec![None; segments],
+                    touch_bits: vec![None; segments],
+                    estimate: None,
+                    buf: Vec::new(),
+                })
+            }
+            _ => None,
+        };
         let sync_interval_s = if options.sync_interval_s.is_finite() {
             options.sync_interval_s.max(0.0)
         } else {
@@ -228,6 +372,8 @@ impl TrialRecorder {
             servo,
             log: None,
             physics: None,
+            estimate: None,
+            scene,
             flush_interval_s: FLUSH_INTERVAL_S,
             sync_interval_s,
             last_flush_t_s: 0.0,
@@ -293,6 +439,21 @@ impl TrialRecorder {
         self.write(SEGMENTS_TOPIC, &mut channel, message.t_s, message)?;
         self.segments = channel;
         self.written.segments += 1;
+        if let Some(mut scene) = self.scene.take() {
+            scene.joint_angles_rad.clear();
+            scene.touch_bits.clear();
+            for sample in &message.segments {
+                scene.joint_angles_rad.push(sample.angle_rad);
+                scene.touch_bits.push(sample.touch);
+            }
+            let drawn = if scene.due(message.t_s) {
+                self.draw(&mut scene, message.t_s)
+            } else {
+                Ok(())
+            };
+            self.scene = Some(scene);
+            drawn?;
+        }
         self.flush_if_due(message.t_s)
     }
 
@@ -302,6 +463,9 @@ impl TrialRecorder {
         self.write(STAGE_TOPIC, &mut channel, message.t_s, message)?;
         self.stage = channel;
         self.written.stage += 1;
+        if let Some(scene) = &mut self.scene {
+            scene.stage_m = message.position_m;
+        }
         self.flush_if_due(message.t_s)
     }
 
@@ -311,6 +475,9 @@ impl TrialRecorder {
         self.write(SERVO_TOPIC, &mut channel, message.t_s, message)?;
         self.servo = channel;
         self.written.servo += 1;
+        if let Some(scene) = &mut self.scene {
+            scene.servo_rad = message.base_angle_rad;
+        }
         self.flush_if_due(message.t_s)
     }
 
@@ -325,6 +492,84 @@ impl TrialRecorder {
         )?);
         self.written.log += 1;
         self.flush_if_due(message.t_s)
+    }
+
+    /// Records a wall estimate; the scene draws the newest one (one without a distance or a
+    /// preview point removes it).
+    pub fn record_estimate(&mut self, message: &EstimateMessage) -> Result<(), RecordError> {
+        let estimate = self.estimate;
+        self.estimate = Some(self.write_lazy(
+            estimate,
+            (ESTIMATE_TOPIC, "antenna.Estimate", estimate_schema),
+            message.t_s,
+            message,
+        )?);
+        self.written.estimate += 1;
+        if let Some(scene) = &mut self.scene {
+            scene.estimate = match (message.distance_m, message.preview_m) {
+                (Some(distance_m), Some(preview_m)) => Some(EstimatedWall {
+                    distance_m,
+                    wall_angle_rad: message.wall_angle_rad,
+                    preview_m,
+                    wall_on_left: scene.wall_on_left,
+                }),
+                _ => None,
+            };
+        }
+        self.flush_if_due(message.t_s)
+    }
+
+    /// Records the chain's frames and the scene at trial time `t_s`, from the newest readings.
+    fn draw(&mut self, scene: &mut SceneRecorder, t_s: f64) -> Result<(), RecordError> {
+        let log_time = self.log_time(t_s)?;
+        let walls = scene.walls_due(t_s);
+        let pose = ChainPose {
+            t_ns: log_time,
+            stage_m: Some(scene.stage_m),
+            servo_rad: Some(scene.servo_rad),
+            joint_angles_rad: &scene.joint_angles_rad,
+            touch_bits: &scene.touch_bits,
+        };
+        let transforms = frame_transforms(&scene.model, &pose);
+        let update = if walls {
+            scene_update(&scene.model, &pose, scene.estimate.as_ref())
+        } else {
+            chain_scene_update(&scene.model, &pose, scene.estimate.as_ref())
+        };
+        let mut buf = std::mem::take(&mut scene.buf);
+        let result = self
+            .encode_and_write(
+                &mut buf,
+                TRANSFORMS_TOPIC,
+                &mut scene.transforms,
+                log_time,
+                &transforms,
+            )
+            .and_then(|()| {
+                self.encode_and_write(&mut buf, SCENE_TOPIC, &mut scene.scene, log_time, &update)
+            });
+        scene.buf = buf;
+        result?;
+        self.written.transforms += 1;
+        self.written.scene += 1;
+        Ok(())
+    }
+
+    fn encode_and_write<M: foxglove::Encode>(
+        &mut self,
+        buf: &mut Vec<u8>,
+        topic: &str,
+        channel: &mut Channel,
+        log_time: u64,
+        message: &M,
+    ) -> Result<(), RecordError> {
+        buf.clear();
+        encode_into(message, buf).map_err(|source| RecordError::Foxglove {
+            path: self.path.clone(),
+            topic: topic.to_owned(),
+            source,
+        })?;
+        self.write_bytes(channel, log_time, buf)
     }
 
     /// Records one step of the simulated rig's physics.
@@ -448,19 +693,34 @@ impl TrialRecorder {
         t_s: f64,
         message: &T,
     ) -> Result<(), RecordError> {
-        let log_time = (t_s.is_finite() && t_s >= 0.0)
+        let log_time = self.log_time(t_s)?;
+        let data = serde_json::to_vec(message).map_err(|source| RecordError::Json {
+            path: self.path.clone(),
+            topic: topic.to_string(),
+            source,
+        })?;
+        self.write_bytes(channel, log_time, &data)
+    }
+
+    /// The log time of trial time `t_s`: Unix-epoch nanoseconds.
+    fn log_time(&self, t_s: f64) -> Result<u64, RecordError> {
+        (t_s.is_finite() && t_s >= 0.0)
             .then(|| (t_s * 1e9).round())
             .filter(|ns| *ns < u64::MAX as f64)
             .and_then(|ns| self.epoch_ns.checked_add(ns as u64))
             .ok_or_else(|| RecordError::BadTime {
                 path: self.path.clone(),
                 t_s,
-            })?;
-        let data = serde_json::to_vec(message).map_err(|source| RecordError::Json {
-            path: self.path.clone(),
-            topic: topic.to_string(),
-            source,
-        })?;
+            })
+    }
+
+    /// Writes a message's bytes on `channel`.
+    fn write_bytes(
+        &mut self,
+        channel: &mut Channel,
+        log_time: u64,
+        data: &[u8],
+    ) -> Result<(), RecordError> {
         let header = MessageHeader {
             channel_id: channel.id,
             sequence: channel.sequence,
@@ -469,7 +729,7 @@ impl TrialRecorder {
         };
         let path = self.path.clone();
         self.writer()?
-            .write_to_known_channel(&header, &data)
+            .write_to_known_channel(&header, data)
             .map_err(|source| RecordError::Mcap { path, source })?;
         channel.sequence = channel.sequence.wrapping_add(1);
         self.dirty = true;
@@ -504,6 +764,42 @@ fn add_channel(
         .map_err(mcap_err)?;
     let id = writer
         .add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())
+        .map_err(mcap_err)?;
+    Ok(Channel { id, sequence: 0 })
+}
+
+/// Adds a channel of Foxglove's standard schema for `M` (protobuf), through the same writer
+/// (and so the same sealed file) as the JSON channels.
+fn add_foxglove_channel<M: foxglove::Encode>(
+    writer: &mut Writer<SealedFile>,
+    path: &Path,
+    topic: &str,
+) -> Result<Channel, RecordError> {
+    let schema = ChannelSchema::of::<M>().map_err(|source| RecordError::Foxglove {
+        path: path.to_path_buf(),
+        topic: topic.to_string(),
+        source,
+    })?;
+    add_raw_channel(writer, path, topic, &schema)
+}
+
+/// Adds a channel with a given schema (name, encoding, data) and message encoding; its
+/// messages are written as raw bytes.
+fn add_raw_channel(
+    writer: &mut Writer<SealedFile>,
+    path: &Path,
+    topic: &str,
+    schema: &ChannelSchema,
+) -> Result<Channel, RecordError> {
+    let mcap_err = |source| RecordError::Mcap {
+        path: path.to_path_buf(),
+        source,
+    };
+    let schema_id = writer
+        .add_schema(&schema.name, &schema.encoding, &schema.data)
+        .map_err(mcap_err)?;
+    let id = writer
+        .add_channel(schema_id, topic, &schema.message_encoding, &BTreeMap::new())
         .map_err(mcap_err)?;
     Ok(Channel { id, sequence: 0 })
 }
