@@ -1323,8 +1323,9 @@ impl MonitorApp {
 }
 
 /// Puts on `frame` (live, drawn with `rig` from `history`) the newest of `estimates` made
-/// at or before its instant: the estimated wall in the track frame, from the base pivot where
-/// the stage was at the estimate's poll, along the stage's travel, toward the wall's side
+/// at or before its instant, if it is still current ([`EstimateHistory::current_at`]): the
+/// estimated wall in the track frame, from the base pivot where the stage was at the
+/// estimate's poll, along the stage's travel, toward the wall's side
 /// ([`RigGeometry::wall_side`]), spanning the chain; or why there is none.
 pub fn attach_estimate(
     frame: &mut ChainFrame,
@@ -1332,13 +1333,20 @@ pub fn attach_estimate(
     rig: &RigGeometry,
     history: &History,
 ) {
-    let Some(estimate) = estimates.at(frame.t_s) else {
-        frame.estimate_note = Some(if estimates.received() == 0 {
-            "the daemon sends none".to_owned()
-        } else {
-            "none yet at this instant".to_owned()
-        });
-        return;
+    let estimate = match estimates.current_at(frame.t_s) {
+        Ok(Some(estimate)) => estimate,
+        Ok(None) if estimates.received() == 0 => {
+            frame.estimate_note = Some("the daemon sends none".to_owned());
+            return;
+        }
+        Ok(None) => {
+            frame.estimate_note = Some("none yet at this instant".to_owned());
+            return;
+        }
+        Err(age_s) => {
+            frame.estimate_note = Some(format!("the newest was made {age_s:.1} s before"));
+            return;
+        }
     };
     let stage_position_m = history
         .index_at(estimate.t_s)

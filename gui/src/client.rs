@@ -604,9 +604,11 @@ fn on_message(
                 .latest_t_s()
                 .is_some_and(|latest| sample.t_s < latest)
             {
-                // A new daemon (its clock restarted): start the history afresh.
+                // A new daemon (its clock restarted): start the history afresh, and the
+                // estimates (the old daemon's times mean nothing on the new clock).
                 let capacity = state.history.capacity();
                 state.history = History::new(state.history.segment_count(), capacity);
+                state.estimates.clear();
             }
             state
                 .history
@@ -750,6 +752,21 @@ mod tests {
         assert_eq!(state.bad_lines.0, 1);
         assert_eq!(state.unknown_lines.0, 0);
         assert_eq!(state.history.len(), 1);
+    }
+
+    /// A new daemon (its samples' clock restarted) starts the estimates afresh too.
+    #[test]
+    fn a_new_daemons_samples_clear_the_estimates() {
+        let (late, early) = (samples_line(500), samples_line(2));
+        let state = receive(&[
+            HELLO,
+            &late,
+            r#"{"type":"estimate","seq":500,"t_ns":500000000,"estimated_ns":500000100,"estimator":"bend","distance_m":0.3,"angle_rad":null,"preview_m":0.05}"#,
+            &early,
+        ]);
+        assert_eq!(state.history.len(), 1);
+        assert!(state.estimates.is_empty());
+        assert_eq!(state.estimates.received(), 1);
     }
 
     /// Every message this monitor reads has its type among [`KNOWN_TYPES`].

@@ -141,6 +141,10 @@ impl Estimate {
     }
 }
 
+/// How long an estimate stays current after its poll at least, seconds
+/// ([`EstimateHistory::current_at`]).
+pub const STALE_AFTER_S: f64 = 1.0;
+
 /// A plotted series: runs of `[t_s, value]` points, one line each (a gap breaks a line).
 pub type Lines = Vec<Vec<[f64; 2]>>;
 
@@ -231,6 +235,30 @@ impl EstimateHistory {
         n.checked_sub(1).and_then(|i| self.estimates.get(i))
     }
 
+    /// [`Self::at`] if it is current at `t_s`: made no longer before it than
+    /// [`STALE_AFTER_S`] or three times the interval since the estimate before it, whichever
+    /// is longer (the daemon's rate is its `[estimate] rate_hz`, not sent). Otherwise how
+    /// long before `t_s` the newest estimate was made (`Err`), or `Ok(None)` for none at all.
+    pub fn current_at(&self, t_s: f64) -> Result<Option<&Estimate>, f64> {
+        let n = self.estimates.partition_point(|e| e.t_s <= t_s);
+        let Some(i) = n.checked_sub(1) else {
+            return Ok(None);
+        };
+        let Some(estimate) = self.estimates.get(i) else {
+            return Ok(None);
+        };
+        let interval_s = i
+            .checked_sub(1)
+            .and_then(|j| self.estimates.get(j))
+            .map_or(0.0, |before| estimate.t_s - before.t_s);
+        let age_s = t_s - estimate.t_s;
+        if age_s > STALE_AFTER_S.max(3.0 * interval_s) {
+            Err(age_s)
+        } else {
+            Ok(Some(estimate))
+        }
+    }
+
     /// The estimated and the true distance between `t0_s` and `t1_s`, millimetres, each as
     /// runs of consecutive estimates that have one (one without breaks its line), at most
     /// about `columns` points each (every `k`th estimate).
@@ -314,6 +342,10 @@ mod tests {
         assert_eq!(h.at(75.5 / 128.0).unwrap().seq, 75);
         assert!(h.at(0.1).is_none());
         assert_eq!(h.at(5.0).unwrap().seq, 99);
+        // Current for a second after the newest poll (at 128/s); then how long ago it was.
+        assert_eq!(h.current_at(1.5).unwrap().unwrap().seq, 99);
+        assert_eq!(h.current_at(3.0 + 99.0 / 128.0), Err(3.0));
+        assert_eq!(h.current_at(0.1), Ok(None));
         // From the one before 0.6 s (76) to the last: the lines break at 83 and 93, which have
         // no estimate; the truth runs on.
         let (estimated, truth) = h.distance_series_mm(0.6, 0.9, 1000);
