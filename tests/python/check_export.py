@@ -8,7 +8,8 @@ Usage: check_export.py EXPECTED.json
 EXPECTED.json (written by crates/antenna-cli/tests/export_python.rs) names the files and holds
 the values that were recorded: t_s, seq, address, angle_rad, angle_counts and touch (polls x
 segments, null for a missing sample), the flags ok, nack, pec_error, bus_error and stale (polls
-x segments), stage_t_s, stage_position_m, servo_t_s, base_angle_rad, trial, config, notes,
+x segments), stage_t_s, stage_position_m, servo_t_s, base_angle_rad, estimate (the wall estimates' messages as
+recorded), trial, config, notes,
 started_unix_ns, truncated_mcap and truncated_polls; `whole` (a second trial whose doubles are
 all whole numbers, its base angle all zero) and `empty_mat` (a trial with no polls). The MAT-files
 are read with scipy's default `loadmat(path)`, no options, and every variable's dtype is checked.
@@ -25,7 +26,8 @@ import numpy as np
 import scipy.io
 from mcap.reader import make_reader
 
-TOPICS = {"/trial/metadata", "/antenna/segments", "/antenna/stage", "/antenna/servo"}
+TOPICS = {"/trial/metadata", "/antenna/segments", "/antenna/stage", "/antenna/servo",
+          "/antenna/estimate"}
 
 
 def fail(message):
@@ -46,7 +48,7 @@ def same(a, b):
 
 
 def check_mcap(e):
-    polls, stage, servo, metadata = [], [], [], None
+    polls, stage, servo, estimate, metadata = [], [], [], [], None
     with open(e["mcap"], "rb") as f:
         reader = make_reader(f, validate_crcs=True)
         summary = reader.get_summary()
@@ -68,6 +70,8 @@ def check_mcap(e):
                 stage.append(data)
             elif channel.topic == "/antenna/servo":
                 servo.append(data)
+            elif channel.topic == "/antenna/estimate":
+                estimate.append(data)
             else:
                 metadata = data
         records = list(reader.iter_metadata())
@@ -85,6 +89,7 @@ def check_mcap(e):
     check([s["position_m"] for s in stage] == e["stage_position_m"], "MCAP: stage positions")
     check([s["t_s"] for s in servo] == e["servo_t_s"], "MCAP: servo times")
     check([s["base_angle_rad"] for s in servo] == e["base_angle_rad"], "MCAP: base angles")
+    check(estimate == e["estimate"], "MCAP: estimates")
     check(metadata is not None and metadata["trial"] == e["trial"], "MCAP: metadata message")
     check(metadata["notes"] == e["notes"], "MCAP: notes")
     print(f"check_export: MCAP ok ({len(polls)} polls, {len(stage)} stage, {len(servo)} servo)")
@@ -118,6 +123,17 @@ MAT_DTYPES = {
     "pec_error": np.uint8, "bus_error": np.uint8, "stale": np.uint8,
     "stage_t_s": np.float64, "stage_position_m": np.float64, "servo_t_s": np.float64,
     "base_angle_rad": np.float64, "started_unix_s": np.float64, "started_unix_ns": np.uint64,
+    "estimate_t_s": np.float64, "estimate_seq": np.uint64, "estimate_distance_m": np.float64,
+    "estimate_angle_rad": np.float64, "estimate_preview_m": np.float64,
+    "estimate_true_distance_m": np.float64, "estimate_true_angle_rad": np.float64,
+}
+# Cell arrays of char (object arrays in scipy), E x 1.
+MAT_TEXT_CELLS = ["estimator", "estimate_reason"]
+# The estimates' doubles and the message fields they come from (null: NaN).
+ESTIMATE_DOUBLES = {
+    "estimate_t_s": "t_s", "estimate_distance_m": "distance_m", "estimate_angle_rad": "angle_rad",
+    "estimate_preview_m": "preview_m", "estimate_true_distance_m": "true_distance_m",
+    "estimate_true_angle_rad": "true_angle_rad",
 }
 
 
@@ -125,6 +141,28 @@ def check_dtypes(m, label):
     for name, dtype in MAT_DTYPES.items():
         check(name in m, f"{label}: no variable {name}")
         check(m[name].dtype == dtype, f"{label}: {name} is {m[name].dtype}, not {dtype.__name__}")
+    for name in MAT_TEXT_CELLS:
+        check(name in m, f"{label}: no variable {name}")
+        check(m[name].dtype == object, f"{label}: {name} is {m[name].dtype}, not a cell array")
+
+
+def text(char_array):
+    """The text of a loaded char array ('' is stored 0 x 0 and loads empty)."""
+    return str(char_array[0]) if char_array.size else ""
+
+
+def check_estimates_mat(m, estimates, label):
+    n = len(estimates)
+    for name in list(ESTIMATE_DOUBLES) + ["estimate_seq"] + MAT_TEXT_CELLS:
+        check(m[name].shape == (n, 1), f"{label}: {name} has shape {m[name].shape}, not {(n, 1)}")
+    for name, field in ESTIMATE_DOUBLES.items():
+        for i, x in enumerate(estimates):
+            check(same(x.get(field), m[name][i, 0]), f"{label}: {name}[{i}]")
+    check(np.array_equal(m["estimate_seq"][:, 0], np.array([x["seq"] for x in estimates],
+                                                           dtype=np.uint64)), f"{label}: seq")
+    for i, x in enumerate(estimates):
+        check(text(m["estimator"][i, 0]) == x["estimator"], f"{label}: estimator[{i}]")
+        check(text(m["estimate_reason"][i, 0]) == x.get("reason", ""), f"{label}: reason[{i}]")
 
 
 def check_mat(e):
@@ -166,7 +204,8 @@ def check_mat(e):
     check(m["truncated"].size == 0, f"MAT: truncated {m['truncated']!r}")
     notes = {str(m["notes"][i, 0][0]): str(m["notes"][i, 1][0]) for i in range(m["notes"].shape[0])}
     check(notes == e["notes"], f"MAT: notes {notes}")
-    print(f"check_export: MAT ok ({n} x {s})")
+    check_estimates_mat(m, e["estimate"], "MAT")
+    print(f"check_export: MAT ok ({n} x {s}, {len(e['estimate'])} estimates)")
 
 
 def check_mat_whole_numbers(e):
@@ -193,6 +232,7 @@ def check_mat_empty(e):
         check(m[name].shape == (0, 1), f"empty MAT: {name} has shape {m[name].shape}")
     for name in ["angle_rad", "angle_counts", "touch", "ok"]:
         check(m[name].size == 0, f"empty MAT: {name} has shape {m[name].shape}")
+    check_estimates_mat(m, [], "empty MAT")
     print("check_export: empty MAT ok")
 
 
@@ -202,8 +242,20 @@ def check_csv(e):
     rows = list(csv.DictReader(lines))
     n, s = len(e["t_s"]), len(e["address"])
     check(len(rows) == n * s, f"CSV: {len(rows)} rows, expected {n * s}")
+    estimates, latest = e["estimate"], -1
     for j, row in enumerate(rows):
         i, k = j // s, j % s
+        # The estimate columns: the latest estimate at or before the poll (empty before it).
+        while latest + 1 < len(estimates) and estimates[latest + 1]["t_s"] <= e["t_s"][i]:
+            latest += 1
+        x = estimates[latest] if latest >= 0 else {}
+        check(row["estimate_seq"] == ("" if latest < 0 else str(x["seq"])), f"CSV row {j}: estimate_seq")
+        check(row["estimator"] == x.get("estimator", ""), f"CSV row {j}: estimator")
+        check(row["estimate_reason"] == x.get("reason", ""), f"CSV row {j}: estimate_reason")
+        for name, field in ESTIMATE_DOUBLES.items():
+            if name != "estimate_t_s":
+                value = None if row[name] == "" else float(row[name])
+                check(same(value, x.get(field)), f"CSV row {j}: {name}")
         check(int(row["poll"]) == i, f"CSV row {j}: poll")
         check(int(row["seq"]) == e["seq"][i], f"CSV row {j}: seq")
         check(float(row["t_s"]) == e["t_s"][i], f"CSV row {j}: t_s")

@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use antenna_data::record::{
-    ServoMessage, StageMessage, TrialRecorder, synthetic_metadata, synthetic_segments,
-    synthetic_servo, synthetic_stage,
+    ServoMessage, StageMessage, TrialRecorder, synthetic_estimate, synthetic_metadata,
+    synthetic_segments, synthetic_servo, synthetic_stage,
 };
 use serde_json::json;
 
@@ -24,6 +24,11 @@ fn record(recorder: &mut TrialRecorder, range: std::ops::Range<u64>) {
         }
         if i % 20 == 0 {
             recorder.record_servo(&synthetic_servo(i / 20)).unwrap();
+        }
+        if i % 10 == 0 {
+            recorder
+                .record_estimate(&synthetic_estimate(i / 10))
+                .unwrap();
         }
     }
 }
@@ -158,6 +163,7 @@ fn python_reads_the_mcap_the_mat_file_and_the_csv_back_exactly() {
         "stage_position_m": stage.iter().map(|s| s.position_m).collect::<Vec<_>>(),
         "servo_t_s": servo.iter().map(|s| s.t_s).collect::<Vec<_>>(),
         "base_angle_rad": servo.iter().map(|s| s.base_angle_rad).collect::<Vec<_>>(),
+        "estimate": (0..polls.div_ceil(10)).map(synthetic_estimate).collect::<Vec<_>>(),
         "trial": metadata.trial,
         "config": metadata.config,
         "notes": metadata.notes,

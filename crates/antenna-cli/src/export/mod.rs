@@ -3,7 +3,9 @@
 //!
 //! # MAT-file variables
 //!
-//! N polls, S segments, M stage positions, K base angles. Every variable loads as its class
+//! N polls, S segments, M stage positions, K base angles, E wall estimates (`/antenna/estimate`:
+//! antennad's live estimate, in the carriage frame: origin at the base pivot, x along the
+//! stage's travel, y toward the wall; none in files from before it or without it). Every variable loads as its class
 //! with MATLAB's `load` and with scipy's default `scipy.io.loadmat(path)` (no options; the
 //! writer is [`mat`], which never stores a double as an integer type): measurements and times
 //! are double (float64 in scipy) even when every value is whole; counters, addresses, raw
@@ -27,6 +29,14 @@
 //! | `started_unix_ns` | uint64 | 1 x 1 | the same instant exactly, Unix ns (0 x 0 in files written before antennad recorded it) |
 //! | `notes` | cell of char | P x 2 | free-text notes: key, value |
 //! | `truncated` | char | 1 x L | empty (0 x 0), or why the file ended early (a crash) |
+//! | `estimate_t_s` | double (float64) | E x 1 | the wall estimates' times (their newest poll's `t_s`), s |
+//! | `estimate_seq` | uint64 | E x 1 | the newest poll's `seq` of each estimate |
+//! | `estimator` | cell of char | E x 1 | the estimator (`contact-line`, `bend`, `ideal-preview`) |
+//! | `estimate_distance_m` | double (float64) | E x 1 | the wall's distance from the travel at `x = preview_m`, m (NaN: no estimate) |
+//! | `estimate_angle_rad` | double (float64) | E x 1 | the wall's angle to the travel, rad (NaN: no estimate, or `bend`, which gives none) |
+//! | `estimate_preview_m` | double (float64) | E x 1 | where along the travel the distance is estimated, m from the base pivot (NaN: no estimate) |
+//! | `estimate_reason` | cell of char | E x 1 | why there is no estimate (empty when there is one) |
+//! | `estimate_true_distance_m`, `estimate_true_angle_rad` | double (float64) | E x 1 | the true wall at the same place and instant, m and rad (the simulated rig; NaN otherwise) |
 //!
 //! A write that fails (a full disk) is an error naming the file; the MAT-file and the CSV
 //! file are written to a temporary file beside the destination and renamed over it only when
@@ -39,12 +49,13 @@
 //! ...` (every poll's wall-clock time is this plus its `t_s`), `# notes.KEY: ...`, `# config:
 //! LINE` per configuration line (no token, as in the MAT-file), and `# truncated: ...` for a
 //! cut file. Then the header and one row per segment per poll:
-//! `poll,seq,t_s,address,angle_counts,angle_rad,touch,ok,nack,pec_error,bus_error,stale,stage_position_m,base_angle_rad`.
+//! `poll,seq,t_s,address,angle_counts,angle_rad,touch,ok,nack,pec_error,bus_error,stale,stage_position_m,base_angle_rad,estimate_seq,estimator,estimate_distance_m,estimate_angle_rad,estimate_preview_m,estimate_reason,estimate_true_distance_m,estimate_true_angle_rad`.
 //! `poll` numbers the polls from 0 in the file, `seq` is the daemon's poll number (empty in
 //! files written before antennad recorded it); a missing sample leaves its cells empty; flags
 //! are 0/1;
-//! `stage_position_m` and `base_angle_rad` are the latest values at or before `t_s` (empty
-//! before the first).
+//! `stage_position_m`, `base_angle_rad` and the `estimate_` columns are the latest values at
+//! or before `t_s` (empty before the first, and where the estimate has none); the estimate's
+//! own poll is `estimate_seq`.
 
 pub mod mat;
 
@@ -53,7 +64,7 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use antenna_data::record::{SegmentSample, Trial};
+use antenna_data::record::{EstimateMessage, SegmentSample, Trial};
 
 use mat::{Array, Data, MatError, MatFile};
 
@@ -191,7 +202,39 @@ pub fn trial_to_mat(trial: &Trial) -> Result<MatFile, ExportError> {
         "truncated",
         Array::text(trial.truncated.as_deref().unwrap_or("")),
     )?;
+    insert_estimates(&mut mat, trial)?;
     Ok(mat)
+}
+
+/// The wall estimates' variables (module docs).
+fn insert_estimates(mat: &mut MatFile, trial: &Trial) -> Result<(), MatError> {
+    let estimates = &trial.estimate;
+    let double = |f: &dyn Fn(&EstimateMessage) -> Option<f64>| {
+        Array::column(Data::Double(
+            estimates.iter().map(|e| f(e).unwrap_or(f64::NAN)).collect(),
+        ))
+    };
+    let texts = |f: &dyn Fn(&EstimateMessage) -> &str| {
+        Array::column(Data::Cell(
+            estimates.iter().map(|e| Array::text(f(e))).collect(),
+        ))
+    };
+    mat.insert("estimate_t_s", double(&|e| Some(e.t_s)))?;
+    mat.insert(
+        "estimate_seq",
+        Array::column(Data::Uint64(estimates.iter().map(|e| e.seq).collect())),
+    )?;
+    mat.insert("estimator", texts(&|e| &e.estimator))?;
+    mat.insert("estimate_distance_m", double(&|e| e.distance_m))?;
+    mat.insert("estimate_angle_rad", double(&|e| e.wall_angle_rad))?;
+    mat.insert("estimate_preview_m", double(&|e| e.preview_m))?;
+    mat.insert(
+        "estimate_reason",
+        texts(&|e| e.reason.as_deref().unwrap_or("")),
+    )?;
+    mat.insert("estimate_true_distance_m", double(&|e| e.true_distance_m))?;
+    mat.insert("estimate_true_angle_rad", double(&|e| e.true_angle_rad))?;
+    Ok(())
 }
 
 /// Writes the MAT-file of a trial to `path` (uncompressed, as before). A failed write is an
@@ -285,7 +328,7 @@ fn cell<T: std::fmt::Display>(value: Option<T>) -> String {
 }
 
 /// The CSV columns (module docs).
-const CSV_COLUMNS: [&str; 14] = [
+const CSV_COLUMNS: [&str; 22] = [
     "poll",
     "seq",
     "t_s",
@@ -300,6 +343,14 @@ const CSV_COLUMNS: [&str; 14] = [
     "stale",
     "stage_position_m",
     "base_angle_rad",
+    "estimate_seq",
+    "estimator",
+    "estimate_distance_m",
+    "estimate_angle_rad",
+    "estimate_preview_m",
+    "estimate_reason",
+    "estimate_true_distance_m",
+    "estimate_true_angle_rad",
 ];
 
 /// The CSV text of a trial (columns in the module docs).
@@ -326,7 +377,7 @@ pub fn trial_to_csv(trial: &Trial) -> Result<String, ExportError> {
     let csv_error = |e: csv::Error| ExportError::Csv(e.to_string());
     out.write_record(CSV_COLUMNS).map_err(csv_error)?;
     let flag = |b: bool| if b { "1" } else { "0" };
-    let (mut stage, mut servo) = (0, 0);
+    let (mut stage, mut servo, mut estimate) = (0, 0, 0);
     for (poll, m) in trial.segments.iter().enumerate() {
         while stage < trial.stage.len() && trial.stage[stage].t_s <= m.t_s {
             stage += 1;
@@ -334,11 +385,25 @@ pub fn trial_to_csv(trial: &Trial) -> Result<String, ExportError> {
         while servo < trial.servo.len() && trial.servo[servo].t_s <= m.t_s {
             servo += 1;
         }
+        while estimate < trial.estimate.len() && trial.estimate[estimate].t_s <= m.t_s {
+            estimate += 1;
+        }
         let position = cell(stage.checked_sub(1).map(|i| trial.stage[i].position_m));
         let base = cell(servo.checked_sub(1).map(|i| trial.servo[i].base_angle_rad));
+        let e = estimate.checked_sub(1).map(|i| &trial.estimate[i]);
+        let estimate_cells = [
+            cell(e.map(|e| e.seq)),
+            cell(e.map(|e| &e.estimator)),
+            cell(e.and_then(|e| e.distance_m)),
+            cell(e.and_then(|e| e.wall_angle_rad)),
+            cell(e.and_then(|e| e.preview_m)),
+            cell(e.and_then(|e| e.reason.as_ref())),
+            cell(e.and_then(|e| e.true_distance_m)),
+            cell(e.and_then(|e| e.true_angle_rad)),
+        ];
         let (poll, seq, t_s) = (poll.to_string(), cell(m.seq), m.t_s.to_string());
         for x in &m.segments {
-            out.write_record([
+            let row = [
                 poll.as_str(),
                 &seq,
                 &t_s,
@@ -353,7 +418,11 @@ pub fn trial_to_csv(trial: &Trial) -> Result<String, ExportError> {
                 flag(x.stale),
                 &position,
                 &base,
-            ])
+            ];
+            out.write_record(
+                row.into_iter()
+                    .chain(estimate_cells.iter().map(String::as_str)),
+            )
             .map_err(csv_error)?;
         }
     }
