@@ -14,6 +14,8 @@ use crate::view::ViewState;
 pub const ESTIMATE_COLOUR: Color32 = Color32::from_rgb(0, 158, 115);
 /// The true distance (simulated rig).
 const TRUE_COLOUR: Color32 = Color32::from_rgb(0, 114, 178);
+/// The line above the plot when there is no current estimate.
+const WARNING_COLOUR: Color32 = Color32::from_rgb(220, 120, 0);
 
 /// The estimate panel (see the module documentation).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -64,15 +66,24 @@ impl EstimatePanel {
         let cursor = view.cursor_s(latest_s);
         ui.horizontal(|ui| {
             ui.label("wall distance, mm");
-            let here = cursor.and_then(|c| estimates.at(c));
+            let here = cursor.map_or(Ok(None), |c| estimates.current_at(c));
             match here {
-                Some(e) if e.has_estimate() => {
+                Ok(Some(e)) if e.has_estimate() => {
                     ui.label(describe(e));
                 }
-                Some(e) => {
-                    ui.label(RichText::new(describe(e)).color(Color32::from_rgb(220, 120, 0)));
+                Ok(Some(e)) => {
+                    ui.label(RichText::new(describe(e)).color(WARNING_COLOUR));
                 }
-                None if estimates.received() == 0 => {
+                Err(age_s) => {
+                    ui.label(
+                        RichText::new(format!(
+                            "no current wall estimate: the newest was made {age_s:.1} s \
+                             before the cursor"
+                        ))
+                        .color(WARNING_COLOUR),
+                    );
+                }
+                Ok(None) if estimates.received() == 0 => {
                     ui.label(
                         RichText::new(
                             "no wall estimate: the daemon sends none ([estimate] estimator = \
@@ -81,7 +92,7 @@ impl EstimatePanel {
                         .weak(),
                     );
                 }
-                None => {
+                Ok(None) => {
                     ui.label(RichText::new("no wall estimate at the cursor yet").weak());
                 }
             }

@@ -15,8 +15,10 @@ use antenna_monitor::estimate::WallSide;
 use antenna_monitor::{AppOptions, MonitorApp};
 use host_daemon::service::config::Config;
 
-/// Polls the fake daemon sends.
-const POLLS: u64 = 400;
+/// Polls the fake daemon sends (1.5 s)...
+const POLLS: u64 = 1500;
+/// ...with an estimate every 10th up to this one (then its estimator stops).
+const LAST_ESTIMATE: u64 = 400;
 /// The stage's position throughout, metres.
 const STAGE_M: f64 = 0.1;
 
@@ -60,8 +62,8 @@ fn estimate(seq: u64) -> StreamMessage {
     })
 }
 
-/// Serves one connection: `hello`, then [`POLLS`] polls with an estimate every 10th and a
-/// `future_thing` line after poll 5; then holds the connection open until the client closes
+/// Serves one connection: `hello`, then [`POLLS`] polls with an estimate every 10th up to
+/// [`LAST_ESTIMATE`] and a `future_thing` line after poll 5; then holds the connection open until the client closes
 /// it. Returns the server's address and its thread.
 fn fake_daemon() -> (String, JoinHandle<()>) {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
@@ -79,7 +81,7 @@ fn fake_daemon() -> (String, JoinHandle<()>) {
         let mut text = serde_json::to_string(&hello).unwrap() + "\n";
         for seq in 1..=POLLS {
             text += &(serde_json::to_string(&samples(seq)).unwrap() + "\n");
-            if seq % 10 == 0 {
+            if seq % 10 == 0 && seq <= LAST_ESTIMATE {
                 text += &(serde_json::to_string(&estimate(seq)).unwrap() + "\n");
             }
             if seq == 5 {
@@ -122,15 +124,19 @@ fn an_unknown_message_type_is_skipped_and_the_estimate_is_shown() {
             .collect();
         assert_eq!(seqs, (1..=POLLS).collect::<Vec<_>>());
         // Every estimate, the newest last.
-        assert_eq!(state.estimates.len(), (POLLS / 10) as usize);
+        assert_eq!(state.estimates.len(), (LAST_ESTIMATE / 10) as usize);
         let latest = state.estimates.latest().unwrap();
-        assert_eq!(latest.seq, POLLS);
+        assert_eq!(latest.seq, LAST_ESTIMATE);
         assert_eq!(latest.distance_m, Some(0.35));
         // The estimated wall over the chain: from the base pivot at the stage's position, x
         // along the travel, y toward the wall (on the left of the default rig's travel).
         let rig = state.rig.as_ref().unwrap();
         assert_eq!(rig.wall_side(), WallSide::Left);
-        let index = state.history.len() - 1;
+        let index = state.history.index_at(LAST_ESTIMATE as f64 * 1e-3).unwrap();
+        assert_eq!(
+            state.history.sample(index).unwrap().seq,
+            Some(LAST_ESTIMATE)
+        );
         let mut frame = rig.frame_at(&state.history, index).unwrap();
         attach_estimate(&mut frame, &state.estimates, rig, &state.history);
         let wall = frame.estimated_wall.clone().unwrap();
@@ -152,13 +158,28 @@ fn an_unknown_message_type_is_skipped_and_the_estimate_is_shown() {
         assert!(frame.estimated_wall.is_none());
         let note = frame.estimate_note.unwrap();
         assert!(note.contains("no contact in the window"), "{note}");
+        // At the newest poll, 1.1 s after the last estimate: it is no longer drawn.
+        let newest = state.history.len() - 1;
+        let mut frame = rig.frame_at(&state.history, newest).unwrap();
+        attach_estimate(&mut frame, &state.estimates, rig, &state.history);
+        assert!(frame.estimated_wall.is_none());
+        assert_eq!(
+            frame.estimate_note.as_deref(),
+            Some("the newest was made 1.1 s before")
+        );
     }
-    // The panel says the estimate at the cursor (the newest poll, following).
+    // Following the newest poll: the last estimate is too old.
+    expect_label(
+        &mut harness,
+        "no current wall estimate: the newest was made 1.1 s before the cursor",
+    );
+    expect_label(&mut harness, "line(s) of message types not known here");
+    // At the last estimate's poll, the panel says it.
+    harness.state_mut().scrub_to(LAST_ESTIMATE as f64 * 1e-3);
     expect_label(
         &mut harness,
         "wall estimate (contact-line): 350.0 mm, 5.7 deg at 50 mm ahead; true 360.0 mm, error -10.0 mm",
     );
-    expect_label(&mut harness, "line(s) of message types not known here");
     // Scrubbed to before the first estimate: the reason.
     harness.state_mut().scrub_to(0.05);
     expect_label(
