@@ -10,9 +10,9 @@
 //! carries out the user's view, export and control actions. A sweep is shown whole as it is
 //! solved (the chain at the newest step) until the user moves the view, then played, paused
 //! and scrubbed like a recording; a follow run the same way, with its top view (the robot, its
-//! antenna, the walls, the estimator's points) and its distance error against time. Live, the
-//! daemon's wall estimate at the cursor is drawn over the chain ([`attach_estimate`]) and its
-//! distance plotted against time ([`EstimatePanel`]).
+//! antenna, the walls, the estimator's points) and its distance error against time. Live and
+//! recorded, the daemon's wall estimate at the cursor is drawn over the chain
+//! ([`attach_estimate`]) and its distance plotted against time ([`EstimatePanel`]).
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -156,7 +156,7 @@ struct DataRef<'a> {
     sweep: Option<&'a SweepRunState>,
     /// A closed-loop run: the chain is its step at the cursor, with the robot.
     follow: Option<&'a FollowRunState>,
-    /// antennad's wall estimates (live).
+    /// antennad's wall estimates (live, or a recording's).
     estimates: Option<&'a EstimateHistory>,
     stage_range_m: Option<(f64, f64)>,
     mount_angle_rad: f64,
@@ -633,7 +633,8 @@ impl MonitorApp {
                     rig: Some(&trial.rig),
                     sweep: None,
                     follow: None,
-                    estimates: None,
+                    // A recording from before the estimates has no panel for them.
+                    estimates: (!trial.estimates.is_empty()).then_some(&trial.estimates),
                     stage_range_m: trial.rig.stage_range_m,
                     mount_angle_rad: trial.rig.base_mount_angle_rad,
                     addresses: &trial.segment_addresses,
@@ -1322,7 +1323,7 @@ impl MonitorApp {
     }
 }
 
-/// Puts on `frame` (live, drawn with `rig` from `history`) the newest of `estimates` made
+/// Puts on `frame` (live or recorded, drawn with `rig` from `history`) the newest of `estimates` made
 /// at or before its instant, if it is still current ([`EstimateHistory::current_at`]): the
 /// estimated wall in the track frame, from the base pivot where the stage was at the
 /// estimate's poll, along the stage's travel, toward the wall's side

@@ -1,6 +1,7 @@
-//! [`EstimateHistory`]: antennad's live wall estimates (the stream's `estimate` lines,
-//! `docs/stream-protocol.md`), the newest and those of the history window, and where the
-//! estimated wall lies in the chain panel's frame ([`EstimatedWall`]).
+//! [`EstimateHistory`]: antennad's wall estimates (live, the stream's `estimate` lines,
+//! `docs/stream-protocol.md`: the newest and those of the history window; recorded, a
+//! trial's `/antenna/estimate` channel: all of them), and where the estimated wall lies in
+//! the chain panel's frame ([`EstimatedWall`]).
 //!
 //! An estimate is in the carriage frame: origin at the base pivot at the estimate's newest
 //! poll, x along the stage's travel, y toward the wall; the wall is the line
@@ -22,8 +23,9 @@ pub struct Estimate {
     pub seq: u64,
     /// That poll's time, seconds.
     pub t_s: f64,
-    /// When the estimate was made, seconds.
-    pub estimated_s: f64,
+    /// When the estimate was made, seconds (`None` from a recording, which keeps only the
+    /// poll's time).
+    pub estimated_s: Option<f64>,
     /// The estimator: `"contact-line"`, `"bend"` or `"ideal-preview"`.
     pub estimator: String,
     /// The wall's distance along y at `preview_m` along x, metres (`None`: no estimate).
@@ -45,10 +47,28 @@ impl From<EstimateMessage> for Estimate {
         Self {
             seq: m.seq,
             t_s: m.t_ns as f64 * 1e-9,
-            estimated_s: m.estimated_ns as f64 * 1e-9,
+            estimated_s: Some(m.estimated_ns as f64 * 1e-9),
             estimator: m.estimator,
             distance_m: m.distance_m.filter(|d| d.is_finite()),
             angle_rad: m.angle_rad.filter(|a| a.is_finite()),
+            preview_m: m.preview_m.filter(|p| p.is_finite()),
+            reason: m.reason,
+            true_distance_m: m.true_distance_m.filter(|d| d.is_finite()),
+            true_angle_rad: m.true_angle_rad.filter(|a| a.is_finite()),
+        }
+    }
+}
+
+impl From<antenna_data::record::EstimateMessage> for Estimate {
+    /// A recorded estimate (times on the trial's clock, as its polls').
+    fn from(m: antenna_data::record::EstimateMessage) -> Self {
+        Self {
+            seq: m.seq,
+            t_s: m.t_s,
+            estimated_s: None,
+            estimator: m.estimator,
+            distance_m: m.distance_m.filter(|d| d.is_finite()),
+            angle_rad: m.wall_angle_rad.filter(|a| a.is_finite()),
             preview_m: m.preview_m.filter(|p| p.is_finite()),
             reason: m.reason,
             true_distance_m: m.true_distance_m.filter(|d| d.is_finite()),
@@ -159,6 +179,19 @@ pub struct EstimateHistory {
 }
 
 impl EstimateHistory {
+    /// Every one of `estimates` (a recording's), in time order (a stable sort: equal times
+    /// keep their order).
+    pub fn whole(estimates: impl IntoIterator<Item = Estimate>) -> Self {
+        let mut estimates: Vec<Estimate> = estimates.into_iter().collect();
+        estimates.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+        Self {
+            received: estimates.len() as u64,
+            capacity: estimates.len().max(1),
+            window_s: f64::INFINITY,
+            estimates: estimates.into(),
+        }
+    }
+
     /// Empty; keeps the estimates of the last `window_s` seconds, at most `capacity`.
     pub fn new(window_s: f64, capacity: usize) -> Self {
         Self {
@@ -312,7 +345,7 @@ mod tests {
             seq,
             // 128 a second: times exact in binary.
             t_s: seq as f64 / 128.0,
-            estimated_s: seq as f64 / 128.0 + 1e-5,
+            estimated_s: Some(seq as f64 / 128.0 + 1e-5),
             estimator: "contact-line".to_owned(),
             distance_m,
             angle_rad: distance_m.map(|_| 0.1),

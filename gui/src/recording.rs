@@ -5,13 +5,16 @@
 //! samples at or before it (they are recorded at their own, lower rates). The geometry comes
 //! from the rig kept in the recording's metadata (what the daemon sends in its stream's
 //! `hello`); a recording without one (written before antennad kept it) gets a stand-in and
-//! says so in [`RecordedTrial::geometry_note`].
+//! says so in [`RecordedTrial::geometry_note`]. The daemon's wall estimates
+//! (`/antenna/estimate`) are kept whole in [`RecordedTrial::estimates`], drawn and plotted
+//! as live ones are.
 
 use std::path::{Path, PathBuf};
 
 use antenna_data::record::{LogMessage, SegmentSample, TrialMetadata, TrialReader};
 
 use crate::error::MonitorError;
+use crate::estimate::{Estimate, EstimateHistory};
 use crate::history::{Health, History, Sample, SegmentReading};
 use crate::rig::RigGeometry;
 
@@ -34,6 +37,9 @@ pub struct RecordedTrial {
     pub truncated: Option<String>,
     /// The segments' addresses, base to tip.
     pub segment_addresses: Vec<u8>,
+    /// The daemon's wall estimates, all of them, in time order (empty from a recording
+    /// without them).
+    pub estimates: EstimateHistory,
 }
 
 /// Reads the trial at `path`.
@@ -98,6 +104,7 @@ pub fn open_trial(path: &Path) -> Result<RecordedTrial, MonitorError> {
         log: trial.log,
         truncated: trial.truncated,
         segment_addresses,
+        estimates: EstimateHistory::whole(trial.estimate.into_iter().map(Estimate::from)),
     })
 }
 
@@ -130,7 +137,7 @@ fn reading(s: &SegmentSample) -> SegmentReading {
 mod tests {
     use super::*;
     use antenna_data::record::{
-        StageMessage, TrialRecorder, synthetic_metadata, synthetic_segments,
+        EstimateMessage, StageMessage, TrialRecorder, synthetic_metadata, synthetic_segments,
     };
 
     #[test]
@@ -152,11 +159,38 @@ mod tests {
                     .unwrap();
             }
             recorder.record_segments(&segments).unwrap();
+            if i % 10 == 5 {
+                let known = i >= 100;
+                recorder
+                    .record_estimate(&EstimateMessage {
+                        t_s: segments.t_s,
+                        seq: i,
+                        estimator: "contact-line".to_owned(),
+                        distance_m: known.then_some(0.2),
+                        wall_angle_rad: known.then_some(-0.1),
+                        preview_m: known.then_some(0.05),
+                        reason: (!known).then(|| "no contact in the window".to_owned()),
+                        true_distance_m: Some(0.21),
+                        true_angle_rad: Some(-0.14),
+                    })
+                    .unwrap();
+            }
         }
         recorder.finish().unwrap();
         let trial = open_trial(&path).unwrap();
         std::fs::remove_file(&path).ok();
         assert_eq!(trial.history.len(), 300);
+        // The estimates, all of them, on the polls' clock.
+        assert_eq!(trial.estimates.len(), 30);
+        let at = trial.history.t_s(200).unwrap();
+        let e = trial.estimates.current_at(at).unwrap().unwrap();
+        assert_eq!(
+            (e.seq, e.distance_m, e.angle_rad),
+            (195, Some(0.2), Some(-0.1))
+        );
+        assert_eq!(e.true_distance_m, Some(0.21));
+        let early = trial.estimates.at(trial.history.t_s(50).unwrap()).unwrap();
+        assert_eq!(early.reason.as_deref(), Some("no contact in the window"));
         assert_eq!(trial.history.segment_count(), 8);
         assert_eq!(trial.rig.segment_count(), 8);
         // The rig kept in the metadata: the simulated rig with its scene's wall.

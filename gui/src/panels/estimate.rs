@@ -148,7 +148,7 @@ mod tests {
         let mut e = Estimate {
             seq: 1,
             t_s: 0.001,
-            estimated_s: 0.001,
+            estimated_s: Some(0.001),
             estimator: "contact-line".to_owned(),
             distance_m: Some(0.3),
             angle_rad: Some(0.1),

@@ -1,6 +1,7 @@
 //! The live wall estimate and message types the monitor does not know, against a fake
 //! antennad: a loopback server that writes a `hello` with the simulated rig's geometry, then
-//! samples, `estimate` lines and a line of a type from the future, as a newer daemon would.
+//! samples, `estimate` lines and a line of a type from the future, as a newer daemon would;
+//! and a recorded trial's estimates.
 #![allow(clippy::unwrap_used)]
 
 use std::io::{Read, Write};
@@ -188,4 +189,59 @@ fn an_unknown_message_type_is_skipped_and_the_estimate_is_shown() {
     );
     drop(harness);
     server.join().unwrap();
+}
+
+/// A recorded trial's estimates (`/antenna/estimate`) are shown as live ones are: the
+/// estimate at the cursor above its plot, the reason before there is one.
+#[test]
+fn a_recorded_trials_estimates_are_shown() {
+    use antenna_data::record::{
+        EstimateMessage as RecordedEstimate, TrialRecorder, synthetic_metadata, synthetic_segments,
+    };
+    let dir = crate::support::temp_dir("recorded-estimate");
+    let path = dir.join("estimates.mcap");
+    let mut metadata = synthetic_metadata("estimates");
+    metadata.rig = Some(host_daemon::service::daemon::rig_info(&Config::default()));
+    let mut recorder = TrialRecorder::create(&path, &metadata).unwrap();
+    let mut times = Vec::new();
+    for i in 0..400 {
+        let segments = synthetic_segments(i, 8);
+        times.push(segments.t_s);
+        recorder.record_segments(&segments).unwrap();
+        if i % 10 == 0 {
+            let known = i >= 200;
+            recorder
+                .record_estimate(&RecordedEstimate {
+                    t_s: segments.t_s,
+                    seq: i,
+                    estimator: "bend".to_owned(),
+                    distance_m: known.then_some(0.25),
+                    wall_angle_rad: None,
+                    preview_m: known.then_some(0.04),
+                    reason: (!known).then(|| "no bend calibration yet".to_owned()),
+                    true_distance_m: None,
+                    true_angle_rad: None,
+                })
+                .unwrap();
+        }
+    }
+    recorder.finish().unwrap();
+    let mut harness = harness(MonitorApp::new(AppOptions {
+        trial: Some(path),
+        export_dir: dir.clone(),
+        ..AppOptions::default()
+    }));
+    harness.step();
+    assert_eq!(harness.state().trial().unwrap().estimates.len(), 40);
+    harness.state_mut().scrub_to(times[100]);
+    expect_label(
+        &mut harness,
+        "no wall estimate (bend): no bend calibration yet",
+    );
+    harness.state_mut().scrub_to(times[305]);
+    expect_label(
+        &mut harness,
+        "wall estimate (bend): 250.0 mm, no angle at 40 mm ahead",
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }
