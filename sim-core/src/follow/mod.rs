@@ -17,6 +17,8 @@
 //! - [`theory`]: the template's linearization about the setpoint and its stability boundary.
 //! - [`footprint`]: the body's rectangle against the walls (collisions).
 //! - [`estimate`]: the estimators (contact line, bend, ideal preview) and odometry.
+//! - [`sensed`]: the contact-line and bend estimators fed sample by sample ([`SensedWall`]),
+//!   the one implementation behind the loop and antennad's live estimate.
 //! - [`control`]: the PD controller, its delay and the search turn.
 //! - [`run`]: the loop ([`Follow`], a [`FollowStep`] per step).
 //! - [`summary`]: how a run went ([`FollowSummary`], [`FollowStatus`]).
@@ -29,6 +31,7 @@ pub mod error;
 pub mod estimate;
 pub mod footprint;
 pub mod run;
+pub mod sensed;
 pub mod summary;
 pub mod theory;
 
@@ -39,5 +42,6 @@ pub use config::{
 pub use control::Command;
 pub use error::FollowError;
 pub use estimate::{BendTable, Estimate, NoEstimate};
-pub use run::{Follow, FollowStep, MAX_TURN_PER_STEP_RAD, calibrate_bend};
+pub use run::{Follow, FollowStep, MAX_TURN_PER_STEP_RAD, calibrate_bend, calibrate_bend_at};
+pub use sensed::SensedWall;
 pub use summary::{FollowStatus, FollowSummary, STATUS_NAMES};

@@ -7,15 +7,14 @@ use nalgebra::Vector2;
 use super::body::{BodyState, step_body};
 use super::config::{BodyModel, Estimator, FollowConfig, WallSide};
 use super::control::{Command, ControlLoop};
-use super::estimate::{
-    BendTable, ContactWindow, Estimate, NoEstimate, Odometry, bend_coordinate, ideal_preview,
-};
+use super::estimate::{BendTable, Estimate, NoEstimate, Odometry, bend_coordinate, ideal_preview};
+use super::sensed::SensedWall;
 use super::summary::{FollowStatus, FollowSummary, SummaryAccumulator};
 use super::{FollowError, footprint};
 use crate::contact::{Contact, QuasiStatic};
 use crate::sensor::{SensorSettings, Sensors};
 use crate::sweep::{BasePose, Motion, Placement, SweepScene, place_at};
-use crate::{EstimatedContact, Line, SolidSide, Wall, estimate_contacts};
+use crate::{Line, SolidSide, Wall};
 
 /// The most the body may turn in one step, radians: past it the run ends
 /// [`FollowStatus::Unstable`] (a held command, a delay or a stiff gain has made the loop
@@ -69,8 +68,9 @@ struct MountedAntenna {
     sensed: Vec<f64>,
     touch: Vec<u8>,
     contacts: Vec<Contact>,
-    estimated: Vec<EstimatedContact>,
-    body_points: Vec<Vector2<f64>>,
+    /// The contact-line or bend estimator, fed by every sample (none for the ideal
+    /// preview).
+    sensed_wall: Option<SensedWall>,
 }
 
 /// A closed-loop run (see the [module documentation](super)).
@@ -101,8 +101,6 @@ pub struct Follow {
     walls: Vec<Wall>,
     mirror: bool,
     antenna: Option<MountedAntenna>,
-    bend: Option<BendTable>,
-    window: Option<ContactWindow>,
     control: ControlLoop,
     body: BodyState,
     odometry: Odometry,
@@ -140,9 +138,12 @@ impl Follow {
         };
         let (sim, note, _) = place_at(&placed_scene, &pose).map_err(FollowError::Placement)?;
         run.placement_note = note;
-        if let super::Estimator::Bend = config.controller.estimator {
-            run.bend = Some(calibrate_bend(scene, config)?);
-        }
+        let layout = sensors.touch_layout();
+        let sensed_wall = match config.controller.estimator {
+            Estimator::ContactLine { window_s } => Some(SensedWall::contact_line(window_s, layout)),
+            Estimator::Bend => Some(SensedWall::bend(calibrate_bend(scene, config)?, layout)),
+            Estimator::IdealPreview { .. } => None,
+        };
         let links = scene.chain.n() + 1;
         run.antenna = Some(MountedAntenna {
             reach_m: scene.chain.total_length_m(),
@@ -152,8 +153,7 @@ impl Follow {
             sensed: vec![0.0; links],
             touch: vec![0; links],
             contacts: Vec::new(),
-            estimated: Vec::new(),
-            body_points: Vec::new(),
+            sensed_wall,
         });
         Ok(run)
     }
@@ -197,17 +197,11 @@ impl Follow {
         ) {
             return Err(FollowError::StartsInWall { wall, depth_m });
         }
-        let window = match config.controller.estimator {
-            Estimator::ContactLine { window_s } => Some(ContactWindow::new(window_s)),
-            _ => None,
-        };
         Ok(Follow {
             config: *config,
             walls,
             mirror,
             antenna: None,
-            bend: None,
-            window,
             control: ControlLoop::new(config.controller, config.robot.body, config.delay_steps()),
             body,
             odometry: Odometry::default(),
@@ -229,7 +223,10 @@ impl Follow {
 
     /// The bend estimator's calibration table, if it has one.
     pub fn bend_table(&self) -> Option<&BendTable> {
-        self.bend.as_ref()
+        self.antenna
+            .as_ref()
+            .and_then(|a| a.sensed_wall.as_ref())
+            .and_then(SensedWall::bend_table)
     }
 
     /// The number of steps the run has (fewer are taken when it ends early).
@@ -285,7 +282,7 @@ impl Follow {
             Ok(s) => s,
             Err(e) => return Some(Err(e)),
         };
-        let (estimate, fresh) = self.estimate(t_s, sampled);
+        let (estimate, fresh) = self.estimate(sampled);
         self.estimate = estimate;
         let command = self.control.command(
             t_s,
@@ -390,24 +387,22 @@ impl Follow {
         a.sensors
             .sense_touch(&a.contacts, &mut a.touch)
             .map_err(sensing)?;
-        a.estimated.clear();
-        let layout = a.sensors.touch_layout();
-        estimate_contacts(
-            a.sim.chain(),
-            &mount_m,
-            &a.sensed,
-            &a.touch,
-            &layout,
-            &mut a.estimated,
-        )
-        .map_err(sensing)?;
-        a.body_points.clear();
-        a.body_points.extend(a.estimated.iter().map(|e| e.point_m));
+        if let Some(wall) = &mut a.sensed_wall {
+            wall.add_sample(
+                t_s,
+                &self.odometry,
+                a.sim.chain(),
+                &mount_m,
+                &a.sensed,
+                &a.touch,
+            )
+            .map_err(sensing)?;
+        }
         Ok(true)
     }
 
     /// The estimator's answer at `t_s`, and whether it is fresh (made from a new sample).
-    fn estimate(&mut self, t_s: f64, sampled: bool) -> (Result<Estimate, NoEstimate>, bool) {
+    fn estimate(&mut self, sampled: bool) -> (Result<Estimate, NoEstimate>, bool) {
         match self.config.controller.estimator {
             Estimator::IdealPreview { preview_m } => (
                 ideal_preview(
@@ -418,35 +413,14 @@ impl Follow {
                 ),
                 true,
             ),
-            Estimator::ContactLine { .. } => {
-                let window = self
-                    .window
-                    .as_mut()
-                    .expect("a contact-line run has a window");
-                if sampled && let Some(a) = &self.antenna {
-                    window.add(t_s, &self.odometry, &a.body_points);
+            // The contact line moves with the odometry at every step; the bend is the
+            // newest sample's.
+            Estimator::Bend if !sampled => (self.estimate, false),
+            Estimator::ContactLine { .. } | Estimator::Bend => {
+                match self.antenna.as_mut().and_then(|a| a.sensed_wall.as_mut()) {
+                    Some(wall) => (wall.estimate(&self.odometry), sampled),
+                    None => (Err(NoEstimate::NoTouch), true),
                 }
-                (window.estimate(&self.odometry), sampled)
-            }
-            Estimator::Bend => {
-                if !sampled {
-                    return (self.estimate, false);
-                }
-                let (Some(a), Some(table)) = (&self.antenna, &self.bend) else {
-                    return (Err(NoEstimate::NoTouch), true);
-                };
-                if a.touch.iter().all(|&b| b == 0) {
-                    return (Err(NoEstimate::NoTouch), true);
-                }
-                let estimate = bend_coordinate(&a.sensed)
-                    .ok_or(NoEstimate::NoTouch)
-                    .and_then(|b| table.distance_m(b))
-                    .map(|distance_m| Estimate {
-                        distance_m,
-                        angle_rad: None,
-                        preview_m: 0.0,
-                    });
-                (estimate, true)
             }
         }
     }
@@ -523,10 +497,15 @@ impl Follow {
             ),
             None => (0, Vec::new(), None, Vec::new()),
         };
-        let estimated_points_m = match &self.window {
-            Some(w) => {
+        let window_points = self
+            .antenna
+            .as_ref()
+            .and_then(|a| a.sensed_wall.as_ref())
+            .map(SensedWall::window_points_m);
+        let estimated_points_m = match window_points {
+            Some(points) => {
                 let (sin, cos) = b.heading_rad.sin_cos();
-                w.body_points_m()
+                points
                     .iter()
                     .map(|p| {
                         flip(b.por_m + Vector2::new(cos * p.x - sin * p.y, sin * p.x + cos * p.y))
@@ -572,13 +551,36 @@ const CALIBRATION_POINTS: usize = 24;
 
 /// The bend estimator's calibration table for this antenna on this robot: the body
 /// parallel to a straight wall (`theta = 0`) at distances from just beyond the mount to
-/// nearly the antenna's reach, the antenna placed by the scene's approach (or a default
-/// approach), its continuous point of bend recorded against the distance.
+/// nearly the antenna's reach, the antenna placed by the scene's approach or tip-on-wall
+/// placement (or a default approach), its continuous point of bend recorded against the
+/// distance.
 ///
 /// # Errors
 /// [`FollowError::Calibration`] when fewer than two distances give a bend.
 pub fn calibrate_bend(scene: &SweepScene, config: &FollowConfig) -> Result<BendTable, FollowError> {
     let r = &config.robot;
+    calibrate_bend_at(
+        scene,
+        &BasePose {
+            base_m: r.mount_m,
+            base_angle_rad: r.mount_angle_rad,
+        },
+        r.speed_m_per_s,
+    )
+}
+
+/// [`calibrate_bend`] for an antenna whose base pivot is at `mount.base_m` in the body frame
+/// and whose base link makes `mount.base_angle_rad` with the body's x axis, moving along x at
+/// `speed_m_per_s` (the direction the placement approaches along): antennad's stage, for
+/// one.
+///
+/// # Errors
+/// [`FollowError::Calibration`] when fewer than two distances give a bend.
+pub fn calibrate_bend_at(
+    scene: &SweepScene,
+    mount: &BasePose,
+    speed_m_per_s: f64,
+) -> Result<BendTable, FollowError> {
     let reach_m = scene.chain.total_length_m();
     let placement = match &scene.placement {
         Placement::Approach {
@@ -592,6 +594,12 @@ pub fn calibrate_bend(scene: &SweepScene, config: &FollowConfig) -> Result<BendT
             along_m: *along_m,
             steps: *steps,
         },
+        // The tip on each wall as the scene puts it there (antennad's rigs start so).
+        Placement::TipOnWall { ahead_m, start, .. } => Placement::TipOnWall {
+            wall: 0,
+            ahead_m: *ahead_m,
+            start: start.clone(),
+        },
         _ => Placement::Approach {
             wall: 0,
             distance_m: 0.05,
@@ -599,8 +607,8 @@ pub fn calibrate_bend(scene: &SweepScene, config: &FollowConfig) -> Result<BendT
             steps: 100,
         },
     };
-    let lo = r.mount_m.y + 0.005;
-    let hi = r.mount_m.y + 0.95 * reach_m;
+    let lo = mount.base_m.y + 0.005;
+    let hi = mount.base_m.y + 0.95 * reach_m;
     let mut rows = Vec::new();
     for k in 0..CALIBRATION_POINTS {
         let distance_m = lo + (hi - lo) * k as f64 / (CALIBRATION_POINTS - 1) as f64;
@@ -618,16 +626,12 @@ pub fn calibrate_bend(scene: &SweepScene, config: &FollowConfig) -> Result<BendT
             )],
             placement: placement.clone(),
             motion: Motion {
-                velocity_m_per_s: Vector2::new(r.speed_m_per_s, 0.0),
+                velocity_m_per_s: Vector2::new(speed_m_per_s, 0.0),
                 ..Motion::default()
             },
             ..scene.clone()
         };
-        let pose = BasePose {
-            base_m: r.mount_m,
-            base_angle_rad: r.mount_angle_rad,
-        };
-        let Ok((sim, _, _)) = place_at(&at, &pose) else {
+        let Ok((sim, _, _)) = place_at(&at, mount) else {
             continue;
         };
         if sim.contacts().is_empty() {
