@@ -52,6 +52,9 @@ pub struct SimState {
     pub relaxed_steps: u64,
     /// What the last step relaxed, in words (empty when nothing).
     pub relaxations: Vec<String>,
+    /// The stage position and base pose the physics was solved at for this state (the
+    /// truth a live wall estimate is checked against); `None` only in a default state.
+    pub solved_at: Option<(f64, BasePose)>,
 }
 
 /// What a recorded physics step was.
@@ -130,6 +133,7 @@ impl SimPhysics {
             steps: Vec::new(),
         };
         physics.state = physics.sense(&report)?;
+        physics.state.solved_at = Some((0.0, start));
         Ok(physics)
     }
 
@@ -249,6 +253,7 @@ impl SimPhysics {
             self.relaxed_steps += 1;
         }
         self.state = self.sense(report)?;
+        self.state.solved_at = Some((stage_m, pose));
         if self.recording {
             self.steps.push(PhysicsStep {
                 kind,
@@ -287,6 +292,7 @@ impl SimPhysics {
                 .sum(),
             relaxed_steps: self.relaxed_steps,
             relaxations: report.relaxations(),
+            solved_at: None,
         })
     }
 }
