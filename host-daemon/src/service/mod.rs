@@ -13,6 +13,7 @@ pub mod daemon;
 pub mod free_space;
 pub(crate) mod motion;
 pub mod rig;
+pub mod estimate;
 pub mod samples;
 pub mod stdout_lines;
 pub mod systemd;

@@ -28,6 +28,8 @@ use antenna_bus::{HallErrors, HallSensor};
 pub use antenna_sim_physics::{PhysicsStep, SimPhysics, SimState, StepKind};
 use anyhow::{Context, Result};
 use sim_core::Sensors;
+use sim_core::sweep::BasePose;
+use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -84,10 +86,22 @@ pub fn sim_bus(config: &Config) -> Result<SimBus> {
 /// The polling thread's hook for the simulated rig: the segments sense the shared state and
 /// run one sampling period of their firmware before each poll.
 pub fn sense(state: Arc<Mutex<SimState>>) -> impl FnMut(&mut SimBus, Duration) + Send + 'static {
+    sense_keeping_poses(state, Arc::new(SensedPoses::default()))
+}
+
+/// [`sense`], keeping the pose the physics was solved at for each poll in `poses`, by the
+/// poll's time (the truth a live wall estimate is checked against).
+pub fn sense_keeping_poses(
+    state: Arc<Mutex<SimState>>,
+    poses: Arc<SensedPoses>,
+) -> impl FnMut(&mut SimBus, Duration) + Send + 'static {
     let mut copy = SimState::default();
-    move |bus, _| {
+    move |bus, now| {
         if let Ok(shared) = state.lock() {
             copy.clone_from(&shared);
+        }
+        if let Some(solved_at) = copy.solved_at {
+            poses.push(u64::try_from(now.as_nanos()).unwrap_or(u64::MAX), solved_at);
         }
         for (k, (&angle, &touch)) in copy.joint_angles_rad.iter().zip(&copy.touch).enumerate() {
             if let Some(segment) = bus.segment_mut(k) {
@@ -96,6 +110,45 @@ pub fn sense(state: Arc<Mutex<SimState>>) -> impl FnMut(&mut SimBus, Duration) +
             }
         }
         bus.sample_all();
+    }
+}
+
+/// The stage position and base pose each poll of the simulated segments sensed, by the
+/// poll's time (`PollRecord::t_ns`), newest last; the oldest are dropped beyond
+/// [`SensedPoses::CAPACITY`].
+#[derive(Debug, Default)]
+pub struct SensedPoses {
+    entries: Mutex<VecDeque<(u64, (f64, BasePose))>>,
+}
+
+impl SensedPoses {
+    /// Entries kept at most (4 s of polls at 1 kHz).
+    pub const CAPACITY: usize = 4096;
+
+    fn push(&self, t_ns: u64, solved_at: (f64, BasePose)) {
+        if let Ok(mut entries) = self.entries.lock() {
+            if entries.len() >= Self::CAPACITY {
+                entries.pop_front();
+            }
+            entries.push_back((t_ns, solved_at));
+        }
+    }
+
+    /// The stage position and base pose the poll at `t_ns` sensed, if kept; that entry and
+    /// every older one are taken out.
+    pub fn take_at(&self, t_ns: u64) -> Option<(f64, BasePose)> {
+        let mut entries = self.entries.lock().ok()?;
+        let mut found = None;
+        while let Some(&(t, solved_at)) = entries.front() {
+            if t > t_ns {
+                break;
+            }
+            entries.pop_front();
+            if t == t_ns {
+                found = Some(solved_at);
+            }
+        }
+        found
     }
 }
 

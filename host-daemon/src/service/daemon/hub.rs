@@ -14,16 +14,20 @@ use crate::service::acquisition::{
     AcquisitionEvent, FirmwareReading, HealthChange, PollRecord, Shared,
 };
 use crate::service::clock::TrialClock;
+use crate::service::estimate::{LiveEstimate, PollInput};
 use crate::service::motion::{MotionCommand, RigStatus};
 use crate::service::samples::{record_sample, stream_sample};
 use crate::service::trial_script::ScriptEnds;
 use crate::service::watchdog::{PollWatchdog, WatchdogEvent};
-use crate::sim::rig::{SimState, StepKind};
+use crate::sim::rig::{SensedPoses, SimState, StepKind};
+use antenna_data::record::EstimateMessage as RecordedEstimate;
 use antenna_data::record::{
     LogMessage, PhysicsStepKind, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage,
     TrialRecorder,
 };
-use antenna_data::stream::{PollingStatus, SegmentStatus, StreamMessage};
+use antenna_data::stream::{
+    EstimateMessage, PollingStatus, SegmentSample, SegmentStatus, StreamMessage,
+};
 use antenna_protocol::{Calibration, FIRMWARE_VERSION, StatusFlags};
 use anyhow::Result;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -81,6 +85,10 @@ pub(super) struct Hub {
     pub(super) finished: bool,
     /// The simulated rig's physics (its contact solver's relaxations are logged).
     pub(super) sim_state: Option<Shared<SimState>>,
+    /// The poses the simulated segments sensed, by poll (the estimate's truth).
+    pub(super) sensed_poses: Option<Arc<SensedPoses>>,
+    /// The live wall estimate (`None` with `[estimate] estimator = "none"`).
+    pub(super) estimate: Option<LiveEstimate>,
     /// Relaxed steps of the simulation already logged.
     pub(super) sim_relaxed_logged: u64,
     /// Watches the polling thread's heartbeat.
@@ -219,6 +227,9 @@ impl Hub {
         }
         if let Some(server) = self.server.take() {
             server.shutdown();
+        }
+        if let Some(foxglove) = self.foxglove.take() {
+            foxglove.stop();
         }
     }
 
@@ -426,20 +437,45 @@ impl Hub {
         if !self.rig_status.servo.load(Ordering::Relaxed) {
             self.base_rad = None;
         }
-        if self.server.is_some() || self.foxglove.is_some() {
-            self.publish(&StreamMessage::Samples {
-                seq: poll.seq,
-                t_ns: poll.t_ns,
-                segments: poll
-                    .readings
-                    .iter()
-                    .zip(&self.calibrations)
-                    .enumerate()
-                    .map(|(k, (r, c))| stream_sample(r, *c, poll.is_stale(k)))
-                    .collect(),
-                stage_position_m: self.stage_mm.map(|mm| mm * 1e-3),
-                base_angle_deg: self.base_rad.map(f64::to_degrees),
-            });
+        let streamed = self.server.is_some() || self.foxglove.is_some();
+        if streamed || self.estimate.is_some() {
+            let segments: Vec<SegmentSample> = poll
+                .readings
+                .iter()
+                .zip(&self.calibrations)
+                .enumerate()
+                .map(|(k, (r, c))| stream_sample(r, *c, poll.is_stale(k)))
+                .collect();
+            let estimate = self.estimate_at(poll, &segments);
+            if streamed {
+                self.publish(&StreamMessage::Samples {
+                    seq: poll.seq,
+                    t_ns: poll.t_ns,
+                    segments,
+                    stage_position_m: self.stage_mm.map(|mm| mm * 1e-3),
+                    base_angle_deg: self.base_rad.map(f64::to_degrees),
+                });
+            }
+            if let Some(estimate) = estimate {
+                let recorded = RecordedEstimate {
+                    t_s: 0.0,
+                    seq: estimate.seq,
+                    estimator: estimate.estimator.clone(),
+                    distance_m: estimate.distance_m,
+                    wall_angle_rad: estimate.angle_rad,
+                    preview_m: estimate.preview_m,
+                    reason: estimate.reason.clone(),
+                    true_distance_m: estimate.true_distance_m,
+                    true_angle_rad: estimate.true_angle_rad,
+                };
+                let t_ns = estimate.t_ns;
+                if streamed {
+                    self.publish(&StreamMessage::Estimate(estimate));
+                }
+                self.record(t_ns, |r, t_s| {
+                    r.record_estimate(&RecordedEstimate { t_s, ..recorded })
+                });
+            }
         }
         let calibrations = self.calibrations.clone();
         let seq = poll.seq;
@@ -465,6 +501,34 @@ impl Hub {
             self.log
                 .sample(sample_line(t_s, self.stage_mm, poll, &self.calibrations));
         }
+    }
+
+    /// Feeds `poll` to the live wall estimate; the estimate when one is due.
+    fn estimate_at(
+        &mut self,
+        poll: &PollRecord,
+        segments: &[SegmentSample],
+    ) -> Option<EstimateMessage> {
+        let estimate = self.estimate.as_mut()?;
+        let angles_rad: Vec<Option<f64>> = segments.iter().map(|s| s.angle_rad).collect();
+        let touch_bits: Vec<Option<u8>> = segments.iter().map(|s| s.touch_bits).collect();
+        let solved_at = self
+            .sensed_poses
+            .as_ref()
+            .and_then(|poses| poses.take_at(poll.t_ns));
+        let clock = self.clock;
+        estimate.on_poll(
+            &PollInput {
+                seq: poll.seq,
+                t_ns: poll.t_ns,
+                angles_rad: &angles_rad,
+                touch_bits: &touch_bits,
+                stage_m: self.stage_mm.map(|mm| mm * 1e-3),
+                servo_rad: self.base_rad,
+                solved_at,
+            },
+            || clock.elapsed_ns(),
+        )
     }
 
     pub(super) fn publish_status(&mut self) {

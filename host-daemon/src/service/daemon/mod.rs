@@ -59,6 +59,7 @@ use crate::config::Config;
 use crate::hardware::poll::SegmentHealth;
 use crate::net::ControlToken;
 use crate::service::acquisition::AcquisitionEvent;
+use crate::service::clock::TrialClock;
 use crate::service::free_space::{FreeSpace, StatvfsFreeSpace};
 use crate::service::systemd::Watchdog;
 use antenna_data::record::RecordCounts;
@@ -103,6 +104,11 @@ pub struct DaemonOptions {
     pub record: bool,
     /// Start the TCP server on `server.listen`.
     pub serve: bool,
+    /// With [`Self::serve`], start the Foxglove server on `foxglove.listen` when the
+    /// configuration turns it on ([`Config::foxglove_enabled`]). `antennad` sets it; off by
+    /// default here, so that daemons started in-process (tests, the monitor's) do not all
+    /// reach for the same port.
+    pub foxglove: bool,
     /// Print sample lines to stdout during a trial ([`crate::service::stdout_lines::stdout`]: a
     /// closed or stalled stdout costs lines, never the daemon). The log goes to `tracing`
     /// either way (target `antennad`), and is kept ([`DaemonHandle::log_lines`]).
@@ -148,6 +154,7 @@ impl Default for DaemonOptions {
             exit_after_trial: false,
             record: true,
             serve: true,
+            foxglove: false,
             echo: false,
             print_hz: 4.0,
             watchdog: None,
@@ -244,18 +251,32 @@ pub struct Daemon;
 #[derive(Debug)]
 pub struct DaemonHandle {
     local_addr: Option<SocketAddr>,
+    foxglove_addr: Option<SocketAddr>,
     token: ControlToken,
     token_generated: bool,
     stop: Arc<AtomicBool>,
     hub: Option<JoinHandle<Result<DaemonSummary>>>,
     log: Log,
     trial: Arc<Mutex<Option<String>>>,
+    clock: TrialClock,
 }
 
 impl DaemonHandle {
+    /// The daemon's clock: every `t_ns` it streams and records (a poll's, an estimate's
+    /// `estimated_ns`) is [`TrialClock::elapsed_ns`] of it, so an in-process client reads
+    /// latencies on the same clock.
+    pub fn clock(&self) -> TrialClock {
+        self.clock
+    }
+
     /// The TCP endpoint actually bound (`None` without a server).
     pub fn local_addr(&self) -> Option<SocketAddr> {
         self.local_addr
+    }
+
+    /// The Foxglove WebSocket endpoint actually bound (`None` when no Foxglove server runs).
+    pub fn foxglove_addr(&self) -> Option<SocketAddr> {
+        self.foxglove_addr
     }
 
     /// The control token (the configured one, or the one generated at start).
@@ -291,7 +312,7 @@ impl DaemonHandle {
     }
 
     /// Stops the daemon: ends any trial (its file finalized), stops the stage, the threads
-    /// and the server.
+    /// and the servers.
     pub fn shutdown(mut self) -> Result<DaemonSummary> {
         self.stop.store(true, Ordering::Relaxed);
         self.join()

@@ -7,16 +7,18 @@ use super::rig_info::rig_info;
 use super::{Daemon, DaemonHandle, DaemonOptions, DaemonSummary, Log, POLL_THREAD_STOP_WAIT};
 use crate::config::Config;
 use crate::hardware::poll::{Poller, SegmentHealth};
+use crate::net::foxglove::{self, FoxgloveError, FoxgloveLive};
 use crate::net::{ControlToken, ServerLog, ServerOptions, StreamServer};
 use crate::service::acquisition::{
     EventSender, PollSettings, Shared, event_channel, spawn_watched_poller,
 };
 use crate::service::clock::TrialClock;
+use crate::service::estimate::LiveEstimate;
 use crate::service::motion::{MotionShared, RigStatus, spawn_motion};
 use crate::service::rig::DaemonRig;
 use crate::service::trial_script::ScriptEnds;
 use crate::service::watchdog::{PollHeartbeat, PollWatchdog, stall_bound};
-use crate::sim::rig::{SimState, sense, sense_with_faults, sim_bus};
+use crate::sim::rig::{SensedPoses, SimState, sense_keeping_poses, sense_with_faults, sim_bus};
 use antenna_data::stream::SegmentStatus;
 use anyhow::{Context, Result, anyhow, bail};
 use std::collections::{BTreeMap, VecDeque};
@@ -89,6 +91,11 @@ impl Daemon {
             Some(token) => token,
             None => ControlToken::generate().context("generating the control token")?,
         };
+        // The live wall estimate (the bend estimator calibrates on the scene here, before
+        // anything starts).
+        let estimate = LiveEstimate::from_config(&config).map_err(|(key, why)| {
+            anyhow!("`{key}` = {:?}: {why}", config.estimate.estimator.name())
+        })?;
         let addresses = config.bus.addresses();
         let clock = TrialClock::start();
         let stop_threads = Arc::new(AtomicBool::new(false));
@@ -100,6 +107,7 @@ impl Daemon {
             .bus
             .is_sim()
             .then(|| Arc::new(Mutex::new(SimState::default())));
+        let sensed_poses = Arc::new(SensedPoses::default());
         let settings = PollSettings {
             period: Duration::from_secs_f64(1.0 / config.bus.poll_hz),
             counter_check_every: config.bus.counter_check_every,
@@ -111,7 +119,7 @@ impl Daemon {
             &config,
             clock,
             settings,
-            sim_state.as_ref(),
+            sim_state.as_ref().map(|s| (s, &sensed_poses)),
             &events,
             (&stop_threads, &heartbeat),
         )?;
@@ -190,6 +198,20 @@ impl Daemon {
         } else {
             None
         };
+        let unix_origin_ns = unix_origin_ns(clock);
+        let foxglove = match start_foxglove(&config, &options, unix_origin_ns, &log) {
+            Ok(foxglove) => foxglove,
+            Err(e) => {
+                stop_threads.store(true, Ordering::Relaxed);
+                if let Some(server) = server {
+                    server.shutdown();
+                }
+                let _ = motion.join();
+                let _ = poll_join(poll_join_bound);
+                return Err(e);
+            }
+        };
+        let foxglove_addr = foxglove.as_ref().map(FoxgloveLive::local_addr);
         let local_addr = server.as_ref().map(StreamServer::local_addr);
         log.line(format!(
             "antennad: {bus_description}; {}; {rig_description}",
@@ -197,6 +219,9 @@ impl Daemon {
         ));
         if let Some(addr) = local_addr {
             log.line(watch_line(&config, token_generated, addr));
+        }
+        if let Some(addr) = foxglove_addr {
+            log.line(foxglove_line(addr));
         }
         if config.bus.is_sim() {
             log.line(format!(
@@ -217,7 +242,7 @@ impl Daemon {
 
         let stop = Arc::new(AtomicBool::new(false));
         let mut hub = Hub {
-            unix_origin_ns: unix_origin_ns(clock),
+            unix_origin_ns,
             token: token.clone(),
             free_check_due: Instant::now(),
             calibrations: config.bus.calibrations(),
@@ -225,7 +250,7 @@ impl Daemon {
             options: options.clone(),
             clock,
             server,
-            foxglove: None,
+            foxglove,
             log: log.clone(),
             trial: None,
             trial_state: Arc::clone(&trial_state),
@@ -254,6 +279,8 @@ impl Daemon {
             outcomes: Vec::new(),
             finished: false,
             sim_state: sim_state.clone(),
+            sensed_poses: sim_state.is_some().then_some(sensed_poses),
+            estimate,
             sim_relaxed_logged: 0,
             max_lateness_seen: Duration::ZERO,
         };
@@ -308,14 +335,69 @@ impl Daemon {
         };
         Ok(DaemonHandle {
             local_addr,
+            foxglove_addr,
             token,
             token_generated,
             stop,
             hub: Some(hub_thread),
             log,
             trial: trial_state,
+            clock,
         })
     }
+}
+
+/// The Foxglove server of `[foxglove]`, if it runs: only with the TCP server
+/// ([`DaemonOptions::serve`]) and [`DaemonOptions::foxglove`], when
+/// [`Config::foxglove_enabled`]. A port that cannot be bound is an error naming
+/// `foxglove.listen`, or with `foxglove.required = false` a warning and no Foxglove; an
+/// antennad built without the server refuses `foxglove.enabled = true` and otherwise says it
+/// has none.
+fn start_foxglove(
+    config: &Config,
+    options: &DaemonOptions,
+    unix_origin_ns: u64,
+    log: &Log,
+) -> Result<Option<FoxgloveLive>> {
+    if !foxglove::BUILT {
+        if config.foxglove.enabled == Some(true) {
+            bail!("`foxglove.enabled` = true: {}", FoxgloveError::NotBuilt);
+        }
+        if options.serve && options.foxglove && config.foxglove_enabled() {
+            log.line(
+                "antennad: no Foxglove server: this antennad was built without it (cargo \
+                 feature `foxglove`)"
+                    .to_owned(),
+            );
+        }
+        return Ok(None);
+    }
+    if !(options.serve && options.foxglove && config.foxglove_enabled()) {
+        return Ok(None);
+    }
+    let listen = &config.foxglove.listen;
+    match FoxgloveLive::start(config, unix_origin_ns) {
+        Ok(live) => Ok(Some(live)),
+        Err(e) if !config.foxglove.required => {
+            log.warn(format!(
+                "antennad: `foxglove.listen` = {listen:?}: {e}; running without Foxglove \
+                 (foxglove.required = false)"
+            ));
+            Ok(None)
+        }
+        Err(e) => Err(anyhow!(e)).context(format!(
+            "`foxglove.listen` = {listen:?}: starting the Foxglove server (another antennad or \
+             program on the port? set [foxglove] listen, or required = false to start without it)"
+        )),
+    }
+}
+
+/// Where Foxglove connects, for the log at start.
+fn foxglove_line(addr: SocketAddr) -> String {
+    format!(
+        "  see it in Foxglove: open a connection, Foxglove WebSocket, ws://{addr} (view-only; \
+         the layout docs/foxglove/antenna-layout.json, docs/foxglove.md)"
+    )
 }
 
 /// The polling thread: on the simulated bus (its segments sensing `sim_state`, with
@@ -324,12 +406,12 @@ fn start_polling(
     config: &Config,
     clock: TrialClock,
     settings: PollSettings,
-    sim_state: Option<&Shared<SimState>>,
+    sim_state: Option<(&Shared<SimState>, &Arc<SensedPoses>)>,
     events: &EventSender,
     (stop, heartbeat): (&Arc<AtomicBool>, &Arc<PollHeartbeat>),
 ) -> Result<(PollJoin, String)> {
     let addresses = config.bus.addresses();
-    let Some(state) = sim_state else {
+    let Some((state, poses)) = sim_state else {
         return hardware_poller(
             config,
             &addresses,
@@ -343,7 +425,10 @@ fn start_polling(
         Poller::new(sim_bus(config)?, &addresses),
         clock,
         settings,
-        sense_with_faults(sense(Arc::clone(state)), config),
+        sense_with_faults(
+            sense_keeping_poses(Arc::clone(state), Arc::clone(poses)),
+            config,
+        ),
         events.clone(),
         Arc::clone(stop),
         Arc::clone(heartbeat),
@@ -497,6 +582,46 @@ mod tests {
         let line = watch_line(&config, false, addr);
         assert!(line.contains("the configured server.token"), "{line}");
         assert!(!line.contains("s3cret"), "{line}");
+    }
+
+    #[test]
+    fn the_foxglove_line_gives_the_websocket_url() {
+        let line = foxglove_line("127.0.0.1:8765".parse().unwrap());
+        assert!(line.contains("ws://127.0.0.1:8765"), "{line}");
+        assert!(line.contains("view-only"), "{line}");
+    }
+
+    /// Built without the server: `foxglove.enabled = true` is refused naming the key; left
+    /// out on the simulated rig (on by default), antennad starts and says it has none.
+    #[cfg(not(feature = "foxglove"))]
+    #[test]
+    fn without_the_feature_enabled_is_refused_and_the_default_is_said() {
+        let mut config = Config::default();
+        config.server.listen = "127.0.0.1:0".to_owned();
+        config.data_dir =
+            std::env::temp_dir().join(format!("antennad-nofox-{}", std::process::id()));
+        config.foxglove.enabled = Some(true);
+        let options = DaemonOptions {
+            foxglove: true,
+            record: false,
+            ..DaemonOptions::default()
+        };
+        let error = Daemon::start(config.clone(), options.clone()).unwrap_err();
+        let text = format!("{error:#}");
+        assert!(text.contains("`foxglove.enabled` = true"), "{text}");
+        assert!(text.contains("built without"), "{text}");
+        config.foxglove.enabled = None;
+        let daemon = Daemon::start(config, options).unwrap();
+        assert_eq!(daemon.foxglove_addr(), None);
+        assert!(
+            daemon
+                .log_lines()
+                .iter()
+                .any(|l| l.contains("no Foxglove server")),
+            "{:?}",
+            daemon.log_lines()
+        );
+        daemon.shutdown().unwrap();
     }
 
     #[test]
