@@ -1300,12 +1300,20 @@ impl MonitorApp {
                 };
                 let path = self.export_dir.join(format!("{stem}.{extension}"));
                 let joints = self.panels.angles.joints(data.history.segment_count());
+                // The estimated wall only while the chain panel shows it.
+                let without_estimate =
+                    measured
+                        .filter(|_| !self.panels.chain.show_estimate)
+                        .map(|m| ChainFrame {
+                            estimated_wall: None,
+                            ..m.clone()
+                        });
                 let input = FigureInput {
                     history: data.history,
                     t0_s,
                     t1_s,
                     joints: &joints,
-                    measured,
+                    measured: without_estimate.as_ref().or(measured),
                     predicted: predicted.filter(|_| self.panels.chain.show_prediction),
                 };
                 export_figure(&input, &path)?;

@@ -1,5 +1,6 @@
 //! Exports: the samples of the visible time range to CSV, and the view (the chain at the
-//! cursor beside the joint angles of the visible range) to SVG or PNG with plotters.
+//! cursor, with antennad's estimated wall when the chain panel shows it, beside the joint
+//! angles of the visible range) to SVG or PNG with plotters.
 //!
 //! # CSV
 //! One header line, then one row per sample with `t0_s <= t_s <= t1_s`:
@@ -151,6 +152,8 @@ const TOUCHED: RGBColor = RGBColor(220, 0, 60);
 const WALL: RGBColor = RGBColor(90, 90, 90);
 /// A follow run's body and path.
 const BODY: RGBColor = RGBColor(60, 60, 60);
+/// antennad's estimated wall (the chain panel's bluish green).
+const ESTIMATED_WALL: RGBColor = RGBColor(0, 158, 115);
 
 fn draw_figure<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
@@ -204,6 +207,26 @@ fn draw_chain<DB: DrawingBackend>(
                 wall.iter().map(|p| (mm(p[0]), mm(p[1]))),
                 WALL.stroke_width(3),
             ))
+            .map_err(e)?;
+    }
+    if let Some(wall) = &measured.estimated_wall {
+        let ends = wall.ends_m.map(|p| (mm(p[0]), mm(p[1])));
+        let label = format!(
+            "estimated wall ({}{})",
+            wall.estimator,
+            if wall.angle_known { "" } else { ", no angle" }
+        );
+        chart
+            .draw_series(LineSeries::new(ends, ESTIMATED_WALL.stroke_width(2)))
+            .map_err(e)?
+            .label(label)
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], ESTIMATED_WALL));
+        chart
+            .draw_series([Cross::new(
+                (mm(wall.at_m[0]), mm(wall.at_m[1])),
+                5,
+                ESTIMATED_WALL.stroke_width(2),
+            )])
             .map_err(e)?;
     }
     if measured.body.is_some() && measured.path_m.len() >= 2 {
@@ -392,6 +415,36 @@ mod tests {
         assert!(lines[101].starts_with("0.2,200,"));
         // Lines end in a bare newline, the last one too; nothing is quoted.
         assert!(text.ends_with("nack\n") && !text.contains('\r') && !text.contains('"'));
+    }
+
+    /// A frame with antennad's estimated wall draws it, labelled with its estimator.
+    #[test]
+    fn the_estimated_wall_is_in_the_figure() {
+        let h = history();
+        let frame = ChainFrame {
+            joints_m: vec![[0.0, 0.0], [0.04, 0.0], [0.08, 0.02], [0.1, 0.05]],
+            segments: vec![crate::frame::SegmentState::QUIET; 2],
+            estimated_wall: Some(crate::estimate::EstimatedWall {
+                ends_m: [[-0.02, 0.1], [0.15, 0.08]],
+                at_m: [0.05, 0.09],
+                angle_known: true,
+                estimator: "contact-line".to_owned(),
+            }),
+            ..ChainFrame::default()
+        };
+        let input = FigureInput {
+            history: &h,
+            t0_s: 0.0,
+            t1_s: 1.0,
+            joints: &[0, 1],
+            measured: Some(&frame),
+            predicted: None,
+        };
+        let svg = std::env::temp_dir().join(format!("monitor-fig-est-{}.svg", std::process::id()));
+        export_figure(&input, &svg).unwrap();
+        let text = std::fs::read_to_string(&svg).unwrap();
+        std::fs::remove_file(&svg).ok();
+        assert!(text.contains("estimated wall (contact-line)"), "{text}");
     }
 
     #[test]
