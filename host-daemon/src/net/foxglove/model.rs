@@ -45,7 +45,8 @@ pub fn chain_model(config: &Config) -> ChainModel {
     };
     ChainModel {
         link_lengths_m: chain.link_lengths_m().to_vec(),
-        base_mount_angle_rad: chain.base_angle_rad(),
+        // The carriage frame turns with the travel: the base link's angle from it.
+        base_mount_angle_rad: chain.base_angle_rad() - travel_angle_rad,
         origin_m,
         travel_angle_rad,
         walls_m,

@@ -7,9 +7,13 @@ use super::control::HubRequest;
 use super::hub::Hub;
 use super::rig_info::rig_info;
 use super::start::trial_names;
+use crate::config::WallSideName;
 use crate::net::ControlToken;
+use crate::net::foxglove::chain_model;
 use crate::service::motion::MotionCommand;
-use antenna_data::record::{LogMessage, RecordCounts, TrialMetadata, TrialRecorder};
+use antenna_data::record::{
+    FoxgloveOptions, LogMessage, RecordCounts, TrialMetadata, TrialRecorder,
+};
 use anyhow::Result;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -111,8 +115,14 @@ impl Hub {
                 rig: Some(rig_info(&self.config)),
             };
             let options = self.config.recording.recorder_options();
+            // The recording's Foxglove channels draw the chain Foxglove live draws.
+            let foxglove = FoxgloveOptions {
+                chain: Some(chain_model(&self.config)),
+                scene_hz: self.config.foxglove.scene_hz,
+                wall_on_left: self.config.estimate.wall_side == WallSideName::Left,
+            };
             Some(
-                TrialRecorder::create_with(&path, &metadata, options)
+                TrialRecorder::create_with_foxglove(&path, &metadata, options, foxglove)
                     .map_err(|e| format!("creating the recording {}: {e}", path.display()))?,
             )
         } else {
