@@ -835,8 +835,8 @@ impl MonitorApp {
                             ui.label(RichText::new(text).color(colour).strong());
                             if state.lagged_dropped > 0 {
                                 ui.label(format!(
-                                    "{} messages dropped (lagged)",
-                                    state.lagged_dropped
+                                    "{} messages dropped (lagged), {} of them polls",
+                                    state.lagged_dropped, state.lagged_samples_dropped
                                 ));
                             }
                             if let (n @ 1.., Some(kind)) = &state.unknown_lines {

@@ -217,6 +217,9 @@ pub struct LiveState {
     pub status: Option<DaemonStatus>,
     /// Messages the daemon dropped for us (from `lagged`), since we started.
     pub lagged_dropped: u64,
+    /// How many of them were polls (`lagged`'s `samples_dropped`): the gaps in `seq` they
+    /// leave (0 from a daemon before it counted them).
+    pub lagged_samples_dropped: u64,
     /// Replies, oldest first (the last few dozen).
     pub replies: Vec<ReplyRecord>,
     /// Successful connections so far.
@@ -243,6 +246,7 @@ impl LiveState {
             segment_addresses: Vec::new(),
             status: None,
             lagged_dropped: 0,
+            lagged_samples_dropped: 0,
             replies: Vec::new(),
             connections: 0,
             bad_lines: (0, None),
@@ -629,7 +633,13 @@ fn on_message(
                 note,
             });
         }
-        StreamMessage::Lagged { dropped, .. } => state.lagged_dropped += dropped,
+        StreamMessage::Lagged {
+            dropped,
+            samples_dropped,
+        } => {
+            state.lagged_dropped += dropped;
+            state.lagged_samples_dropped += samples_dropped;
+        }
         StreamMessage::Estimate(estimate) => {
             if !*greeted {
                 return Err("estimate before hello: not an antennad stream".to_owned());
@@ -754,6 +764,19 @@ mod tests {
         assert_eq!(state.history.len(), 1);
     }
 
+    /// `lagged` counts the messages dropped and, of them, the polls (an older daemon's line
+    /// without `samples_dropped` counts none).
+    #[test]
+    fn lagged_counts_the_polls_dropped_apart() {
+        let state = receive(&[
+            HELLO,
+            r#"{"type":"lagged","dropped":5,"samples_dropped":3}"#,
+            r#"{"type":"lagged","dropped":2}"#,
+        ]);
+        assert_eq!(state.lagged_dropped, 7);
+        assert_eq!(state.lagged_samples_dropped, 3);
+    }
+
     /// A new daemon (its samples' clock restarted) starts the estimates afresh too.
     #[test]
     fn a_new_daemons_samples_clear_the_estimates() {
@@ -773,7 +796,7 @@ mod tests {
     #[test]
     fn the_known_types_are_the_messages_read() {
         let estimate = r#"{"type":"estimate","seq":2,"t_ns":2000000,"estimated_ns":2000100,"estimator":"bend","distance_m":0.3,"angle_rad":null,"preview_m":0.05}"#;
-        let lagged = r#"{"type":"lagged","dropped":3}"#;
+        let lagged = r#"{"type":"lagged","dropped":3,"samples_dropped":2}"#;
         let reply = r#"{"type":"reply","id":1,"ok":true,"message":"ok"}"#;
         let status = r#"{"type":"status","t_ns":1,"trial":null,"segments":[],"note":null}"#;
         let first = samples_line(1);

@@ -42,13 +42,15 @@ fn connect_shows_the_daemon_the_chain_and_the_rig_geometry() {
         let last = state.history.sample(n - 1).unwrap();
         let first = state.history.sample(0).unwrap();
         let seq_span = last.seq.unwrap() - first.seq.unwrap();
-        let held = n as u64 - 1 + state.lagged_dropped;
+        // The polls among the messages dropped (`lagged`'s `samples_dropped`; the others
+        // are status and estimate lines).
+        let held = n as u64 - 1 + state.lagged_samples_dropped;
         assert!(
             seq_span >= held,
             "seq {} to {}: {n} polls held, {} dropped",
             first.seq.unwrap(),
             last.seq.unwrap(),
-            state.lagged_dropped
+            state.lagged_samples_dropped
         );
         gaps = seq_span - held;
         let seqs: Vec<u64> = (0..n)
