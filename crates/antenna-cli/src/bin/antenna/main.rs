@@ -169,7 +169,8 @@ struct IdentifyArgs {
 ///
 /// A trial cut short by a crash exports up to its last flush (with a warning on stderr).
 /// Variables and columns: see the `antenna_cli::export` docs. Exit status: 0 written; 2 bad
-/// input (a message naming the file).
+/// input or a failed write (a message naming the file; a failed write leaves no partial
+/// file).
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:
   antenna export data/trial-001.mcap --mat trial-001.mat
@@ -556,9 +557,8 @@ fn run_export(args: &ExportArgs) -> Result<(), Failure> {
             .with_context(|| format!("{}: exporting to {}", path.display(), out.display()))?;
     }
     if let Some(out) = &args.csv {
-        let text = antenna_cli::export::trial_to_csv(&trial)
+        antenna_cli::export::write_csv(&trial, out)
             .with_context(|| format!("{}: exporting to {}", path.display(), out.display()))?;
-        std::fs::write(out, text).with_context(|| format!("{}: cannot write", out.display()))?;
     }
     Ok(())
 }
