@@ -10,8 +10,8 @@
 //! ([`ChainFrame::path_m`]: a sweep's straight track in any direction, a follow run's path of
 //! the robot so far), and a closed-loop run's frame the robot's body ([`BodyDrawing`]: its
 //! footprint at its pose and heading), the estimator's points and the whole run's extent, so
-//! that sweeps and follow runs draw through the same chain panel. A live frame may carry
-//! antennad's wall estimate ([`ChainFrame::estimated_wall`], [`crate::estimate`]).
+//! that sweeps and follow runs draw through the same chain panel. A frame of the rig (live
+//! or recorded) may carry antennad's wall estimate ([`ChainFrame::estimated_wall`], [`crate::estimate`]).
 //!
 //! Where a touch switch sits is the frame's to say, the same for every source:
 //! [`ChainFrame::lit_switches`] places each switch that fires at sim-core's place for it,
@@ -158,10 +158,10 @@ pub struct ChainFrame {
     /// The whole run's extent `(min, max)` (every pose's footprint and antenna reach), for a
     /// view that fits the run; `None`: fit the frame ([`ChainFrame::bounds_m`]).
     pub run_extent_m: Option<(PointM, PointM)>,
-    /// antennad's live wall estimate at this instant, drawn over the chain (live only).
+    /// antennad's wall estimate at this instant, drawn over the chain (live or recorded).
     pub estimated_wall: Option<EstimatedWall>,
-    /// Why no estimated wall is drawn, when the source estimates (live: the daemon's reason,
-    /// or that it sends no estimates).
+    /// Why no estimated wall is drawn, when the source estimates (the daemon's reason, that
+    /// the newest estimate is too old, or that it sends none).
     pub estimate_note: Option<String>,
 }
 

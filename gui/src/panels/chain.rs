@@ -9,7 +9,7 @@
 //! heading (red while it overlaps a wall), with the estimator's points and the estimated wall
 //! point. Such a view either follows the robot or fits the whole run ([`TopView`]).
 //!
-//! Live, antennad's wall estimate ([`ChainFrame::estimated_wall`]) is drawn over the chain
+//! antennad's wall estimate, live or recorded ([`ChainFrame::estimated_wall`]), is drawn over the chain
 //! when **estimate** is ticked: the estimated wall as a bluish green line (dashed when the
 //! estimator gives no angle: drawn parallel to the stage's travel), a cross where its distance
 //! is measured (the preview point), and the reason in the legend when there is no estimate.
@@ -68,7 +68,7 @@ pub struct ChainPanel {
     pub show_difference: bool,
     /// Draw a sweep's wall map.
     pub show_map: bool,
-    /// Draw antennad's wall estimate (live).
+    /// Draw antennad's wall estimate (live or recorded).
     pub show_estimate: bool,
     /// A moving robot's view: following it, or the whole run.
     pub top_view: TopView,
