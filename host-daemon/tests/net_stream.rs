@@ -10,7 +10,7 @@ use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
 
-use antenna_data::stream::{PROTOCOL_VERSION, StreamMessage};
+use antenna_data::stream::{EstimateMessage, PROTOCOL_VERSION, StreamMessage};
 use host_daemon::net::{ControlToken, RecordingHandler, ServerOptions, StreamServer};
 use net_support::{Client, TOKEN, follow_exactly, samples, wait_for_clients};
 
@@ -168,6 +168,92 @@ fn slow_client_gets_exact_lag_counts_and_stays_connected() {
         1,
         "a slow client is lagged, not disconnected"
     );
+    server.shutdown();
+}
+
+/// An estimate line of poll `seq` (the daemon sends one after every tenth poll's samples).
+fn estimate(seq: u64) -> StreamMessage {
+    StreamMessage::Estimate(EstimateMessage {
+        seq,
+        t_ns: seq * 1_000_000,
+        estimated_ns: seq * 1_000_000 + 20_000,
+        estimator: "contact-line".to_owned(),
+        distance_m: Some(0.14),
+        angle_rad: Some(-0.1),
+        preview_m: Some(0.3),
+        reason: None,
+        true_distance_m: None,
+        true_angle_rad: None,
+    })
+}
+
+#[test]
+fn with_other_lines_dropped_too_samples_dropped_is_the_exact_seq_gap() {
+    let server = server(ServerOptions {
+        queue_capacity: 8,
+        write_timeout: Duration::from_secs(60),
+        ..ServerOptions::default()
+    });
+    let mut slow = Client::connect(server.local_addr());
+    wait_for_clients(&server, 1);
+    const N: u64 = 150_000;
+    let publish = |seq: u64| {
+        server.publish(&samples(seq));
+        if seq % 10 == 0 {
+            server.publish(&estimate(seq));
+        }
+    };
+    for seq in 0..N {
+        publish(seq);
+    }
+    let reader = thread::spawn(move || {
+        let (mut next, mut pending, mut lagged_estimates) = (0u64, 0u64, 0u64);
+        let (mut received, mut estimates) = (0u64, 0u64);
+        loop {
+            match slow.next_message() {
+                StreamMessage::Hello { .. } => {}
+                StreamMessage::Lagged {
+                    dropped,
+                    samples_dropped,
+                } => {
+                    assert!(samples_dropped <= dropped);
+                    pending += samples_dropped;
+                    lagged_estimates += dropped - samples_dropped;
+                }
+                StreamMessage::Samples { seq, .. } => {
+                    assert_eq!(
+                        seq,
+                        next + pending,
+                        "gap not accounted for by samples_dropped"
+                    );
+                    (next, pending) = (seq + 1, 0);
+                    received += 1;
+                    if seq >= N {
+                        return (slow, received, estimates, lagged_estimates);
+                    }
+                }
+                StreamMessage::Estimate(e) => {
+                    assert_eq!(e.seq % 10, 0);
+                    estimates += 1;
+                }
+                other => panic!("unexpected {other:?}"),
+            }
+        }
+    });
+    let mut seq = N;
+    let deadline = Instant::now() + Duration::from_secs(300);
+    while !reader.is_finished() {
+        assert!(
+            Instant::now() < deadline,
+            "the reader never reached the tail"
+        );
+        publish(seq);
+        seq += 1;
+        thread::sleep(Duration::from_millis(5));
+    }
+    let (_slow, received, estimates, lagged_estimates) = reader.join().unwrap();
+    assert!(received > 0 && estimates > 0);
+    assert!(lagged_estimates > 0, "estimates were dropped too");
     server.shutdown();
 }
 

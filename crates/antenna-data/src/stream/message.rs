@@ -372,6 +372,42 @@ mod tests {
         assert_eq!((sample.contact, sample.touch_bits), (Some(true), None));
     }
 
+    /// The `estimate` and `lagged` examples in docs/stream-protocol.md, byte for byte; a
+    /// `lagged` line from a daemon before `samples_dropped` still reads.
+    #[test]
+    fn documented_estimate_and_lagged_lines() {
+        let doc = include_str!("../../../../docs/stream-protocol.md");
+        let lines: Vec<&str> = doc
+            .lines()
+            .filter(|l| l.starts_with(r#"{"type":"estimate""#))
+            .collect();
+        assert_eq!(lines.len(), 2);
+        for line in &lines {
+            let message: StreamMessage = serde_json::from_str(line).unwrap();
+            assert_eq!(serde_json::to_string(&message).unwrap(), *line);
+            let StreamMessage::Estimate(e) = message else {
+                panic!("not an estimate: {line}");
+            };
+            // An estimate has no reason; no estimate has one and no distance.
+            assert_eq!(e.distance_m.is_some(), e.reason.is_none());
+            assert!(e.estimated_ns >= e.t_ns);
+        }
+        let line = doc
+            .lines()
+            .find(|l| l.starts_with(r#"{"type":"lagged""#))
+            .unwrap();
+        let message: StreamMessage = serde_json::from_str(line).unwrap();
+        assert_eq!(serde_json::to_string(&message).unwrap(), line);
+        let old: StreamMessage = serde_json::from_str(r#"{"type":"lagged","dropped":3}"#).unwrap();
+        assert_eq!(
+            old,
+            StreamMessage::Lagged {
+                dropped: 3,
+                samples_dropped: 0
+            }
+        );
+    }
+
     /// The `status` example in docs/stream-protocol.md, byte for byte; a line from a daemon
     /// without the bus fields (bus errors, firmware, the watchdog) still reads.
     #[test]
