@@ -22,6 +22,9 @@ def main():
     polls, metadata = [], None
     with open(sys.argv[1], "rb") as f:
         for _schema, channel, message in make_reader(f).iter_messages():
+            # The Foxglove channels (/antenna/transforms, /antenna/scene) are protobuf.
+            if channel.message_encoding != "json":
+                continue
             data = json.loads(message.data)
             if channel.topic == "/antenna/segments":
                 polls.append((message.log_time, data["t_s"], data.get("seq")))

@@ -136,6 +136,10 @@ const NOT_DESCRIPTIONS: &[(&str, &str)] = &[
     // `antenna design`'s flags: the shorthand for a scene's `[antenna]` and
     // `[antenna.stiffness]` on the command line (`antenna design --scene FILE` reads a scene).
     ("crates/antenna-cli/src/bin/antenna/main.rs", "DesignArgs"),
+    // The live wall estimate (stream protocol 1's `estimate`, as sent and as the monitor keeps
+    // it): a measurement of a wall's distance and angle, not a wall a scene describes.
+    ("crates/antenna-data/src/stream/message.rs", "EstimateMessage"),
+    ("gui/src/estimate.rs", "Estimate"),
 ];
 
 /// Every struct in `text` with its fields' names (fields at the struct's top level; comments
