@@ -1,14 +1,17 @@
 //! The live wall estimate and message types the monitor does not know, against a fake
 //! antennad: a loopback server that writes a `hello` with the simulated rig's geometry, then
 //! samples, `estimate` lines and a line of a type from the future, as a newer daemon would;
-//! and a recorded trial's estimates.
+//! a real antennad's estimates on the simulated rig, placed on the scene's wall; and a
+//! recorded trial's estimates.
 #![allow(clippy::unwrap_used)]
 
 use std::io::{Read, Write};
 use std::net::TcpListener;
 use std::thread::JoinHandle;
 
-use crate::support::{PATIENCE_S, expect_label, harness, step_until};
+use crate::support::{
+    PATIENCE_S, config, expect_label, harness, monitor, start_daemon, step_until, temp_dir,
+};
 use antenna_data::stream::{EstimateMessage, PROTOCOL_VERSION, SegmentSample, StreamMessage};
 use antenna_monitor::app::attach_estimate;
 use antenna_monitor::client::ConnectionState;
@@ -198,7 +201,7 @@ fn a_recorded_trials_estimates_are_shown() {
     use antenna_data::record::{
         EstimateMessage as RecordedEstimate, TrialRecorder, synthetic_metadata, synthetic_segments,
     };
-    let dir = crate::support::temp_dir("recorded-estimate");
+    let dir = temp_dir("recorded-estimate");
     let path = dir.join("estimates.mcap");
     let mut metadata = synthetic_metadata("estimates");
     metadata.rig = Some(host_daemon::service::daemon::rig_info(&Config::default()));
@@ -243,5 +246,68 @@ fn a_recorded_trials_estimates_are_shown() {
         &mut harness,
         "wall estimate (bend): 250.0 mm, no angle at 40 mm ahead",
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A real antennad on the simulated rig with the `ideal-preview` estimator (the true wall
+/// along y from the base pivot): its estimates arrive after their polls, and the wall the
+/// monitor draws from one (the daemon's carriage frame turned into the chain's track frame)
+/// passes through the scene's wall where the estimate measured it.
+#[test]
+fn a_real_daemons_estimate_lies_on_the_scenes_wall() {
+    use host_daemon::service::config::EstimatorName;
+    let dir = temp_dir("daemon-estimate");
+    let mut daemon_config = config(&dir);
+    daemon_config.estimate.estimator = EstimatorName::IdealPreview;
+    let daemon = start_daemon(daemon_config);
+    let mut harness = monitor(&daemon, "", dir.clone());
+    // An estimate whose poll is held (estimates come after their poll's samples).
+    step_until(
+        &mut harness,
+        "an estimate of a held poll",
+        PATIENCE_S,
+        |h| {
+            let state = h.state().live().unwrap().lock();
+            state.estimates.latest().is_some_and(|e| {
+                state
+                    .history
+                    .index_at(e.t_s)
+                    .and_then(|i| state.history.sample(i))
+                    .is_some_and(|s| s.seq == Some(e.seq))
+            })
+        },
+    );
+    {
+        let state = harness.state().live().unwrap().lock();
+        assert_eq!(state.unknown_lines.0, 0);
+        assert_eq!(state.bad_lines.0, 0);
+        let e = state.estimates.latest().unwrap().clone();
+        assert_eq!(e.estimator, "ideal-preview");
+        let distance_m = e.distance_m.unwrap();
+        // The truth is the same ray from the same pose.
+        assert!((e.true_distance_m.unwrap() - distance_m).abs() < 1e-9);
+        assert_eq!((e.angle_rad, e.preview_m), (None, Some(0.0)));
+        let rig = state.rig.as_ref().unwrap();
+        let index = state.history.index_at(e.t_s).unwrap();
+        let mut frame = rig.frame_at(&state.history, index).unwrap();
+        attach_estimate(&mut frame, &state.estimates, rig, &state.history);
+        let wall = frame.estimated_wall.clone().unwrap();
+        assert!(!wall.angle_known);
+        // The preview point (on y through the base pivot) is on the scene's wall, and
+        // `distance_m` from the base pivot.
+        let at = nalgebra::Vector2::new(wall.at_m[0], wall.at_m[1]);
+        let gap_m = rig.walls[0].signed_distance(&at).gap_m;
+        assert!(
+            gap_m.abs() < 1e-6,
+            "the estimate's point is {gap_m} m off the wall"
+        );
+        let base = frame.base_m;
+        let from_base_m = (wall.at_m[0] - base[0]).hypot(wall.at_m[1] - base[1]);
+        assert!((from_base_m - distance_m).abs() < 1e-9);
+    }
+    // The panel says it: no angle from this estimator, and no error against the truth.
+    expect_label(&mut harness, "wall estimate (ideal-preview): ");
+    expect_label(&mut harness, "no angle at 0 mm ahead; true ");
+    daemon.shutdown().unwrap();
     std::fs::remove_dir_all(&dir).ok();
 }
