@@ -39,6 +39,8 @@ pub struct FoxgloveLive {
     server: Option<WebSocketServerHandle>,
     local_addr: SocketAddr,
     channels: Channels,
+    /// The channels' context: the server holds it weakly (it must outlive the server).
+    context: Arc<Context>,
 }
 
 impl std::fmt::Debug for FoxgloveLive {
@@ -109,6 +111,7 @@ impl FoxgloveLive {
             server: Some(handle),
             local_addr,
             channels,
+            context,
         })
     }
 
@@ -147,6 +150,8 @@ impl FoxgloveLive {
                 runtime.block_on(async { tokio::time::timeout(STOP_WAIT, shutdown.wait()).await });
         }
         runtime.shutdown_timeout(STOP_WAIT);
+        // The channels leave the context with it.
+        let _ = &self.context;
     }
 }
 

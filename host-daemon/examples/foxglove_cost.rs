@@ -1,0 +1,211 @@
+//! What the Foxglove server costs antennad (issue #48): the default trial on the simulated
+//! rig at 1 kHz, `SCHED_FIFO` 50 when permitted, run without the server, with the server and
+//! no client, and with the server and one client subscribed to every channel (the 3D ones at
+//! 50 Hz, every poll's samples), interleaved, `RUNS` times each. A measurement, not a test:
+//!
+//! ```text
+//! cargo run --release -p host-daemon --example foxglove_cost [-- SECONDS RUNS [BUSY]]
+//! ```
+//!
+//! The client is this program again (`--client ADDR`), in its own process, so its CPU is not
+//! the daemon's; it reads everything and counts what it got. Each row gives the poll's period
+//! jitter (|period - 1 ms|, from the event tap's poll time stamps), the daemon process's CPU
+//! share over the run and its RSS after it; `BUSY` busy-looping processes run beside it
+//! (default 0).
+
+use anyhow::{Context, Result, bail};
+use host_daemon::service::acquisition::AcquisitionEvent;
+use host_daemon::service::config::Config;
+use host_daemon::service::daemon::{Daemon, DaemonOptions, EventTap};
+use std::net::{SocketAddr, TcpStream};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use tungstenite::Message;
+use tungstenite::client::IntoClientRequest;
+use tungstenite::http::HeaderValue;
+
+/// utime + stime of this process, seconds (clock ticks of 1/100 s, Linux's USER_HZ).
+fn cpu_s() -> Result<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").context("/proc/self/stat")?;
+    let after = stat.rsplit_once(')').context("stat format")?.1;
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let ticks: u64 = fields[11].parse::<u64>()? + fields[12].parse::<u64>()?;
+    Ok(ticks as f64 / 100.0)
+}
+
+/// A `Vm...` line of /proc/self/status, kB.
+fn status_kb(key: &str) -> Result<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").context("/proc/self/status")?;
+    let line = status
+        .lines()
+        .find(|l| l.starts_with(key))
+        .with_context(|| format!("{key} in /proc/self/status"))?;
+    Ok(line.split_whitespace().nth(1).context("value")?.parse()?)
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
+}
+
+/// The client: connects as Foxglove does, subscribes to every channel and reads until the
+/// server goes; prints the messages and bytes it got.
+fn client(addr: &str) -> Result<()> {
+    let addr: SocketAddr = addr.parse().context("ADDR")?;
+    let stream = TcpStream::connect(addr)?;
+    let mut request = format!("ws://{addr}").into_client_request()?;
+    request.headers_mut().insert(
+        "Sec-WebSocket-Protocol",
+        HeaderValue::from_static("foxglove.sdk.v1"),
+    );
+    let (mut socket, _) = tungstenite::client(request, stream)?;
+    let (mut messages, mut bytes, mut subscribed) = (0u64, 0u64, 0usize);
+    loop {
+        match socket.read() {
+            Ok(Message::Text(text)) => {
+                let op: serde_json::Value = serde_json::from_str(text.as_str())?;
+                if op["op"] == "advertise" {
+                    let subscriptions: Vec<serde_json::Value> = op["channels"]
+                        .as_array()
+                        .context("channels")?
+                        .iter()
+                        .map(|c| {
+                            subscribed += 1;
+                            serde_json::json!({ "id": subscribed, "channelId": c["id"] })
+                        })
+                        .collect();
+                    socket.send(Message::text(
+                        serde_json::json!({ "op": "subscribe", "subscriptions": subscriptions })
+                            .to_string(),
+                    ))?;
+                }
+            }
+            Ok(Message::Binary(payload)) => {
+                messages += 1;
+                bytes += payload.len() as u64;
+            }
+            Ok(_) => {}
+            Err(_) => break,
+        }
+    }
+    eprintln!("client: {subscribed} channels, {messages} messages, {bytes} bytes");
+    Ok(())
+}
+
+/// Background load: `n` busy-looping processes, killed when dropped.
+struct Load(Vec<std::process::Child>);
+
+impl Drop for Load {
+    fn drop(&mut self) {
+        for child in &mut self.0 {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+/// One run: the default trial for `seconds`; returns the table row's figures.
+fn run(seconds: f64, foxglove: bool, with_client: bool) -> Result<String> {
+    let mut config = Config::default();
+    config.server.listen = "127.0.0.1:0".to_owned();
+    config.foxglove.listen = "127.0.0.1:0".to_owned();
+    config.foxglove.enabled = Some(foxglove);
+    let stamps: Arc<Mutex<Vec<u64>>> =
+        Arc::new(Mutex::new(Vec::with_capacity((seconds * 1200.0) as usize)));
+    let on_event = {
+        let stamps = Arc::clone(&stamps);
+        EventTap::new(move |event| {
+            if let (AcquisitionEvent::Poll(p), Ok(mut stamps)) = (event, stamps.lock()) {
+                stamps.push(p.t_ns);
+            }
+        })
+    };
+    let cpu_before = cpu_s()?;
+    let wall = Instant::now();
+    let daemon = Daemon::start(
+        config.clone(),
+        DaemonOptions {
+            serve: true,
+            foxglove: true,
+            ..DaemonOptions::tapped_trial(Duration::from_secs_f64(seconds), on_event)
+        },
+    )?;
+    let mut child = match (with_client, daemon.foxglove_addr()) {
+        (true, Some(addr)) => Some(
+            std::process::Command::new(std::env::current_exe()?)
+                .args(["--client", &addr.to_string()])
+                .spawn()
+                .context("starting the client")?,
+        ),
+        (true, None) => bail!("no Foxglove server"),
+        _ => None,
+    };
+    let summary = daemon.wait()?;
+    let cpu = (cpu_s()? - cpu_before) / wall.elapsed().as_secs_f64();
+    if let Some(child) = &mut child {
+        child.wait()?;
+    }
+    let stamps = std::mem::take(&mut *stamps.lock().map_err(|_| anyhow::anyhow!("tap"))?);
+    let period_us = 1e6 / config.bus.poll_hz;
+    let mut jitter: Vec<f64> = stamps
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) as f64 / 1e3 - period_us).abs())
+        .collect();
+    jitter.sort_by(f64::total_cmp);
+    Ok(format!(
+        "{} | {} | {:.1} / {:.1} / {:.0} | {:.1} | {:.1} |",
+        summary.polls,
+        summary.skipped,
+        percentile(&jitter, 0.5),
+        percentile(&jitter, 0.99),
+        jitter.last().copied().unwrap_or(0.0),
+        100.0 * cpu,
+        status_kb("VmRSS:")? as f64 / 1024.0
+    ))
+}
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("--client") {
+        return client(args.get(1).context("--client ADDR")?);
+    }
+    let seconds: f64 = args
+        .first()
+        .map_or(Ok(10.0), |s| s.parse())
+        .context("SECONDS")?;
+    let runs: usize = args.get(1).map_or(Ok(3), |s| s.parse()).context("RUNS")?;
+    let busy: usize = args.get(2).map_or(Ok(0), |s| s.parse()).context("BUSY")?;
+    let _load = Load(
+        (0..busy)
+            .map(|_| {
+                std::process::Command::new("sh")
+                    .args(["-c", "while :; do :; done"])
+                    .spawn()
+                    .context("starting a busy process")
+            })
+            .collect::<Result<_>>()?,
+    );
+    println!(
+        "default trial at 1 kHz on the simulated rig, {seconds} s per run, {busy} busy \
+         processes, {} cores",
+        std::thread::available_parallelism().map_or(0, |n| n.get())
+    );
+    println!(
+        "| run | Foxglove | polls | skipped | jitter p50 / p99 / max (us) | CPU (% of a core) | \
+         RSS (MB) |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for k in 1..=runs {
+        for (name, foxglove, with_client) in [
+            ("no server", false, false),
+            ("server, no client", true, false),
+            ("server, one client (every channel)", true, true),
+        ] {
+            println!("| {k} | {name} | {}", run(seconds, foxglove, with_client)?);
+        }
+    }
+    println!(
+        "peak RSS (VmHWM): {:.1} MB",
+        status_kb("VmHWM:")? as f64 / 1024.0
+    );
+    Ok(())
+}
