@@ -3,6 +3,7 @@
 //! the polling thread's heartbeat and publishes the status.
 
 use super::control::HubRequest;
+use super::recording::{Recorded, RecordingThread};
 use super::start::PollTotals;
 use super::trial::ActiveTrial;
 use super::{DaemonOptions, Log, TrialOutcome};
@@ -23,13 +24,11 @@ use crate::sim::rig::{SensedPoses, SimState, StepKind};
 use antenna_data::record::EstimateMessage as RecordedEstimate;
 use antenna_data::record::{
     LogMessage, PhysicsStepKind, PhysicsStepMessage, SegmentsMessage, ServoMessage, StageMessage,
-    TrialRecorder,
 };
 use antenna_data::stream::{
     EstimateMessage, PollingStatus, SegmentSample, SegmentStatus, StreamMessage,
 };
 use antenna_protocol::{Calibration, FIRMWARE_VERSION, StatusFlags};
-use anyhow::Result;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
 use std::sync::{Arc, Mutex};
@@ -123,6 +122,7 @@ impl Hub {
                 self.on_request(request);
             }
             self.check_watchdog();
+            self.check_recording();
             // A script that ended sent its last samples first: take them into the trial
             // before it ends (they may have come after the drain above).
             if self.trial_script_ended() {
@@ -247,24 +247,30 @@ impl Hub {
         t_ns as f64 * 1e-9
     }
 
-    /// Records `f`'s message if a trial runs and `t_ns` is inside it; a failing recorder ends
-    /// the trial.
-    pub(super) fn record(
-        &mut self,
-        t_ns: u64,
-        f: impl FnOnce(&mut TrialRecorder, f64) -> Result<(), antenna_data::record::RecordError>,
-    ) {
-        let Some(trial) = &mut self.trial else { return };
+    /// Records the message `make` builds from the trial time if a trial runs and `t_ns` is
+    /// inside it: handed to the recording's thread, never waited for.
+    pub(super) fn record(&mut self, t_ns: u64, make: impl FnOnce(f64) -> Recorded) {
+        let Some(trial) = &self.trial else { return };
         if t_ns < trial.start_ns {
             return;
         }
         let t_s = (t_ns - trial.start_ns) as f64 * 1e-9;
-        let Some(recorder) = &mut trial.recorder else {
-            return;
-        };
-        if let Err(e) = f(recorder, t_s).and_then(|()| recorder.flush_if_due(t_s)) {
-            self.log
-                .error(format!("antennad: recording failed, ending the trial: {e}"));
+        if let Some(recording) = &trial.recorder {
+            recording.record(make(t_s));
+        }
+    }
+
+    /// A recording that failed (a write refused, a stalled disk) ends its trial.
+    fn check_recording(&mut self) {
+        let failure = self
+            .trial
+            .as_ref()
+            .and_then(|t| t.recorder.as_ref())
+            .and_then(RecordingThread::failure);
+        if let Some(why) = failure {
+            self.log.error(format!(
+                "antennad: recording failed, ending the trial: {why}"
+            ));
             self.end_trial("the recording failed");
         }
     }
@@ -278,23 +284,23 @@ impl Hub {
             AcquisitionEvent::Stage { t_ns, position_mm } => {
                 self.stage_mm = Some(*position_mm);
                 let position_m = position_mm * 1e-3;
-                self.record(*t_ns, |r, t_s| {
-                    r.record_stage(&StageMessage { t_s, position_m })
+                self.record(*t_ns, |t_s| {
+                    Recorded::Stage(StageMessage { t_s, position_m })
                 });
             }
             AcquisitionEvent::Base { t_ns, angle_rad } => {
                 self.base_rad = Some(*angle_rad);
                 let base_angle_rad = *angle_rad;
-                self.record(*t_ns, |r, t_s| {
-                    r.record_servo(&ServoMessage {
+                self.record(*t_ns, |t_s| {
+                    Recorded::Servo(ServoMessage {
                         t_s,
                         base_angle_rad,
                     })
                 });
             }
             AcquisitionEvent::Physics { t_ns, step } => {
-                self.record(*t_ns, |r, t_s| {
-                    r.record_physics(&PhysicsStepMessage {
+                self.record(*t_ns, |t_s| {
+                    Recorded::Physics(PhysicsStepMessage {
                         t_s,
                         kind: match step.kind {
                             StepKind::Place => PhysicsStepKind::Place,
@@ -385,8 +391,8 @@ impl Hub {
     }
 
     pub(super) fn record_log(&mut self, t_ns: u64, text: &str) {
-        self.record(t_ns, |r, t_s| {
-            r.record_log(&LogMessage {
+        self.record(t_ns, |t_s| {
+            Recorded::Log(LogMessage {
                 t_s,
                 text: text.to_owned(),
             })
@@ -472,15 +478,15 @@ impl Hub {
                 if streamed {
                     self.publish(&StreamMessage::Estimate(estimate));
                 }
-                self.record(t_ns, |r, t_s| {
-                    r.record_estimate(&RecordedEstimate { t_s, ..recorded })
+                self.record(t_ns, |t_s| {
+                    Recorded::Estimate(RecordedEstimate { t_s, ..recorded })
                 });
             }
         }
         let calibrations = self.calibrations.clone();
         let seq = poll.seq;
-        self.record(poll.t_ns, |r, t_s| {
-            r.record_segments(&SegmentsMessage {
+        self.record(poll.t_ns, |t_s| {
+            Recorded::Segments(SegmentsMessage {
                 seq: Some(seq),
                 t_s,
                 segments: poll

@@ -74,6 +74,7 @@ use std::time::Duration;
 mod control;
 mod hub;
 mod log;
+mod recording;
 mod rig_info;
 mod start;
 mod trial;

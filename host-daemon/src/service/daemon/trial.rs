@@ -5,6 +5,7 @@
 use super::TrialOutcome;
 use super::control::HubRequest;
 use super::hub::Hub;
+use super::recording::{Recorded, RecordingThread};
 use super::rig_info::rig_info;
 use super::start::trial_names;
 use crate::config::WallSideName;
@@ -47,7 +48,8 @@ pub(super) struct ActiveTrial {
     pub(super) start_ns: u64,
     /// Zero: until the script is done.
     pub(super) duration: Duration,
-    pub(super) recorder: Option<TrialRecorder>,
+    /// The recording, on its own thread.
+    pub(super) recorder: Option<RecordingThread>,
     pub(super) print_every: u64,
 }
 
@@ -121,9 +123,11 @@ impl Hub {
                 scene_hz: self.config.foxglove.scene_hz,
                 wall_on_left: self.config.estimate.wall_side == WallSideName::Left,
             };
+            let recorder = TrialRecorder::create_with_foxglove(&path, &metadata, options, foxglove)
+                .map_err(|e| format!("creating the recording {}: {e}", path.display()))?;
             Some(
-                TrialRecorder::create_with_foxglove(&path, &metadata, options, foxglove)
-                    .map_err(|e| format!("creating the recording {}: {e}", path.display()))?,
+                RecordingThread::start(recorder)
+                    .map_err(|e| format!("starting the recording's thread: {e}"))?,
             )
         } else {
             None
@@ -191,16 +195,14 @@ impl Hub {
         }
         let _ = self.motion.send(MotionCommand::EndScript);
         let (path, recorded, result) = match trial.recorder {
-            Some(mut recorder) => {
+            Some(recording) => {
                 // The reason is the file's last word (a full disk may refuse even that).
                 let t_s = self.clock.elapsed_ns().saturating_sub(trial.start_ns) as f64 * 1e-9;
-                let _ = recorder.record_log(&LogMessage {
+                let path = recording.path().to_path_buf();
+                let (written, result) = recording.finish(Recorded::Log(LogMessage {
                     t_s,
                     text: format!("trial ended: {why}"),
-                });
-                let written = recorder.written();
-                let path = recorder.path().to_path_buf();
-                let result = recorder.finish().map(|_| ());
+                }));
                 (Some(path), written, result)
             }
             None => (None, RecordCounts::default(), Ok(())),
