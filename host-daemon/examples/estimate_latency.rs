@@ -150,8 +150,10 @@ struct Run {
 }
 
 fn run(seconds: f64, estimate: bool, data_dir: &std::path::Path) -> Result<Run> {
-    let mut config = Config::default();
-    config.data_dir = data_dir.to_owned();
+    let mut config = Config {
+        data_dir: data_dir.to_owned(),
+        ..Config::default()
+    };
     config.server.listen = "127.0.0.1:0".to_owned();
     config.foxglove.listen = "127.0.0.1:0".to_owned();
     config.foxglove.enabled = Some(true);

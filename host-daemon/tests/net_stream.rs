@@ -199,7 +199,7 @@ fn with_other_lines_dropped_too_samples_dropped_is_the_exact_seq_gap() {
     const N: u64 = 150_000;
     let publish = |seq: u64| {
         server.publish(&samples(seq));
-        if seq % 10 == 0 {
+        if seq.is_multiple_of(10) {
             server.publish(&estimate(seq));
         }
     };
@@ -233,7 +233,7 @@ fn with_other_lines_dropped_too_samples_dropped_is_the_exact_seq_gap() {
                     }
                 }
                 StreamMessage::Estimate(e) => {
-                    assert_eq!(e.seq % 10, 0);
+                    assert!(e.seq.is_multiple_of(10));
                     estimates += 1;
                 }
                 other => panic!("unexpected {other:?}"),
