@@ -138,7 +138,10 @@ const NOT_DESCRIPTIONS: &[(&str, &str)] = &[
     ("crates/antenna-cli/src/bin/antenna/main.rs", "DesignArgs"),
     // The live wall estimate (stream protocol 1's `estimate`, as sent and as the monitor keeps
     // it): a measurement of a wall's distance and angle, not a wall a scene describes.
-    ("crates/antenna-data/src/stream/message.rs", "EstimateMessage"),
+    (
+        "crates/antenna-data/src/stream/message.rs",
+        "EstimateMessage",
+    ),
     ("gui/src/estimate.rs", "Estimate"),
 ];
 
