@@ -22,6 +22,8 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
             "1.5",
             "--listen",
             "127.0.0.1:0",
+            "--foxglove-listen",
+            "127.0.0.1:0",
             "--data-dir",
         ])
         .arg(&dir)
@@ -32,6 +34,12 @@ fn a_short_trial_is_printed_recorded_and_streamed() {
     assert!(output.status.success(), "{stdout}\n{stderr}");
     // The log, on stderr: timestamped and leveled.
     assert!(stderr.contains("watch it with: nc 127.0.0.1 "), "{stderr}");
+    // The simulated rig is on view in Foxglove by default (here on a free port).
+    assert!(
+        stderr
+            .contains("see it in Foxglove: open a connection, Foxglove WebSocket, ws://127.0.0.1:"),
+        "{stderr}"
+    );
     assert!(
         stderr.contains("-- move 1: +500.0 mm at 25 mm/s"),
         "{stderr}"
@@ -103,6 +111,8 @@ fn a_configured_token_is_never_printed_and_a_generated_one_once() {
                 "0.3",
                 "--listen",
                 "127.0.0.1:0",
+                "--foxglove-listen",
+                "127.0.0.1:0",
             ])
             .arg("--data-dir")
             .arg(dir.join("data"))
@@ -171,6 +181,8 @@ fn refused(name: &str, text: &str) -> String {
             "--exit-after-trial",
             "--listen",
             "127.0.0.1:0",
+            "--foxglove-listen",
+            "127.0.0.1:0",
             "--no-record",
         ])
         .output()
@@ -235,7 +247,13 @@ fn spawn(
 ) -> (std::process::Child, std::net::SocketAddr, Lines, Lines) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_antennad"))
         .args(args)
-        .args(["--listen", "127.0.0.1:0", "--data-dir"])
+        .args([
+            "--listen",
+            "127.0.0.1:0",
+            "--foxglove-listen",
+            "127.0.0.1:0",
+            "--data-dir",
+        ])
         .arg(dir)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

@@ -68,9 +68,16 @@ struct Args {
     /// Do not record trials.
     #[arg(long)]
     no_record: bool,
-    /// Do not start the TCP server.
+    /// Do not start the TCP server (nor the Foxglove server).
     #[arg(long)]
     no_server: bool,
+    /// Overrides the Foxglove WebSocket endpoint (`[foxglove] listen`, address:port; port 0:
+    /// any free port, said in the log).
+    #[arg(long)]
+    foxglove_listen: Option<String>,
+    /// Do not start the Foxglove server, whatever `[foxglove]` says.
+    #[arg(long)]
+    no_foxglove: bool,
     /// Sample lines printed per second during a trial.
     #[arg(long, default_value_t = 4.0)]
     print_hz: f64,
@@ -127,6 +134,9 @@ fn apply_overrides(config: &mut Config, args: &Args) {
     if let Some(listen) = &args.listen {
         config.server.listen.clone_from(listen);
     }
+    if let Some(listen) = &args.foxglove_listen {
+        config.foxglove.listen.clone_from(listen);
+    }
 }
 
 fn run(args: Args) -> Result<()> {
@@ -155,6 +165,8 @@ fn run(args: Args) -> Result<()> {
         exit_after_trial: args.exit_after_trial,
         record: !args.no_record,
         serve: !args.no_server,
+        // As `[foxglove]` says: on for the simulated rig, off with hardware.
+        foxglove: !args.no_foxglove,
         echo: !args.quiet,
         print_hz: args.print_hz,
         watchdog,
