@@ -174,6 +174,7 @@ fn main() -> Result<()> {
         scene_source: Some("frame_bench".to_owned()),
         link_lengths_m: links,
         base_mount_angle_deg: 30.0,
+        estimate_wall_side: None,
     };
     let server = StreamServer::bind_with(
         "127.0.0.1:0",

@@ -270,6 +270,7 @@ mod tests {
             scene_source: Some(format!("mu {mu}")),
             link_lengths_m: vec![0.04; 9],
             base_mount_angle_deg: 30.0,
+            estimate_wall_side: None,
         };
         RigGeometry::from_rig_info(&info, "test").unwrap()
     }
@@ -317,6 +318,7 @@ mod tests {
                 scene_source: None,
                 link_lengths_m: vec![0.04; 9],
                 base_mount_angle_deg: 30.0,
+                estimate_wall_side: None,
             };
             if let (Some(text), Some(threshold_n)) = (&mut info.scene_toml, threshold) {
                 text.push_str(&format!("[sensors]\ntouch_threshold_n = {threshold_n:?}\n"));

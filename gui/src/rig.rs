@@ -35,6 +35,8 @@ pub struct RigGeometry {
     pub stage_range_m: Option<(f64, f64)>,
     /// Polls per second.
     pub poll_hz: f64,
+    /// The daemon's `[estimate] wall_side`, when its `hello` says it.
+    pub declared_wall_side: Option<WallSide>,
     /// Where this geometry came from, for the status line.
     pub source: String,
     /// The force that closes a touch switch in the prediction, newtons: the scene's
@@ -85,6 +87,11 @@ impl RigGeometry {
         };
         geometry.stage_range_m = Some((rig.stage_min_m, rig.stage_max_m));
         geometry.poll_hz = rig.poll_hz;
+        geometry.declared_wall_side = match rig.estimate_wall_side.as_deref() {
+            Some("left") => Some(WallSide::Left),
+            Some("right") => Some(WallSide::Right),
+            _ => None,
+        };
         Ok(geometry)
     }
 
@@ -102,6 +109,7 @@ impl RigGeometry {
             walls: scene.walls.clone(),
             stage_range_m: None,
             poll_hz: 1000.0,
+            declared_wall_side: None,
             source: source.into(),
             touch_threshold_n: 0.0,
             base_start_m: scene.base_start_m,
@@ -147,6 +155,7 @@ impl RigGeometry {
             walls: Vec::new(),
             stage_range_m: None,
             poll_hz: 1000.0,
+            declared_wall_side: None,
             source: source.into(),
             touch_threshold_n: 0.0,
             base_start_m: Vector2::zeros(),
@@ -166,11 +175,14 @@ impl RigGeometry {
         [self.direction.x, self.direction.y]
     }
 
-    /// Which side of the stage's travel the wall is on (the estimate's y axis, antennad's
-    /// `[estimate] wall_side`, which its `hello` does not carry): the side of the scene's
-    /// nearest wall to the base pivot (the stage in the middle of its range), left without a
-    /// wall.
+    /// Which side of the stage's travel the wall is on (the estimate's y axis): antennad's
+    /// `[estimate] wall_side` as its `hello` says it; from a daemon that does not say, the
+    /// side of the scene's nearest wall to the base pivot (the stage in the middle of its
+    /// range), left without a wall.
     pub fn wall_side(&self) -> WallSide {
+        if let Some(side) = self.declared_wall_side {
+            return side;
+        }
         let middle = self.stage_range_m.map(|(lo, hi)| (lo + hi) / 2.0);
         let base = self.base_m(middle);
         let base = Vector2::new(base[0], base[1]);
@@ -327,16 +339,21 @@ pub(crate) mod tests {
         assert!(rig.walls[0].signed_distance(&Vector2::new(0.1, 0.0)).gap_m > 0.0);
     }
 
-    /// The default rig's wall is on the left of the stage's travel (its y > 0); the same
-    /// scene travelling the other way has it on the right.
+    /// The default rig's wall is on the left of the stage's travel (its y > 0), as its
+    /// daemon says; from a daemon that does not say, the scene's: the same scene travelling
+    /// the other way has it on the right. What the daemon says wins.
     #[test]
-    fn the_wall_side_is_the_scenes() {
+    fn the_wall_side_is_the_daemons_or_else_the_scenes() {
         let rig = default_rig();
         assert_eq!(rig.travel_direction(), [1.0, 0.0]);
+        assert_eq!(rig.declared_wall_side, Some(WallSide::Left));
         assert_eq!(rig.wall_side(), WallSide::Left);
         let mut reversed = rig.clone();
         reversed.direction = -reversed.direction;
+        reversed.declared_wall_side = None;
         assert_eq!(reversed.wall_side(), WallSide::Right);
+        reversed.declared_wall_side = Some(WallSide::Left);
+        assert_eq!(reversed.wall_side(), WallSide::Left);
         let bare = RigGeometry::fallback(3).unwrap();
         assert_eq!(bare.wall_side(), WallSide::Left);
     }
@@ -364,6 +381,7 @@ pub(crate) mod tests {
             scene_source: Some("rig.toml".to_owned()),
             link_lengths_m: Vec::new(),
             base_mount_angle_deg: 0.0,
+            estimate_wall_side: None,
         };
         let error = RigGeometry::from_rig_info(&info, "hello")
             .unwrap_err()

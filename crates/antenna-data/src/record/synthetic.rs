@@ -89,6 +89,7 @@ pub fn synthetic_rig(segments: usize) -> RigInfo {
         scene_source: None,
         link_lengths_m: vec![0.04; segments + 1],
         base_mount_angle_deg: 30.0,
+        estimate_wall_side: None,
     }
 }
 

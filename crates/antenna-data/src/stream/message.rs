@@ -138,6 +138,11 @@ pub struct RigInfo {
     /// plus `base_angle_deg` of each sample.
     #[serde(default)]
     pub base_mount_angle_deg: f64,
+    /// Which side of the stage's travel the live estimate's y axis points to, toward the
+    /// wall (`[estimate] wall_side`: `"left"` or `"right"`); `None` from daemons before the
+    /// estimate (a client then takes the side of the scene's nearest wall).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimate_wall_side: Option<String>,
 }
 
 /// One segment in one poll. A failed read has `error` set and no angle, contact or touch bits.

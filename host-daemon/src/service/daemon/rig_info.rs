@@ -1,6 +1,6 @@
 //! The rig for the stream's `hello` and the recordings' metadata.
 
-use crate::config::Config;
+use crate::config::{Config, WallSideName};
 use antenna_data::stream::RigInfo;
 
 /// The rig for the stream's `hello` (docs/stream-protocol.md) and every recording: the
@@ -18,6 +18,13 @@ pub fn rig_info(config: &Config) -> RigInfo {
         scene_source: Some(rig.source.clone()),
         link_lengths_m: chain.link_lengths_m().to_vec(),
         base_mount_angle_deg: chain.base_angle_rad().to_degrees(),
+        estimate_wall_side: Some(
+            match config.estimate.wall_side {
+                WallSideName::Left => "left",
+                WallSideName::Right => "right",
+            }
+            .to_owned(),
+        ),
     }
 }
 
@@ -36,6 +43,7 @@ mod tests {
         assert_eq!((info.stage_min_m, info.stage_max_m), (5e-3, 0.25));
         assert_eq!(info.link_lengths_m, vec![0.04; 9]);
         assert!((info.base_mount_angle_deg - 30.0).abs() < 1e-12);
+        assert_eq!(info.estimate_wall_side.as_deref(), Some("left"));
         // The text is the scene in force.
         let scene = Scene::parse(info.scene_toml.as_deref().unwrap(), "hello").unwrap();
         assert_eq!(
