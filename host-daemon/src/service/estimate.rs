@@ -27,7 +27,7 @@
 //! solved at for that poll.
 
 use crate::config::{Config, EstimatorName, WallSideName};
-use antenna_data::stream::EstimateMessage;
+use antenna_data::stream::{EstimateMessage, SegmentSample};
 use nalgebra::Vector2;
 use sim_core::follow::estimate::{Estimate, NoEstimate, Odometry};
 use sim_core::follow::{SensedWall, calibrate_bend_at};
@@ -48,10 +48,9 @@ pub struct PollInput<'a> {
     pub seq: u64,
     /// Its time on the daemon's clock, ns.
     pub t_ns: u64,
-    /// Each segment's calibrated joint angle (`None`: the read failed), base to tip.
-    pub angles_rad: &'a [Option<f64>],
-    /// Each segment's touch bits (`None`: the read failed).
-    pub touch_bits: &'a [Option<u8>],
+    /// Each segment's reading as streamed, base to tip: its calibrated joint angle and touch
+    /// bits (`None`: the read failed).
+    pub segments: &'a [SegmentSample],
     /// The stage's measured position, m (`None`: no stage, or not known yet).
     pub stage_m: Option<f64>,
     /// The servo's measured angle, rad (`None`: no servo).
@@ -257,18 +256,17 @@ impl LiveEstimate {
     /// The sensed angles and touch bits of `poll` in the (mirrored) carriage frame; false
     /// when a read failed.
     fn fill(&mut self, poll: &PollInput<'_>) -> bool {
-        let n = self.theta.len() - 1;
-        if poll.angles_rad.len() != n || poll.touch_bits.len() != n {
+        if poll.segments.len() + 1 != self.theta.len() {
             return false;
         }
         self.theta[0] = self.sign * (self.mount_angle_rad + poll.servo_rad.unwrap_or(0.0));
         self.touch[0] = 0;
-        for (k, (angle, bits)) in poll.angles_rad.iter().zip(poll.touch_bits).enumerate() {
-            let (Some(angle), Some(bits)) = (angle, bits) else {
+        for (k, segment) in poll.segments.iter().enumerate() {
+            let (Some(angle), Some(bits)) = (segment.angle_rad, segment.touch_bits) else {
                 return false;
             };
             self.theta[k + 1] = self.sign * angle;
-            self.touch[k + 1] = *bits;
+            self.touch[k + 1] = bits;
         }
         true
     }

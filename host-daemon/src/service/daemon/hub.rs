@@ -516,8 +516,6 @@ impl Hub {
         segments: &[SegmentSample],
     ) -> Option<EstimateMessage> {
         let estimate = self.estimate.as_mut()?;
-        let angles_rad: Vec<Option<f64>> = segments.iter().map(|s| s.angle_rad).collect();
-        let touch_bits: Vec<Option<u8>> = segments.iter().map(|s| s.touch_bits).collect();
         let solved_at = self
             .sensed_poses
             .as_ref()
@@ -527,8 +525,7 @@ impl Hub {
             &PollInput {
                 seq: poll.seq,
                 t_ns: poll.t_ns,
-                angles_rad: &angles_rad,
-                touch_bits: &touch_bits,
+                segments,
                 stage_m: self.stage_mm.map(|mm| mm * 1e-3),
                 servo_rad: self.base_rad,
                 solved_at,
