@@ -1,7 +1,8 @@
 //! What the Foxglove server costs antennad (issue #48): the default trial on the simulated
 //! rig at 1 kHz, `SCHED_FIFO` 50 when permitted, run without the server, with the server and
-//! no client, and with the server and one client subscribed to every channel (the 3D ones at
-//! 50 Hz, every poll's samples), interleaved, `RUNS` times each. A measurement, not a test:
+//! no client, with one client subscribed to every channel but the samples (the 3D ones at
+//! 50 Hz, the status, the estimates) and with one subscribed to every channel (every poll's
+//! samples too), interleaved, `RUNS` times each. A measurement, not a test:
 //!
 //! ```text
 //! cargo run --release -p host-daemon --example foxglove_cost [-- SECONDS RUNS [BUSY]]
@@ -47,9 +48,10 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * p).round() as usize]
 }
 
-/// The client: connects as Foxglove does, subscribes to every channel and reads until the
-/// server goes; prints the messages and bytes it got.
-fn client(addr: &str) -> Result<()> {
+/// The client: connects as Foxglove does, subscribes to every channel (`only_3d`: all but
+/// the samples, every poll's) and reads until the server goes; prints the messages and bytes
+/// it got.
+fn client(addr: &str, only_3d: bool) -> Result<()> {
     let addr: SocketAddr = addr.parse().context("ADDR")?;
     let stream = TcpStream::connect(addr)?;
     let mut request = format!("ws://{addr}").into_client_request()?;
@@ -68,6 +70,7 @@ fn client(addr: &str) -> Result<()> {
                         .as_array()
                         .context("channels")?
                         .iter()
+                        .filter(|c| !(only_3d && c["topic"] == "/antenna/samples"))
                         .map(|c| {
                             subscribed += 1;
                             serde_json::json!({ "id": subscribed, "channelId": c["id"] })
@@ -104,7 +107,7 @@ impl Drop for Load {
 }
 
 /// One run: the default trial for `seconds`; returns the table row's figures.
-fn run(seconds: f64, foxglove: bool, with_client: bool) -> Result<String> {
+fn run(seconds: f64, foxglove: bool, client: Option<&str>) -> Result<String> {
     let mut config = Config::default();
     config.server.listen = "127.0.0.1:0".to_owned();
     config.foxglove.listen = "127.0.0.1:0".to_owned();
@@ -129,14 +132,14 @@ fn run(seconds: f64, foxglove: bool, with_client: bool) -> Result<String> {
             ..DaemonOptions::tapped_trial(Duration::from_secs_f64(seconds), on_event)
         },
     )?;
-    let mut child = match (with_client, daemon.foxglove_addr()) {
-        (true, Some(addr)) => Some(
+    let mut child = match (client, daemon.foxglove_addr()) {
+        (Some(channels), Some(addr)) => Some(
             std::process::Command::new(std::env::current_exe()?)
-                .args(["--client", &addr.to_string()])
+                .args(["--client", &addr.to_string(), channels])
                 .spawn()
                 .context("starting the client")?,
         ),
-        (true, None) => bail!("no Foxglove server"),
+        (Some(_), None) => bail!("no Foxglove server"),
         _ => None,
     };
     let summary = daemon.wait()?;
@@ -166,7 +169,8 @@ fn run(seconds: f64, foxglove: bool, with_client: bool) -> Result<String> {
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.first().map(String::as_str) == Some("--client") {
-        return client(args.get(1).context("--client ADDR")?);
+        let only_3d = args.get(2).map(String::as_str) == Some("3d");
+        return client(args.get(1).context("--client ADDR")?, only_3d);
     }
     let seconds: f64 = args
         .first()
@@ -195,12 +199,13 @@ fn main() -> Result<()> {
     );
     println!("|---|---|---|---|---|---|---|");
     for k in 1..=runs {
-        for (name, foxglove, with_client) in [
-            ("no server", false, false),
-            ("server, no client", true, false),
-            ("server, one client (every channel)", true, true),
+        for (name, foxglove, client) in [
+            ("no server", false, None),
+            ("server, no client", true, None),
+            ("server, one client (all but the samples)", true, Some("3d")),
+            ("server, one client (every channel)", true, Some("all")),
         ] {
-            println!("| {k} | {name} | {}", run(seconds, foxglove, with_client)?);
+            println!("| {k} | {name} | {}", run(seconds, foxglove, client)?);
         }
     }
     println!(

@@ -6,7 +6,8 @@ use super::schemas::{
     STATUS_TOPIC, TRANSFORMS_TOPIC, estimate_schema, samples_schema, status_schema,
 };
 use antenna_data::foxglove::{
-    ChainModel, ChainPose, EstimatedWall, chain_scene_update, frame_transforms, scene_update,
+    ChainModel, ChainPose, ESTIMATED_WALL_ID, EstimatedWall, chain_scene_update, frame_transforms,
+    scene_update,
 };
 use antenna_data::stream::{EstimateMessage, StreamMessage};
 use foxglove::messages::{FrameTransforms, SceneUpdate};
@@ -15,8 +16,9 @@ use serde_json::Value;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// How often the walls are sent again (besides to every new subscriber of the scene), ns.
-const WALLS_EVERY_NS: u64 = 2_000_000_000;
+/// How often the whole scene (the walls too) is sent again, besides to every new subscriber
+/// of the scene, ns.
+const SCENE_REFRESH_NS: u64 = 2_000_000_000;
 
 /// The chain as the newest samples gave it.
 #[derive(Debug, Default)]
@@ -50,9 +52,15 @@ pub(super) struct Channels {
     estimate: Arc<RawChannel>,
     transforms: Channel<FrameTransforms>,
     scene: Channel<SceneUpdate>,
-    /// Set when a client subscribes to the scene: the walls go out with the next update.
+    /// Set when a client subscribes to the scene: the whole scene goes out with the next
+    /// update.
     walls_due: Arc<AtomicBool>,
-    walls_sent_ns: Option<u64>,
+    /// When the whole scene was last sent (Unix-epoch ns).
+    scene_refreshed_ns: Option<u64>,
+    /// The touch words and the estimated wall the last scene update drew: the links are drawn
+    /// in their own frames (the transforms move them), so the scene changes only with these.
+    scene_touch_bits: Vec<Option<u8>>,
+    scene_estimate: Option<EstimatedWall>,
     next_scene_ns: u64,
     pose: Pose,
     estimated_wall: Option<EstimatedWall>,
@@ -104,7 +112,9 @@ impl Channels {
                 .build::<FrameTransforms>(),
             scene: context.channel_builder(SCENE_TOPIC).build::<SceneUpdate>(),
             walls_due,
-            walls_sent_ns: None,
+            scene_refreshed_ns: None,
+            scene_touch_bits: Vec::new(),
+            scene_estimate: None,
             next_scene_ns: 0,
             pose: Pose::default(),
             estimated_wall: None,
@@ -184,19 +194,32 @@ impl Channels {
                 .log_with_meta(&frame_transforms(&self.settings.model, &pose), meta);
         }
         if self.scene.has_sinks() {
-            let walls_due = self.walls_due.swap(false, Ordering::Relaxed)
+            // The whole scene to a new subscriber and every SCENE_REFRESH_NS; between, the
+            // chain's entities (in the links' frames, moved by the transforms) only when a
+            // touch switch changed, and the estimated wall alone when only it changed.
+            let refresh = self.walls_due.swap(false, Ordering::Relaxed)
                 || self
-                    .walls_sent_ns
-                    .is_none_or(|sent| unix_ns.saturating_sub(sent) >= WALLS_EVERY_NS);
-            let model = &self.settings.model;
-            let estimate = self.estimated_wall.as_ref();
-            let update = if walls_due && !model.walls_m.is_empty() {
-                self.walls_sent_ns = Some(unix_ns);
-                scene_update(model, &pose, estimate)
-            } else {
-                chain_scene_update(model, &pose, estimate)
-            };
-            self.scene.log_with_meta(&update, meta);
+                    .scene_refreshed_ns
+                    .is_none_or(|sent| unix_ns.saturating_sub(sent) >= SCENE_REFRESH_NS);
+            let touched = self.scene_touch_bits != self.pose.touch_bits;
+            let estimated = self.scene_estimate != self.estimated_wall;
+            if refresh || touched || estimated {
+                let model = &self.settings.model;
+                let estimate = self.estimated_wall.as_ref();
+                let update = if refresh {
+                    self.scene_refreshed_ns = Some(unix_ns);
+                    scene_update(model, &pose, estimate)
+                } else {
+                    let mut update = chain_scene_update(model, &pose, estimate);
+                    if !touched {
+                        update.entities.retain(|e| e.id == ESTIMATED_WALL_ID);
+                    }
+                    update
+                };
+                self.scene.log_with_meta(&update, meta);
+                self.scene_touch_bits.clone_from(&self.pose.touch_bits);
+                self.scene_estimate = self.estimated_wall;
+            }
         }
     }
 
