@@ -9,7 +9,7 @@
 //! | topic | encoding, schema | what |
 //! |---|---|---|
 //! | `/antenna/transforms` | protobuf, `foxglove.FrameTransforms` | `world` -> `carriage` -> `link_0` .. `link_n`, at `[foxglove] scene_hz` |
-//! | `/antenna/scene` | protobuf, `foxglove.SceneUpdate` | the links, their touch switches (coloured when closed), the walls (simulated rig), the estimated wall, at `scene_hz` |
+//! | `/antenna/scene` | protobuf, `foxglove.SceneUpdate` | the links, their touch switches (coloured when closed), the walls (simulated rig), the estimated wall: whole to a new subscriber and every 2 s, between at `scene_hz` what changed |
 //! | `/antenna/samples` | json, [`schemas::SAMPLES_SCHEMA`] | every poll: the stream's `samples` line |
 //! | `/antenna/status` | json, [`schemas::STATUS_SCHEMA`] | the stream's `status` line |
 //! | `/antenna/estimate` | json, [`schemas::ESTIMATE_SCHEMA`] | the stream's `estimate` line |
