@@ -12,7 +12,7 @@ mod net_support;
 
 use antenna_data::stream::StreamMessage;
 use foxglove::Decode;
-use foxglove::messages::FrameTransforms;
+use foxglove::messages::{FrameTransforms, SceneUpdate};
 use host_daemon::service::config::Config;
 use host_daemon::service::daemon::{Daemon, DaemonHandle, DaemonOptions};
 use net_support::Client;
@@ -320,7 +320,9 @@ fn a_client_sees_the_polled_chain_view_only() {
         "/antenna/transforms",
         "/antenna/samples",
         "/antenna/estimate",
+        "/antenna/scene",
     ]);
+    let mut scenes: Vec<SceneUpdate> = Vec::new();
     let mut samples: BTreeMap<u64, StreamMessage> = BTreeMap::new();
     let mut transforms: Vec<(u64, FrameTransforms)> = Vec::new();
     let mut estimates = Vec::new();
@@ -328,7 +330,18 @@ fn a_client_sees_the_polled_chain_view_only() {
     let mut messages = 0;
     let refusal =
         |client: &FoxgloveClient| client.statuses.iter().find(|s| s["level"] == 2).cloned();
-    while compared < 10 || refusal(&client).is_none() {
+    let estimates_matched = |estimates: &[(u64, StreamMessage)],
+                             samples: &BTreeMap<u64, StreamMessage>| {
+        estimates
+            .iter()
+            .filter(|(log_time_ns, _)| samples.contains_key(log_time_ns))
+            .count()
+    };
+    while compared < 10
+        || refusal(&client).is_none()
+        || estimates_matched(&estimates, &samples) < 3
+        || scenes.is_empty()
+    {
         messages += 1;
         assert!(
             messages < 200_000,
@@ -353,6 +366,7 @@ fn a_client_sees_the_polled_chain_view_only() {
                 let message: StreamMessage = serde_json::from_slice(&m.payload).unwrap();
                 estimates.push((m.log_time_ns, message));
             }
+            4 => scenes.push(SceneUpdate::decode(m.payload.as_slice()).unwrap()),
             other => panic!("no subscription {other}"),
         }
         // Compare every transforms message whose poll's samples came.
@@ -406,6 +420,26 @@ fn a_client_sees_the_polled_chain_view_only() {
             assert_eq!(*seq, estimate.seq);
         }
     }
+    // The first scene is whole: every link in its own frame (locked to it), the simulated
+    // rig's wall in `world`.
+    let first = &scenes[0];
+    let links = config.sim.rig.scene.chain.link_lengths_m().len();
+    for k in 0..links {
+        let link = first
+            .entities
+            .iter()
+            .find(|e| e.id == format!("link_{k}"))
+            .unwrap_or_else(|| panic!("no link_{k} in {first:?}"));
+        assert_eq!(link.frame_id, format!("link_{k}"));
+        assert!(link.frame_locked);
+    }
+    assert!(
+        first
+            .entities
+            .iter()
+            .any(|e| e.id == "wall_0" && e.frame_id == "world"),
+        "{first:?}"
+    );
     daemon.shutdown().unwrap();
 }
 
