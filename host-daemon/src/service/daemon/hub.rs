@@ -250,18 +250,22 @@ impl Hub {
     /// Records the message `make` builds from the trial time if a trial runs and `t_ns` is
     /// inside it: handed to the recording's thread, never waited for.
     pub(super) fn record(&mut self, t_ns: u64, make: impl FnOnce(f64) -> Recorded) {
-        let Some(trial) = &self.trial else { return };
+        let Some(trial) = &mut self.trial else { return };
         if t_ns < trial.start_ns {
             return;
         }
         let t_s = (t_ns - trial.start_ns) as f64 * 1e-9;
-        if let Some(recording) = &trial.recorder {
+        if let Some(recording) = &mut trial.recorder {
             recording.record(make(t_s));
         }
     }
 
-    /// A recording that failed (a write refused, a stalled disk) ends its trial.
+    /// Hands the recording its waiting messages when they are due; a recording that failed
+    /// (a write refused, a stalled disk) ends its trial.
     fn check_recording(&mut self) {
+        if let Some(recording) = self.trial.as_mut().and_then(|t| t.recorder.as_mut()) {
+            recording.hand_over_if_due();
+        }
         let failure = self
             .trial
             .as_ref()
