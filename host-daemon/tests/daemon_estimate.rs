@@ -1,8 +1,8 @@
 //! The live wall estimate end to end on the simulated rig: antennad streams an `estimate`
 //! line after the samples of the poll it was made from, at `[estimate] rate_hz`, on the
 //! daemon's clock, with the true wall of that poll beside it; the contact-line estimate is
-//! within its bound of the truth, the ideal preview is the truth; bad `[estimate]` keys are
-//! refused with the key named.
+//! within its bound of the truth, the ideal preview is the truth; bad `[estimate]` and
+//! `[foxglove]` keys are refused with the file, line and key named.
 #![allow(clippy::unwrap_used)]
 
 mod net_support;
@@ -198,7 +198,7 @@ fn no_estimate_when_none_is_asked_for() {
 }
 
 #[test]
-fn bad_estimate_keys_are_refused_with_the_key_named() {
+fn bad_estimate_and_foxglove_keys_are_refused_with_the_key_named() {
     for (text, key) in [
         ("[estimate]\nwindow_s = 0.0\n", "estimate.window_s"),
         ("[estimate]\nrate_hz = 5000.0\n", "estimate.rate_hz"),
@@ -209,6 +209,11 @@ fn bad_estimate_keys_are_refused_with_the_key_named() {
             "[estimate]\nestimator = \"ideal-preview\"\n[servo]\nport = \"/dev/ttyACM0\"\n",
             "estimate.estimator",
         ),
+        ("[foxglove]\nscene_hz = 0.0\n", "foxglove.scene_hz"),
+        ("[foxglove]\nscene_hz = 2000.0\n", "foxglove.scene_hz"),
+        ("[foxglove]\nlisten = \"everywhere\"\n", "foxglove.listen"),
+        ("[foxglove]\nrequired = \"yes\"\n", "required"),
+        ("[foxglove]\nport = 8765\n", "port"),
     ] {
         let error = Config::from_toml_str(text, "estimate.toml")
             .unwrap_err()
