@@ -27,38 +27,8 @@ use tungstenite::client::IntoClientRequest;
 use tungstenite::http::HeaderValue;
 use tungstenite::{Message, WebSocket};
 
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
-}
-
-/// Background load: `n` busy-looping processes, killed when dropped.
-struct Load(Vec<std::process::Child>);
-
-impl Load {
-    fn start(n: usize) -> Result<Self> {
-        let children = (0..n)
-            .map(|_| {
-                std::process::Command::new("sh")
-                    .args(["-c", "while :; do :; done"])
-                    .spawn()
-                    .context("starting a busy process")
-            })
-            .collect::<Result<Vec<_>>>()?;
-        Ok(Self(children))
-    }
-}
-
-impl Drop for Load {
-    fn drop(&mut self) {
-        for child in &mut self.0 {
-            let _ = child.kill();
-            let _ = child.wait();
-        }
-    }
-}
+mod support;
+use support::{Load, percentile};
 
 /// Latencies, microseconds, of the estimates a client received.
 type Latencies = Arc<Mutex<Vec<f64>>>;

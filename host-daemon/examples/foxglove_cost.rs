@@ -25,28 +25,8 @@ use tungstenite::Message;
 use tungstenite::client::IntoClientRequest;
 use tungstenite::http::HeaderValue;
 
-/// utime + stime of this process, seconds (clock ticks of 1/100 s, Linux's USER_HZ).
-fn cpu_s() -> Result<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").context("/proc/self/stat")?;
-    let after = stat.rsplit_once(')').context("stat format")?.1;
-    let fields: Vec<&str> = after.split_whitespace().collect();
-    let ticks: u64 = fields[11].parse::<u64>()? + fields[12].parse::<u64>()?;
-    Ok(ticks as f64 / 100.0)
-}
-
-/// A `Vm...` line of /proc/self/status, kB.
-fn status_kb(key: &str) -> Result<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").context("/proc/self/status")?;
-    let line = status
-        .lines()
-        .find(|l| l.starts_with(key))
-        .with_context(|| format!("{key} in /proc/self/status"))?;
-    Ok(line.split_whitespace().nth(1).context("value")?.parse()?)
-}
-
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
-}
+mod support;
+use support::{Load, cpu_s, percentile, status_kb};
 
 /// The client: connects as Foxglove does, subscribes to every channel (`only_3d`: all but
 /// the samples, every poll's) and reads until the server goes; prints the messages and bytes
@@ -92,18 +72,6 @@ fn client(addr: &str, only_3d: bool) -> Result<()> {
     }
     eprintln!("client: {subscribed} channels, {messages} messages, {bytes} bytes");
     Ok(())
-}
-
-/// Background load: `n` busy-looping processes, killed when dropped.
-struct Load(Vec<std::process::Child>);
-
-impl Drop for Load {
-    fn drop(&mut self) {
-        for child in &mut self.0 {
-            let _ = child.kill();
-            let _ = child.wait();
-        }
-    }
 }
 
 /// One run: the default trial for `seconds`; returns the table row's figures.
@@ -178,16 +146,7 @@ fn main() -> Result<()> {
         .context("SECONDS")?;
     let runs: usize = args.get(1).map_or(Ok(3), |s| s.parse()).context("RUNS")?;
     let busy: usize = args.get(2).map_or(Ok(0), |s| s.parse()).context("BUSY")?;
-    let _load = Load(
-        (0..busy)
-            .map(|_| {
-                std::process::Command::new("sh")
-                    .args(["-c", "while :; do :; done"])
-                    .spawn()
-                    .context("starting a busy process")
-            })
-            .collect::<Result<_>>()?,
-    );
+    let _load = Load::start(busy)?;
     println!(
         "default trial at 1 kHz on the simulated rig, {seconds} s per run, {busy} busy \
          processes, {} cores",

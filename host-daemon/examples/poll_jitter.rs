@@ -22,61 +22,8 @@ use host_daemon::service::daemon::{Daemon, DaemonOptions, EventTap};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-/// utime + stime of this process, seconds (clock ticks of 1/100 s, Linux's USER_HZ).
-fn cpu_s() -> Result<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").context("/proc/self/stat")?;
-    // Fields after the command name (which is in parentheses and may hold spaces).
-    let after = stat.rsplit_once(')').context("stat format")?.1;
-    let fields: Vec<&str> = after.split_whitespace().collect();
-    let ticks: u64 = fields[11].parse::<u64>()? + fields[12].parse::<u64>()?;
-    Ok(ticks as f64 / 100.0)
-}
-
-/// A `Vm...` line of /proc/self/status, kB.
-fn status_kb(key: &str) -> Result<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").context("/proc/self/status")?;
-    let line = status
-        .lines()
-        .find(|l| l.starts_with(key))
-        .with_context(|| format!("{key} in /proc/self/status"))?;
-    Ok(line.split_whitespace().nth(1).context("value")?.parse()?)
-}
-
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
-}
-
-/// Background load: `n` busy-looping processes, killed when dropped.
-struct Load(Vec<std::process::Child>);
-
-impl Load {
-    fn start(n: usize) -> Result<Self> {
-        let children = (0..n)
-            .map(|_| {
-                std::process::Command::new("sh")
-                    .args(["-c", "while :; do :; done"])
-                    .spawn()
-                    .context("starting a busy process")
-            })
-            .collect::<Result<Vec<_>>>()?;
-        Ok(Self(children))
-    }
-}
-
-impl Drop for Load {
-    fn drop(&mut self) {
-        for child in &mut self.0 {
-            let _ = child.kill();
-            let _ = child.wait();
-        }
-    }
-}
-
-/// The 1-minute load average.
-fn load_average() -> Result<f64> {
-    let text = std::fs::read_to_string("/proc/loadavg").context("/proc/loadavg")?;
-    Ok(text.split_whitespace().next().context("loadavg")?.parse()?)
-}
+mod support;
+use support::{Load, cpu_s, load_average, percentile, status_kb};
 
 fn main() -> Result<()> {
     let mut args = std::env::args().skip(1);
