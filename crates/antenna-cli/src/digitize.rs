@@ -66,6 +66,9 @@ pub enum DigitizeError {
         /// The number asked for.
         points: usize,
     },
+    /// No points per edge asked for ([`sample_edges`]).
+    #[error("0 points per edge asked for; sampling an edge takes at least 1")]
+    NoPointsPerEdge,
     /// A negative or non-finite noise.
     #[error("the noise must be a finite number of metres >= 0, got {noise_m}")]
     BadNoise {
@@ -131,6 +134,38 @@ pub fn digitize(
         }
     }
     Err(DigitizeError::NoValidDraw)
+}
+
+/// The wall through `vertices_m` sampled with no noise, `per_edge` points on each edge: edge
+/// `i`'s points are `v_i + (v_{i+1} - v_i) k / per_edge` for `k` in `0..per_edge`, then the
+/// last vertex; `edges * per_edge + 1` points in all, rounded to the nanometre like
+/// [`digitize`]'s. The vertices themselves are among the points, every other point lies on
+/// an edge to within the rounding (issue #49: a finely sampled wall must sweep as its
+/// vertices do).
+///
+/// # Errors
+/// [`DigitizeError::NoPointsPerEdge`] for `per_edge` of 0, [`DigitizeError::Wall`] for an
+/// invalid wall.
+pub fn sample_edges(
+    vertices_m: &[Vector2<f64>],
+    solid: SolidSide,
+    per_edge: usize,
+) -> Result<Vec<Vector2<f64>>, DigitizeError> {
+    if per_edge == 0 {
+        return Err(DigitizeError::NoPointsPerEdge);
+    }
+    Polyline::new(vertices_m.to_vec(), solid)?;
+    let mut points_m = Vec::with_capacity((vertices_m.len() - 1) * per_edge + 1);
+    for pair in vertices_m.windows(2) {
+        for k in 0..per_edge {
+            points_m.push(round(
+                pair[0] + (pair[1] - pair[0]) * (k as f64 / per_edge as f64),
+            ));
+        }
+    }
+    points_m.push(round(vertices_m[vertices_m.len() - 1]));
+    Polyline::new(points_m.clone(), solid)?;
+    Ok(points_m)
 }
 
 /// The points as a `points_file`: a header line `x_m,y_m`, then one `x,y` line per point

@@ -10,7 +10,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use antenna_cli::digitize::{TRAPEZOID_10K, digitize, points_csv};
+use antenna_cli::digitize::{TRAPEZOID_10K, digitize, points_csv, sample_edges};
 use antenna_scene::Scene;
 use common::{WALL_SCENE, examples_dir, run, stderr, stdout};
 use serde_json::Value;
@@ -357,4 +357,46 @@ fn the_committed_trapezoid_is_what_the_generator_writes() {
     assert_eq!(digitized.motion, trapezoid_scene.motion);
     assert_eq!(digitized.placement, trapezoid_scene.placement);
     assert_eq!(digitized.contact, trapezoid_scene.contact);
+}
+
+/// The noiseless samplings of the trapezoid (issue #49's finely sampled walls) are what
+/// `digitize_trapezoid --per-edge N` writes, their scenes read them, and every point lies on
+/// the trapezoid to within the nanometre rounding, its six vertices among them.
+#[test]
+fn the_committed_sampled_trapezoids_are_what_the_generator_writes() {
+    let trapezoid_scene = Scene::from_path(&examples_dir().join("wall_polyline.toml")).unwrap();
+    let WallShape::Polyline(trapezoid) = &trapezoid_scene.walls[0].shape else {
+        panic!("{:?}", trapezoid_scene.walls[0].shape)
+    };
+    for per_edge in [2000, 1999] {
+        let points_m =
+            sample_edges(trapezoid.vertices_m(), trapezoid.solid_side(), per_edge).unwrap();
+        assert_eq!(points_m.len(), 5 * per_edge + 1);
+        let file = format!("walls/trapezoid_{per_edge}_per_edge.csv");
+        let committed = std::fs::read_to_string(examples_dir().join(&file)).unwrap();
+        assert!(
+            committed.replace("\r\n", "\n") == points_csv(&points_m),
+            "examples/{file} is not what `cargo run -p antenna-cli --example \
+             digitize_trapezoid -- --per-edge {per_edge}` writes: regenerate it"
+        );
+        let scene = Scene::from_path(&examples_dir().join(format!("wall_sampled_{per_edge}.toml")))
+            .unwrap();
+        let WallShape::Polyline(wall) = &scene.walls[0].shape else {
+            panic!("{:?}", scene.walls[0].shape)
+        };
+        assert_eq!(wall.vertices_m(), points_m.as_slice());
+        for v in trapezoid.vertices_m() {
+            assert!(wall.vertices_m().contains(v), "vertex {v:?} kept exactly");
+        }
+        let farthest_m = wall
+            .vertices_m()
+            .iter()
+            .map(|p| trapezoid.signed_distance(p).gap_m.abs())
+            .fold(0.0, f64::max);
+        assert!(farthest_m < 1e-9, "{farthest_m} m off the trapezoid");
+        assert_eq!(scene.chain, trapezoid_scene.chain);
+        assert_eq!(scene.motion, trapezoid_scene.motion);
+        assert_eq!(scene.placement, trapezoid_scene.placement);
+        assert_eq!(scene.contact, trapezoid_scene.contact);
+    }
 }

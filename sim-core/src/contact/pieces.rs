@@ -1,4 +1,5 @@
-//! The walls as the contacts see them: polylines cut at their concave corners.
+//! The walls as the contacts see them: polylines cut at their concave corners (the solver's
+//! walls have no flat vertices, see [`super::QuasiStatic::new`]).
 //!
 //! The signed distance to a polyline has a kink along the bisector of each concave corner
 //! (where the free side's angle is under 180 degrees): a point pressed into such a corner

@@ -108,6 +108,16 @@ impl QuasiStatic {
     /// at `base_m`, among `walls`. Hairs start open (at [`crate::Hair::rest_angle_rad`]). No contact forces act yet: call
     /// [`Self::settle`] to let a posture touching a wall come to rest.
     ///
+    /// The walls are kept without the polyline vertices that lie within the penetration
+    /// tolerance of the chord replacing them ([`crate::Polyline::without_flat_vertices`]):
+    /// such a vertex is not a corner. A wall scanned or digitized finely, its points
+    /// rounded, has turns of `1e-13..1e-12` rad between collinear points, which tested
+    /// against 0 made hundreds of spurious corners (contacts, snaps, and a sweep that
+    /// depended on how finely the wall was sampled). Dropping them moves the wall by at most
+    /// the penetration tolerance; contacts are reported, and every step certified, against
+    /// these walls ([`Self::walls`]), the vertices kept and their arclengths the given
+    /// walls'.
+    ///
     /// # Errors
     /// [`ContactError::WrongLength`], [`ContactError::NotFinite`],
     /// [`ContactError::OutsideLimits`], [`ContactError::BadSetting`], and
@@ -151,6 +161,12 @@ impl QuasiStatic {
             .hairs()
             .iter()
             .map(|h| h.map_or(0.0, |h| h.rest_angle_rad()))
+            .collect();
+        // A vertex within the penetration tolerance of the chord that replaces it is not a
+        // corner: see `Polyline::without_flat_vertices`.
+        let walls: Vec<Wall> = walls
+            .iter()
+            .map(|w| w.without_flat_vertices(settings.penetration_tolerance_m))
             .collect();
         let pieces = Pieces::new(&walls);
         let hair_reach_m = chain
@@ -226,7 +242,7 @@ impl QuasiStatic {
         &self.chain
     }
 
-    /// The walls.
+    /// The walls, without their flat vertices (see [`Self::new`]).
     pub fn walls(&self) -> &[Wall] {
         &self.walls
     }

@@ -42,6 +42,7 @@
 //! # }
 //! ```
 
+mod edge_tree;
 mod error;
 mod line;
 mod polyline;
@@ -532,6 +533,18 @@ impl Wall {
     pub fn translate(&mut self, offset_m: Vector2<f64>) {
         self.shape.translate(offset_m);
         self.surfaces.translate_x(offset_m.x);
+    }
+
+    /// The wall without the polyline vertices that are no corners at `tolerance_m`
+    /// ([`Polyline::without_flat_vertices`]); a line or a sinusoid as it is.
+    pub fn without_flat_vertices(&self, tolerance_m: f64) -> Wall {
+        match &self.shape {
+            WallShape::Polyline(p) => Wall {
+                shape: WallShape::Polyline(p.without_flat_vertices(tolerance_m)),
+                surfaces: self.surfaces.clone(),
+            },
+            _ => self.clone(),
+        }
     }
 
     /// A copy of the wall moved by `offset_m`.

@@ -11,6 +11,7 @@
 
 use nalgebra::Vector2;
 
+use super::edge_tree::{EdgeTree, point_segment_distance2, segment_segment_distance2};
 use super::error::{WallError, finite};
 use super::{
     ConvexFeature, FeatureContact, SegmentContact, SolidSide, WallPoint, better, lerp, ray_is_valid,
@@ -42,43 +43,17 @@ pub struct Polyline {
     /// Arclength of vertex `i` from vertex 0, metres.
     arclengths_m: Vec<f64>,
     solid: SolidSide,
-    /// The finite edges in runs with their bounding boxes, for nearest-point queries that
-    /// skip the runs farther than the best edge found (empty for short polylines).
-    chunks: Vec<EdgeChunk>,
+    /// The finite edges in a hierarchy of runs with their bounding boxes, so that a query
+    /// visits what is near it (empty for short polylines, searched edge by edge).
+    tree: EdgeTree,
 }
 
-/// A run of consecutive finite edges and their bounding box.
-#[derive(Clone, Debug, PartialEq)]
-struct EdgeChunk {
-    first_edge: usize,
-    end_edge: usize,
-    min_m: Vector2<f64>,
-    max_m: Vector2<f64>,
-}
-
-/// How far apart two runs' boxes may be and their edges still meet: the collinear test of
+/// How far apart two edges' boxes may be and the edges still meet: the collinear test of
 /// [`Polyline::edges_meet`] allows `1e-12` m off the line.
 const BOX_SLACK_M: f64 = 1e-9;
 
-impl EdgeChunk {
-    /// Whether the boxes of two runs overlap (within [`BOX_SLACK_M`]).
-    fn boxes_overlap(&self, other: &EdgeChunk) -> bool {
-        self.min_m.x <= other.max_m.x + BOX_SLACK_M
-            && other.min_m.x <= self.max_m.x + BOX_SLACK_M
-            && self.min_m.y <= other.max_m.y + BOX_SLACK_M
-            && other.min_m.y <= self.max_m.y + BOX_SLACK_M
-    }
-
-    /// A lower bound of the squared distance from `p_m` to any edge of the run.
-    fn distance2_lower_bound(&self, p_m: &Vector2<f64>) -> f64 {
-        let dx = (self.min_m.x - p_m.x).max(p_m.x - self.max_m.x).max(0.0);
-        let dy = (self.min_m.y - p_m.y).max(p_m.y - self.max_m.y).max(0.0);
-        dx * dx + dy * dy
-    }
-}
-
 /// Polylines with fewer finite edges than this are searched edge by edge.
-const CHUNKED_FROM_EDGES: usize = 32;
+const TREE_FROM_EDGES: usize = 32;
 
 /// A stretch of a segment with at most this many edges within reach has its equidistance
 /// candidates enumerated (`O(edges^2)`) rather than be halved again.
@@ -97,33 +72,13 @@ const MAX_HALVINGS: usize = 20;
 /// far end `9e-8` m at most, which the link's own end pairs hold.
 const CONE_ROUNDING: f64 = 1e-6;
 
-/// The runs of finite edges (`1..edges - 1`; the first and last edges are rays) of the
-/// polyline through `vertices_m`, about `sqrt(edges)` edges each.
-fn edge_chunks(vertices_m: &[Vector2<f64>]) -> Vec<EdgeChunk> {
-    let edges = vertices_m.len().saturating_sub(1);
-    if edges < CHUNKED_FROM_EDGES {
-        return Vec::new();
+/// The hierarchy of the finite edges of the polyline through `vertices_m`, or none if it has
+/// fewer than [`TREE_FROM_EDGES`] edges.
+fn edge_tree(vertices_m: &[Vector2<f64>]) -> EdgeTree {
+    if vertices_m.len().saturating_sub(1) < TREE_FROM_EDGES {
+        return EdgeTree::new(&[]);
     }
-    let size = (edges as f64).sqrt().ceil() as usize;
-    let mut chunks = Vec::with_capacity(edges / size + 1);
-    let mut first_edge = 1;
-    while first_edge < edges - 1 {
-        let end_edge = (first_edge + size).min(edges - 1);
-        let mut min_m = vertices_m[first_edge];
-        let mut max_m = min_m;
-        for v in &vertices_m[first_edge..=end_edge] {
-            min_m = min_m.inf(v);
-            max_m = max_m.sup(v);
-        }
-        chunks.push(EdgeChunk {
-            first_edge,
-            end_edge,
-            min_m,
-            max_m,
-        });
-        first_edge = end_edge;
-    }
-    chunks
+    EdgeTree::new(vertices_m)
 }
 
 /// Which feature of the polyline is nearest.
@@ -188,7 +143,7 @@ impl Polyline {
                 return Err(WallError::EdgeDoublesBack { vertex });
             }
         }
-        let chunks = edge_chunks(&vertices_m);
+        let tree = edge_tree(&vertices_m);
         let polyline = Polyline {
             vertices_m,
             tangents,
@@ -196,19 +151,19 @@ impl Polyline {
             lengths_m,
             arclengths_m,
             solid,
-            chunks,
+            tree,
         };
         Ok(polyline)
     }
 
     /// The first pair (in the order of the first edge, then the second) of non-adjacent
     /// edges that meet, end rays included. Edge by edge for a short polyline; a long one
-    /// (a digitized wall) checks the pairs of its runs of edges whose boxes overlap and its
-    /// end rays against every edge: `O(E sqrt(E))` for a wall that does not fold onto
-    /// itself, where every pair took 0.15 s for 10,000 points.
+    /// (a digitized wall) checks each finite edge against the edges whose runs' boxes meet
+    /// its box (through the tree) and its end rays against every edge: `O(E log E)` for a
+    /// wall that does not fold onto itself, where every pair took 0.15 s for 10,000 points.
     fn first_crossing(&self) -> Option<(usize, usize)> {
         let edges = self.tangents.len();
-        if self.chunks.is_empty() {
+        if self.tree.is_empty() {
             return self.first_crossing_of_every_pair();
         }
         let mut first: Option<(usize, usize)> = None;
@@ -222,16 +177,18 @@ impl Polyline {
             consider(0, j);
             consider(edges - 1, j);
         }
-        for (index, a) in self.chunks.iter().enumerate() {
-            for b in &self.chunks[index..] {
-                if a.boxes_overlap(b) {
-                    for i in a.first_edge..a.end_edge {
-                        for j in b.first_edge..b.end_edge {
-                            consider(i, j);
-                        }
-                    }
+        for i in 1..edges - 1 {
+            let (v, w) = (self.vertices_m[i], self.vertices_m[i + 1]);
+            let (lo, hi) = (
+                v.inf(&w).add_scalar(-BOX_SLACK_M),
+                v.sup(&w).add_scalar(BOX_SLACK_M),
+            );
+            self.tree.edges_meeting_box(&lo, &hi, |j| {
+                if j >= i + 2 {
+                    consider(i, j);
                 }
-            }
+                true
+            });
         }
         first
     }
@@ -325,6 +282,81 @@ impl Polyline {
         unique
     }
 
+    /// The polyline without the vertices that are not corners at `tolerance_m`: a vertex
+    /// within `tolerance_m` of the chord that replaces it is dropped, by Douglas and
+    /// Peucker's recursion (keep the ends; between two kept vertices, keep the vertex
+    /// farthest from their chord if it lies farther than `tolerance_m`, and recurse on both
+    /// sides). Every vertex dropped lies within `tolerance_m` of the edge that replaces it,
+    /// so the wall moves by at most that much; a test of each vertex against its neighbours'
+    /// chord would not bound it, as small turns add up along a finely sampled curve, which
+    /// keeps its shape here. Kept vertices keep their arclengths (a point's arclength stays
+    /// the wall's own). Without a vertex to drop (the usual case), a copy.
+    ///
+    /// A laser scan of a straight edge, its points rounded to the nanometre, is its two
+    /// ends: the trapezoid of `examples/wall_polyline.toml` sampled at 2,000 points an edge
+    /// is its six vertices again at a tolerance of 1 nm (`examples/wall_sampled_2000.toml`).
+    ///
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use sim_core::{Polyline, SolidSide};
+    ///
+    /// let points: Vec<_> = (0..=100)
+    ///     .map(|k| Vector2::new(k as f64 * 1e-3, if k % 2 == 0 { 0.0 } else { 4e-10 }))
+    ///     .collect();
+    /// let scan = Polyline::new(points, SolidSide::Left).unwrap();
+    /// let flat = scan.without_flat_vertices(1e-9);
+    /// assert_eq!(flat.vertices_m(), &[Vector2::new(0.0, 0.0), Vector2::new(0.1, 0.0)]);
+    /// assert_eq!(scan.without_flat_vertices(1e-10), scan);
+    /// ```
+    pub fn without_flat_vertices(&self, tolerance_m: f64) -> Polyline {
+        let count = self.vertices_m.len();
+        let mut keep = vec![false; count];
+        keep[0] = true;
+        keep[count - 1] = true;
+        let mut stack = vec![(0, count - 1)];
+        while let Some((first, last)) = stack.pop() {
+            let (a, b) = (self.vertices_m[first], self.vertices_m[last]);
+            let farthest = (first + 1..last)
+                .map(|k| (point_segment_distance2(&self.vertices_m[k], &a, &b), k))
+                .fold(None, |best: Option<(f64, usize)>, c| match best {
+                    Some(b) if b.0 >= c.0 => Some(b),
+                    _ => Some(c),
+                });
+            if let Some((distance2, k)) = farthest
+                && distance2 > tolerance_m * tolerance_m
+            {
+                keep[k] = true;
+                stack.push((k, last));
+                stack.push((first, k));
+            }
+        }
+        if keep.iter().all(|&k| k) {
+            return self.clone();
+        }
+        let kept: Vec<usize> = (0..count).filter(|&k| keep[k]).collect();
+        let vertices_m: Vec<Vector2<f64>> = kept.iter().map(|&k| self.vertices_m[k]).collect();
+        let arclengths_m: Vec<f64> = kept.iter().map(|&k| self.arclengths_m[k]).collect();
+        let mut tangents = Vec::with_capacity(kept.len() - 1);
+        let mut lengths_m = Vec::with_capacity(kept.len() - 1);
+        for pair in vertices_m.windows(2) {
+            let d = pair[1] - pair[0];
+            let length_m = d.norm();
+            tangents.push(d / length_m);
+            lengths_m.push(length_m);
+        }
+        let normals = tangents.iter().map(|t| self.solid.free_normal(t)).collect();
+        let tree = edge_tree(&vertices_m);
+        Polyline {
+            vertices_m,
+            tangents,
+            normals,
+            lengths_m,
+            arclengths_m,
+            solid: self.solid,
+            tree,
+        }
+    }
+
     /// For a polyline whose edges all run one way: its line as (normal, offset), with
     /// `normal . p = offset` on it.
     fn straight_line(&self) -> Option<(Vector2<f64>, f64)> {
@@ -344,7 +376,7 @@ impl Polyline {
         let normals = self.normals[first..last].to_vec();
         let lengths_m = self.lengths_m[first..last].to_vec();
         let arclengths_m = self.arclengths_m[first..=last].to_vec();
-        let chunks = edge_chunks(&vertices_m);
+        let tree = edge_tree(&vertices_m);
         Polyline {
             vertices_m,
             tangents,
@@ -352,7 +384,7 @@ impl Polyline {
             lengths_m,
             arclengths_m,
             solid: self.solid,
-            chunks,
+            tree,
         }
     }
 
@@ -393,8 +425,8 @@ impl Polyline {
     }
 
     /// The nearest feature to `p_m` and the squared distance to it: the first edge (by
-    /// index) at the least distance. With chunks, the runs of edges whose bounding box is
-    /// farther than the best edge so far are skipped (the answer is the same).
+    /// index) at the least distance. Through the tree, the runs of edges whose bounding box
+    /// is farther than the best edge so far are skipped (the answer is the same).
     fn nearest(&self, p_m: &Vector2<f64>) -> (Nearest, f64) {
         let last = self.tangents.len() - 1;
         let mut best = (Nearest::Edge { edge: 0, u_m: 0.0 }, f64::INFINITY);
@@ -417,7 +449,7 @@ impl Polyline {
                 *best_edge = edge;
             }
         };
-        if self.chunks.is_empty() {
+        if self.tree.is_empty() {
             for edge in 0..=last {
                 consider(edge, &mut best, &mut best_edge);
             }
@@ -425,30 +457,17 @@ impl Polyline {
         }
         consider(0, &mut best, &mut best_edge);
         consider(last, &mut best, &mut best_edge);
-        // The nearest run first (a tight bound early), then every run that can still hold
-        // an edge as near.
-        let nearest_chunk = self
-            .chunks
-            .iter()
-            .enumerate()
-            .map(|(i, c)| (c.distance2_lower_bound(p_m), i))
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|(_, i)| i);
-        if let Some(i) = nearest_chunk {
-            let c = &self.chunks[i];
-            for edge in c.first_edge..c.end_edge {
-                consider(edge, &mut best, &mut best_edge);
-            }
-        }
-        for (i, c) in self.chunks.iter().enumerate() {
-            if Some(i) == nearest_chunk || c.distance2_lower_bound(p_m) > best.1 {
-                continue;
-            }
-            for edge in c.first_edge..c.end_edge {
-                consider(edge, &mut best, &mut best_edge);
-            }
-        }
-        best
+        // The runs that can still hold an edge as near, nearest first (a tight bound early).
+        let best = core::cell::RefCell::new((best, best_edge));
+        self.tree.edges_near_point(
+            p_m,
+            || best.borrow().0.1,
+            |edge| {
+                let (b, e) = &mut *best.borrow_mut();
+                consider(edge, b, e);
+            },
+        );
+        best.into_inner().0
     }
 
     /// The normals the wall can press with at `wall_point` (this polyline's
@@ -473,14 +492,68 @@ impl Polyline {
         [self.normals[vertex - 1], self.normals[vertex]]
     }
 
-    /// A lower bound of the signed distance of every point of `a -> b`, without a search:
-    /// none yet (`-inf`); see [`crate::WallShape::segment_gap_lower_bound_m`].
-    pub(crate) fn segment_gap_lower_bound_m(
-        &self,
-        _a_m: &Vector2<f64>,
-        _b_m: &Vector2<f64>,
-    ) -> f64 {
-        f64::NEG_INFINITY
+    /// A lower bound of the signed distance of every point of `a -> b` (see
+    /// [`crate::WallShape::segment_gap_lower_bound_m`]): for a long polyline, the segment's
+    /// distance to the wall (its end rays, then the runs of edges near it through the tree,
+    /// `O(log edges)` where few edges are near) if the segment stays in free space (it does
+    /// not meet the wall and its start is free), else its start's gap less its length (the
+    /// distance is 1-Lipschitz). A short polyline (fewer than 32 edges) has none (`-inf`):
+    /// its search costs what the bound would.
+    pub(crate) fn segment_gap_lower_bound_m(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
+        if self.tree.is_empty() {
+            return f64::NEG_INFINITY;
+        }
+        let last = self.tangents.len() - 1;
+        let best = core::cell::Cell::new(
+            self.segment_edge_distance2(0, a_m, b_m)
+                .min(self.segment_edge_distance2(last, a_m, b_m)),
+        );
+        self.tree.edges_near_segment(
+            a_m,
+            b_m,
+            || best.get(),
+            |edge| best.set(best.get().min(self.segment_edge_distance2(edge, a_m, b_m))),
+        );
+        let start_gap_m = self.signed_distance(a_m).gap_m;
+        let distance_m = best.get().sqrt();
+        if distance_m > 0.0 && start_gap_m > 0.0 {
+            // (Less a relative rounding allowance: a bound, never above the true distance.)
+            distance_m * (1.0 - 1e-12)
+        } else {
+            start_gap_m.min(0.0) - (b_m - a_m).norm()
+        }
+    }
+
+    /// The squared distance between the segment `a -> b` and edge `edge` (an end ray as the
+    /// ray it is): 0 where they cross, else that of an end of one to the other.
+    fn segment_edge_distance2(&self, edge: usize, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> f64 {
+        let (lo, hi) = self.range_m(edge);
+        if lo.is_finite() && hi.is_finite() {
+            let (v, w) = (self.vertices_m[edge], self.vertices_m[edge + 1]);
+            return segment_segment_distance2(a_m, b_m, &v, &w);
+        }
+        let (v, t) = (self.vertices_m[edge], self.tangents[edge]);
+        let d = b_m - a_m;
+        let denom = cross(&d, &t);
+        if denom != 0.0 {
+            let r = v - a_m;
+            let s = cross(&r, &t) / denom;
+            let u = cross(&r, &d) / denom;
+            if (0.0..=1.0).contains(&s) && u >= lo && u <= hi {
+                return 0.0;
+            }
+        }
+        let point_edge = |p: &Vector2<f64>| {
+            let u = t.dot(&(p - v)).clamp(lo, hi);
+            (v + t * u - p).norm_squared()
+        };
+        let mut distance2 = point_edge(a_m).min(point_edge(b_m));
+        for end_m in [lo, hi] {
+            if end_m.is_finite() {
+                distance2 = distance2.min(point_segment_distance2(&(v + t * end_m), a_m, b_m));
+            }
+        }
+        distance2
     }
 
     /// The signed distance and nearest point (see [`WallPoint`]); `O(edges)`, no allocation.
@@ -591,12 +664,11 @@ impl Polyline {
         };
         let d2 = d.norm_squared();
         let edges = self.tangents.len();
-        let interior = 1..edges; // interior vertices
         if d2 > 0.0 {
             // Convex corners against the segment: the corner and its foot on the segment,
             // the normal the segment's own (a corner has no normal of its own: the distance
             // from a point just inside the corner jumps between its two edges).
-            for k in interior.clone() {
+            let corner = |k: usize| {
                 let s = (self.vertices_m[k] - a_m).dot(&d) / d2;
                 if s > 0.0 && s < 1.0 {
                     let corner = if corner_geometry {
@@ -607,6 +679,25 @@ impl Polyline {
                     let c = corner.unwrap_or_else(|| self.at(a_m, b_m, s));
                     consider_contact(c);
                 }
+            };
+            if self.tree.is_empty() || corner_geometry {
+                (1..edges).for_each(corner);
+            } else {
+                // Through the tree, the corners that can hold the minimum: in free space
+                // (both ends free, no crossing) the minimum is the distance to the nearest
+                // feature, so a corner whose foot holds it lies within the ends' smaller gap
+                // of the segment; else within the reach of the stretch (`Reach`). A corner
+                // farther off has a foot no deeper than the minimum.
+                let (lo_m, hi_m) = if needs_solid_side {
+                    reach_box(a_m, b_m, ends_gap_m)
+                } else {
+                    let reach_m = deepest_end_m * (1.0 + 1e-9) + 1e-12;
+                    (
+                        a_m.inf(b_m).add_scalar(-reach_m),
+                        a_m.sup(b_m).add_scalar(reach_m),
+                    )
+                };
+                self.corners_in_box(&lo_m, &hi_m, corner);
             }
             if !needs_solid_side {
                 return best_cell.get();
@@ -689,7 +780,22 @@ impl Polyline {
         gaps_m: [f64; 2],
     ) -> impl Iterator<Item = usize> + '_ {
         let reach = Reach::new(p0, p1, gaps_m);
-        (0..self.tangents.len()).filter(move |&i| self.within_reach(i, &reach))
+        let edges = self.tangents.len();
+        let scan = self.tree.is_empty();
+        // Without a tree, every edge; with one, the rays and the runs whose boxes meet the
+        // reach's box (the edges come in increasing order either way).
+        let mut near: Vec<usize> = Vec::new();
+        if !scan {
+            near.push(0);
+            self.tree.edges_meeting_box(&reach.lo_m, &reach.hi_m, |i| {
+                near.push(i);
+                true
+            });
+            near.push(edges - 1);
+        }
+        let all = (0..edges).filter(move |_| scan);
+        all.chain(near)
+            .filter(move |&i| self.within_reach(i, &reach))
     }
 
     /// Whether edge `i` can be nearest to a point of the stretch `reach` describes: an end
@@ -966,7 +1072,8 @@ impl Polyline {
     /// The convex corners that could press on the segment `a -> b` with a gap below
     /// `within_m`, appended to `out`: those within `within_m` plus half the segment's
     /// length of its bounding box (a corner poking through a segment lies within the
-    /// box grown by its depth), whose cone holds the segment's normal; `O(vertices)`.
+    /// box grown by its depth), whose cone holds the segment's normal; `O(log vertices)`
+    /// through the tree where few corners are near.
     pub fn features_near_segment(
         &self,
         a_m: &Vector2<f64>,
@@ -974,27 +1081,26 @@ impl Polyline {
         within_m: f64,
         out: &mut Vec<FeatureContact>,
     ) {
-        let (lo, hi) = (a_m.inf(b_m), a_m.sup(b_m));
         let reach = within_m.max(0.0) + 0.5 * (b_m - a_m).norm();
-        for vertex in 1..self.tangents.len() {
-            let v = self.vertices_m[vertex];
-            if v.x < lo.x - reach || v.x > hi.x + reach || v.y < lo.y - reach || v.y > hi.y + reach
-            {
-                continue;
-            }
+        let (lo, hi) = (
+            a_m.inf(b_m).add_scalar(-reach),
+            a_m.sup(b_m).add_scalar(reach),
+        );
+        self.corners_in_box(&lo, &hi, |vertex| {
             if let Some(c) = self.corner_feature_contact(vertex, a_m, b_m)
                 && c.supported
                 && c.gap_m < within_m
             {
                 out.push(c);
             }
-        }
+        });
     }
 
-    /// Whether the segment `a -> b` crosses an edge (end rays included).
+    /// Whether the segment `a -> b` crosses an edge (end rays included); through the tree,
+    /// the finite edges whose runs' boxes meet the segment's box.
     fn crosses(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> bool {
         let d = b_m - a_m;
-        (0..self.tangents.len()).any(|edge| {
+        let crosses_edge = |edge: usize| {
             let t = self.tangents[edge];
             let denom = cross(&d, &t);
             if denom == 0.0 {
@@ -1005,7 +1111,49 @@ impl Polyline {
             let u = cross(&r, &d) / denom;
             let (lo, hi) = self.range_m(edge);
             (0.0..=1.0).contains(&s) && u >= lo && u <= hi
-        })
+        };
+        let edges = self.tangents.len();
+        if self.tree.is_empty() {
+            return (0..edges).any(crosses_edge);
+        }
+        if crosses_edge(0) || crosses_edge(edges - 1) {
+            return true;
+        }
+        !self
+            .tree
+            .edges_meeting_box(&a_m.inf(b_m), &a_m.sup(b_m), |edge| !crosses_edge(edge))
+    }
+
+    /// Calls `visit` with every interior vertex (corner) inside the box `lo_m..hi_m`, in
+    /// increasing order: a scan, or the ends of the edges the tree finds near the box.
+    fn corners_in_box(
+        &self,
+        lo_m: &Vector2<f64>,
+        hi_m: &Vector2<f64>,
+        mut visit: impl FnMut(usize),
+    ) {
+        let inside =
+            |v: &Vector2<f64>| v.x >= lo_m.x && v.x <= hi_m.x && v.y >= lo_m.y && v.y <= hi_m.y;
+        if self.tree.is_empty() {
+            for k in 1..self.tangents.len() {
+                if inside(&self.vertices_m[k]) {
+                    visit(k);
+                }
+            }
+            return;
+        }
+        // Corner k ends edge k - 1 and starts edge k: the finite edges `1..edges - 1` the
+        // tree holds end at every interior vertex. Adjacent edges share one: each once.
+        let mut next = 1;
+        self.tree.edges_meeting_box(lo_m, hi_m, |edge| {
+            for k in edge.max(next)..=edge + 1 {
+                if inside(&self.vertices_m[k]) {
+                    visit(k);
+                }
+            }
+            next = edge + 2;
+            true
+        });
     }
 
     /// The first point of the ray `origin + t direction`, `t` in `[0, max_m]`, on the
@@ -1070,16 +1218,8 @@ impl Polyline {
         let solid = self.solid.swapped();
         let tangents: Vec<Vector2<f64>> = self.tangents.iter().map(flip).collect();
         let normals = tangents.iter().map(|t| solid.free_normal(t)).collect();
-        let chunks = self
-            .chunks
-            .iter()
-            .map(|c| EdgeChunk {
-                first_edge: c.first_edge,
-                end_edge: c.end_edge,
-                min_m: Vector2::new(c.min_m.x, -c.max_m.y),
-                max_m: Vector2::new(c.max_m.x, -c.min_m.y),
-            })
-            .collect();
+        let mut tree = self.tree.clone();
+        tree.mirror_about_x_axis();
         Polyline {
             vertices_m: self.vertices_m.iter().map(flip).collect(),
             tangents,
@@ -1087,7 +1227,7 @@ impl Polyline {
             lengths_m: self.lengths_m.clone(),
             arclengths_m: self.arclengths_m.clone(),
             solid,
-            chunks,
+            tree,
         }
     }
 
@@ -1096,10 +1236,7 @@ impl Polyline {
         for v in &mut self.vertices_m {
             *v += offset_m;
         }
-        for chunk in &mut self.chunks {
-            chunk.min_m += offset_m;
-            chunk.max_m += offset_m;
-        }
+        self.tree.translate(&offset_m);
     }
 
     /// A copy moved by `offset_m`.
@@ -1214,7 +1351,7 @@ mod tests {
             }
             let edges = vertices.len() - 1;
             let walk = unchecked(vertices, SolidSide::Left);
-            prop_assert!(!walk.chunks.is_empty());
+            prop_assert!(!walk.tree.is_empty());
             prop_assert_eq!(walk.tangents.len(), edges);
             prop_assert_eq!(walk.first_crossing(), walk.first_crossing_of_every_pair());
             let noisy = noisy_line(200, noisy_seed);
@@ -1269,18 +1406,19 @@ mod tests {
     }
 
     proptest! {
-        /// The chunked nearest-point search gives exactly what the edge-by-edge one does.
+        /// The nearest-point search through the tree gives exactly what the edge-by-edge one
+        /// does.
         #[test]
-        fn chunked_search_is_exact(
+        fn tree_search_is_exact(
             count in 33usize..400,
             seed in any::<u64>(),
             x in -0.05f64..0.9,
             y in -0.02f64..0.02,
         ) {
             let wall = noisy_line(count, seed);
-            prop_assert!(!wall.chunks.is_empty());
+            prop_assert!(!wall.tree.is_empty());
             let mut plain = wall.clone();
-            plain.chunks.clear();
+            plain.tree = EdgeTree::new(&[]);
             let p = Vector2::new(x, y);
             prop_assert_eq!(wall.signed_distance(&p), plain.signed_distance(&p));
             // On a vertex, and half-way along an edge (ties between edges).
@@ -1328,6 +1466,46 @@ mod tests {
                 wall.equidistance_candidates(&a, &b, (0.0, 1.0), gaps, &consider);
             }
             prop_assert_eq!(halved, best.get());
+        }
+
+        /// The queries through the tree answer as the scans do on digitized walls of up to
+        /// 400 edges, for segments from 5 mm to 15 cm near and in them: the deepest point
+        /// (the same contact), the corners near a segment (the same list, in order), the
+        /// crossing test; and the segment's gap bound is a bound, exact where the segment
+        /// stays in free space.
+        #[test]
+        fn tree_queries_answer_as_scans(
+            count in 33usize..400,
+            seed in any::<u64>(),
+            x in -0.05f64..0.8,
+            y in -0.01f64..0.03,
+            angle_rad in -3.2f64..3.2,
+            length_m in 0.005f64..0.15,
+            within_m in 0.0f64..0.01,
+        ) {
+            let wall = noisy_line(count, seed);
+            prop_assert!(!wall.tree.is_empty());
+            let mut plain = wall.clone();
+            plain.tree = EdgeTree::new(&[]);
+            let a = Vector2::new(x, y);
+            let b = a + Vector2::new(angle_rad.cos(), angle_rad.sin()) * length_m;
+            let by_tree = wall.segment_contact(&a, &b);
+            let by_scan = plain.segment_contact(&a, &b);
+            prop_assert_eq!(by_tree.wall.gap_m, by_scan.wall.gap_m);
+            prop_assert_eq!(by_tree, by_scan);
+            prop_assert_eq!(wall.crosses(&a, &b), plain.crosses(&a, &b));
+            let (mut near_tree, mut near_scan) = (Vec::new(), Vec::new());
+            wall.features_near_segment(&a, &b, within_m, &mut near_tree);
+            plain.features_near_segment(&a, &b, within_m, &mut near_scan);
+            prop_assert_eq!(near_tree, near_scan);
+            let bound_m = wall.segment_gap_lower_bound_m(&a, &b);
+            prop_assert!(bound_m <= by_scan.wall.gap_m, "{bound_m} > {}", by_scan.wall.gap_m);
+            if by_scan.wall.gap_m > 0.0 {
+                prop_assert!(
+                    (bound_m - by_scan.wall.gap_m).abs() <= 1e-12 * (1.0 + by_scan.wall.gap_m),
+                    "{bound_m} against {}", by_scan.wall.gap_m
+                );
+            }
         }
 
         /// A segment lying flush on an edge and running on past its convex corner rests on
