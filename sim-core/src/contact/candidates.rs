@@ -46,7 +46,11 @@ impl QuasiStatic {
             self.check_base(w, wall, &self.probe, goal.base_m)?;
         }
         let mut out: Vec<Pair> = self
-            .touching(&self.probe, &self.beta, self.settings.margin_m)
+            // Per chain point and per link, the nearest few (a rough or digitized wall puts
+            // dozens of pieces and corners within the margin of one link; the nearest are
+            // what it can touch next, and anything the solve pushes into a wall joins after
+            // it).
+            .touching(&self.probe, &self.beta, self.settings.margin_m, NEAREST)
             .into_iter()
             .map(|key| self.fresh_pair(key))
             .collect();
@@ -132,15 +136,18 @@ impl QuasiStatic {
         geo
     }
 
-    /// The pairs of `posture` (hair angles `beta`) with a gap below `within_m`.
-    pub(super) fn touching(&self, posture: &Posture, beta: &[f64], within_m: f64) -> Vec<PairKey> {
+    /// The pairs of `posture` (hair angles `beta`) with a gap below `within_m`: per chain
+    /// point and per link, the `keep` nearest (deepest).
+    pub(super) fn touching(
+        &self,
+        posture: &Posture,
+        beta: &[f64],
+        within_m: f64,
+        keep: usize,
+    ) -> Vec<PairKey> {
         let n = self.chain.n();
         let mut keys = Vec::new();
         let mut features: Vec<FeatureContact> = Vec::new();
-        // Per chain point and per link, the nearest few (a rough or digitized wall puts
-        // dozens of pieces and corners within the margin of one link; the nearest are what
-        // it can touch next, and anything the solve pushes into a wall joins after it).
-        let keep = if within_m > 0.0 { NEAREST } else { usize::MAX };
         // A feature whose foot is just past a link's end is a pair of the link while it is
         // near (it hands over to the end's point pair without chatter), but it is not in
         // the link: only a foot on the link itself makes a link inside a wall (a solve
@@ -697,7 +704,14 @@ impl QuasiStatic {
     }
 
     /// The pairs inside a wall after a solve to `x` (hair coordinates `hair_links`), with
-    /// the probe posture at `x` ([`Self::probe_at`]), that are not pairs yet.
+    /// the probe posture at `x` ([`Self::probe_at`]), that are not pairs yet: per chain
+    /// point and per link the [`NEAREST`] deepest. A link pushed into a rough stretch of
+    /// wall (a digitized wall's noise) had every asperity under it join at once: up to 181
+    /// pairs and 340 rank-one terms in one Newton system (issue #49), whose dense border
+    /// (an LU, and an SVD where many corners pressing on one link make it rank deficient)
+    /// was 70% of `examples/wall_digitized.toml`'s sweep. The deepest hold the link out;
+    /// any still inside join in the next round (57.6 s -> 2.8 s for that sweep's first 6 s,
+    /// every step certified; the CI sample's trajectories unchanged).
     pub(super) fn missed_pairs(
         &self,
         x: &[f64],
@@ -706,7 +720,7 @@ impl QuasiStatic {
     ) -> Vec<Pair> {
         let tol = self.settings.penetration_tolerance_m;
         let beta = self.beta_of(x, hair_links);
-        self.touching(&self.probe, &beta, -tol)
+        self.touching(&self.probe, &beta, -tol, NEAREST)
             .into_iter()
             .filter(|key| {
                 !pairs
@@ -1098,7 +1112,7 @@ mod tests {
         let across = Vector2::new(0.0, 0.099);
         sim.probe.update(&sim.chain, across, &sim.theta);
         let tol = sim.settings.penetration_tolerance_m;
-        let keys = sim.touching(&sim.probe, &sim.beta, -tol);
+        let keys = sim.touching(&sim.probe, &sim.beta, -tol, usize::MAX);
         assert!(
             keys.iter()
                 .any(|k| k.link == 1 && matches!(k.kind, PairKind::Link { .. })),

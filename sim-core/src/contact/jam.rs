@@ -118,7 +118,7 @@ impl QuasiStatic {
                 beta[l] = x[n + k];
             }
             out.clear();
-            for key in point_keys(sim.touching(posture, beta, 0.0)) {
+            for key in point_keys(sim.touching(posture, beta, 0.0, usize::MAX)) {
                 let mut geo = PairGeometry::at(key.link, 1.0, Vector2::zeros());
                 evaluate(
                     &sim.chain,
