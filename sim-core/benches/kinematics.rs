@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, SamplingMode, criterion_group, criterion_main};
 use nalgebra::{DMatrix, Matrix3xX};
-use sim_core::matrix_forms::{
+use sim_core::kinematics::matrix_forms::{
     seed_all_jacobians, seed_frame_poses, seed_frame_velocities, seed_hybrid_jacobian,
 };
 use sim_core::{

@@ -1,4 +1,4 @@
-//! The ring-down fit of `sim_core::identify` side by side with varpro (issue #17): accuracy
+//! The ring-down fit of `sim_core::design::identify` side by side with varpro (issue #17): accuracy
 //! and time of fitting `c + exp(-sigma t)(a cos w t + b sin w t)` to seeded noisy ring-downs.
 //!
 //! Both fits start where `identify_stiffness` starts its fit: the spectrum peak `w0` and the
@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use bench_common::{human, median};
 use nalgebra::{Matrix5, Vector5};
-use sim_core::identify::fit_bench::{self, cost_of, ring_down, scan_seed};
+use sim_core::design::identify::fit_bench::{self, cost_of, ring_down, scan_seed};
 
 const F_N_HZ: [f64; 4] = [2.0, 3.7, 8.0, 20.0];
 const ZETAS: [f64; 5] = [0.01, 0.03, 0.1, 0.2, 0.3];

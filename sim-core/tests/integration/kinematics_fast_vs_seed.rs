@@ -11,7 +11,7 @@ use crate::common_kinematics;
 use common_kinematics::{Case, assert_close, assert_close_f, case};
 use nalgebra::{Matrix3xX, Vector2};
 use proptest::prelude::*;
-use sim_core::matrix_forms::{
+use sim_core::kinematics::matrix_forms::{
     seed_all_jacobians, seed_body_jacobian, seed_frame_poses, seed_frame_velocities, seed_hair_tip,
     seed_hair_tip_velocity, seed_hybrid_jacobian, seed_pose, seed_spatial_jacobian, seed_transform,
     seed_velocity,

@@ -8,7 +8,7 @@
 
 use nalgebra::{DMatrix, Matrix3xX, Vector2};
 
-use crate::positions::frame_poses_into;
+use crate::kinematics::positions::frame_poses_into;
 use crate::{Chain, Frame, FramePoses, KinematicsError};
 
 /// Which Jacobian of the pair `(s, b)`.

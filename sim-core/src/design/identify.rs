@@ -45,7 +45,7 @@ use varpro::prelude::SeparableNonlinearModel;
 use varpro::problem::SeparableProblemBuilder;
 use varpro::solvers::levmar::LevMarSolver;
 
-pub use crate::nitinol::CABLE_STIFFNESS_N_M_PER_RAD;
+pub use crate::design::nitinol::CABLE_STIFFNESS_N_M_PER_RAD;
 /// Inertia of one robot segment about its joint (thesis Table 6.1), kg m^2.
 pub const SEGMENT_INERTIA_KG_M2: f64 = 3.25e-6;
 /// Fewest samples accepted.

@@ -1,7 +1,7 @@
 //! The validated chain description: link lengths, base angle, joint limits, stiffness, rest
 //! angles and hairs (thesis 2.2, docs/model.md 1, 3, 4, 7).
 
-use crate::hair::Hair;
+use crate::kinematics::hair::Hair;
 use crate::{ChainError, ChainField, Frame, KinematicsError};
 
 /// The limits of one joint, `cw_rad <= theta_j <= ccw_rad` (thesis 2.2.4), measured relative to

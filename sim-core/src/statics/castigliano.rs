@@ -4,7 +4,7 @@
 //! With the spring energy written in the joint torques, `U = 1/2 sum tau_j^2 / k_j`
 //! (3.2.2.13), Castigliano's second theorem gives `delta theta_j = dU/dtau_j = tau_j / k_j`
 //! (3.2.2.14), and a tip load `(F, M)` loads the joints with `tau = J_Gn^T (F, M)` (3.2.2.10),
-//! hence 3.2.2.15. Signs as in [`crate::tip_force`]: `F` and `M` act on the tip (ground
+//! hence 3.2.2.15. Signs as in [`crate::statics::tip_force`]: `F` and `M` act on the tip (ground
 //! frame, counter-clockwise positive), and the base (`theta_0`, held by the servo) does not
 //! move.
 //!
@@ -17,7 +17,7 @@
 use nalgebra::Vector2;
 
 use crate::Chain;
-use crate::tip_force::{TipForceError, check_finite, check_theta, cross, lever_arms_m};
+use crate::statics::tip_force::{TipForceError, check_finite, check_theta, cross, lever_arms_m};
 
 /// `delta theta_j = (J_Gn^T (F, M))_j / k_j` for `j = 1..=n`, radians, `n + 1` entries with
 /// `delta theta_0 = 0` (the base is held). `tip_force_n` is the force on the tip (ground

@@ -17,13 +17,13 @@
 //!
 //! The thesis's own parametrisation (3.2.1.1: `R' = -I`, `p' = (-l/2, 0)`, hair angle
 //! `theta'` in a base frame turned by pi) is the left, distal, centred hair with
-//! `beta = theta' + pi`; [`crate::matrix_forms::seed_hair_tip`] computes it as printed.
+//! `beta = theta' + pi`; [`crate::kinematics::matrix_forms::seed_hair_tip`] computes it as printed.
 
 use nalgebra::{Matrix3xX, Vector2};
 
-use crate::chain::finite;
-use crate::jacobian::hybrid_into_unchecked;
-use crate::positions::frame_pose_unchecked;
+use crate::kinematics::chain::finite;
+use crate::kinematics::jacobian::hybrid_into_unchecked;
+use crate::kinematics::positions::frame_pose_unchecked;
 use crate::{Chain, ChainError, ChainField, Frame, FramePoses, JointLimit, KinematicsError, Pose2};
 
 /// How close to its own link a hair with a compliant root may bend past its stop: its angle
