@@ -46,6 +46,9 @@
 //!   point of contact, preview distance, flip), contact points estimated from 12-bit joint
 //!   angles and touch bits scored against the true wall, and the wall's coverage
 //!   (docs/model.md 8, thesis 4.2.2).
+//! - `numerics` (crate-private): the building blocks of the solvers, one per file, each with its
+//!   tests: a Gragg-Bulirsch-Stoer extrapolation step and Carlson's elliptic integrals (the
+//!   elastica's integrator and closed form).
 //! - [`design`]: joint stiffness profiles ([`design::profile`]), Nitinol wires per joint
 //!   ([`design::nitinol`]), and joint stiffness identified from a free-oscillation recording
 //!   ([`design::identify`], docs/model.md 9, thesis 6.2).
@@ -96,6 +99,7 @@ pub mod contact;
 pub mod design;
 pub mod follow;
 pub mod kinematics;
+pub(crate) mod numerics;
 pub mod sensing;
 pub mod statics;
 pub mod sweep;
