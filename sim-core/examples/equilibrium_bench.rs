@@ -21,14 +21,17 @@ use std::time::Instant;
 
 use nalgebra::Vector2;
 use plotters::prelude::*;
+use sim_core::Chain;
 use sim_core::design::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::statics::beam::{
     Beam, BeamLayout, RichardsonOptions, richardson_tip, solve_beam_chain,
 };
+use sim_core::statics::elastica::{
+    ElasticaOptions, perpendicular_load_closed_form, solve as solve_elastica,
+};
 use sim_core::statics::equilibrium::{
     EquilibriumProblem, InitialGuess, SolveOptions, solve_equilibrium,
 };
-use sim_core::{Chain, ElasticaOptions, perpendicular_load_closed_form, solve_elastica};
 
 type BoxResult<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -527,7 +530,7 @@ fn section(
     } = pinned;
     writeln!(
         s,
-        "\n**Pinned tip, 9 links.** The thesis's robot: 9 links of 40 mm (a base link at 30 deg and 8 flexible joints, as docs/scene-format.md counts `links`), fast-exponential stiffness {SEED_K_MIN_N_M_PER_RAD}..{SEED_K_MAX_N_M_PER_RAD} N m/rad (`profile.rs`), joint limits +-90 deg, no load; the tip pinned at ({}, {}) m and moved in {steps} steps of 0.5 mm to ({:.3}, {}) m. The sweep starts from a C at the first pin and then from each previous answer; the cold starts solve every pin point afresh. Default solver options (KKT tolerance 1e-10). Time: median over the pin points of each point's median time per solve.\n",
+        "\n**Pinned tip, 9 links.** The thesis's robot: 9 links of 40 mm (a base link at 30 deg and 8 flexible joints, as docs/scene-format.md counts `links`), fast-exponential stiffness {SEED_K_MIN_N_M_PER_RAD}..{SEED_K_MAX_N_M_PER_RAD} N m/rad (`design/profile.rs`), joint limits +-90 deg, no load; the tip pinned at ({}, {}) m and moved in {steps} steps of 0.5 mm to ({:.3}, {}) m. The sweep starts from a C at the first pin and then from each previous answer; the cold starts solve every pin point afresh. Default solver options (KKT tolerance 1e-10). Time: median over the pin points of each point's median time per solve.\n",
         first[0], first[1], last[0], last[1]
     )?;
     writeln!(

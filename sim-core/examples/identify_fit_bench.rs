@@ -6,11 +6,11 @@
 //!
 //! - **hand LM**: the hand-written Levenberg-Marquardt fit of all five parameters that
 //!   identify.rs used before issue #17, kept here as the baseline.
-//! - **varpro**: identify.rs's fit now (through its hidden `fit_bench` hooks): variable
+//! - **varpro**: `design/identify/`'s fit now (through its hidden `fit_bench` hooks): variable
 //!   projection (`varpro` 0.14, its Levenberg-Marquardt on the two nonlinear parameters
 //!   `sigma, w`; `a, b, c` solved for at each step).
 //!
-//! Records: `ring_down` of identify.rs's tests (amplitude 0.3 rad, offset 0.05 rad, phase
+//! Records: `ring_down` of `design/identify/`'s tests (amplitude 0.3 rad, offset 0.05 rad, phase
 //! `0.37 seed`, xorshift64* Gaussian noise) over natural frequency, damping ratio, sample rate,
 //! record length in periods and noise level (0, 1 and 3 mrad as the tests use, and 10 mrad),
 //! three noise seeds per noisy configuration. Errors: `f_n = sqrt(sigma^2 + w^2) / 2 pi` and

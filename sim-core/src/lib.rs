@@ -17,7 +17,7 @@
 //!   `b` are relative to `C_s` and written in `C_s` (the thesis's `p_sb`, `theta_sb`,
 //!   `J_sb`). Per-frame lists hold frames `-1..=n` in order: entry `b + 1` is frame `b`.
 //! - **Velocities** are hybrid (the thesis's `V_h`): `(p_dot_sb, omega_sb)` in `C_s`; body and
-//!   spatial Jacobians are in [`JacobianKind`].
+//!   spatial Jacobians are in [`JacobianKind`](kinematics::jacobian::JacobianKind).
 //! - **Units** are SI and named: `_m`, `_rad`, `_nm` (newton-metres), `_n` (newtons),
 //!   `_per_s`.
 //!
@@ -25,26 +25,30 @@
 //! The crate is organized by concept, one folder each; the root re-exports what the toolkit's
 //! other crates use (the chain, its kinematics, equilibria, walls, profiles, wires,
 //! identification, sensing and mapping), everything else is reached by its path.
-//! - [`kinematics`]: the validated chain ([`Chain`], [`ChainBuilder`], [`JointLimit`]), frame
-//!   indices ([`Frame`]), poses, hybrid velocities and Jacobians of any frame pair (`O(n)`),
-//!   the joint-limit map, the hairs' kinematics, the thesis's matrix forms (the reference the
-//!   fast paths are tested against), and the typed errors ([`KinematicsError`],
-//!   [`ChainError`]).
+//! - [`kinematics`]: the validated chain ([`Chain`], its
+//!   [`ChainBuilder`](kinematics::chain::ChainBuilder), [`JointLimit`]), frame indices
+//!   ([`Frame`]), poses ([`kinematics::positions`]), hybrid velocities
+//!   ([`kinematics::velocity`]) and Jacobians ([`kinematics::jacobian`](mod@kinematics::jacobian)) of any frame pair in
+//!   `O(n)`, the joint-limit map, the hairs' kinematics ([`kinematics::hair`]), the thesis's
+//!   matrix forms (the reference the fast paths are tested against), and the typed errors
+//!   ([`KinematicsError`], [`ChainError`]).
 //! - [`statics`]: spring energy and tip load with gradient and Hessian
 //!   ([`statics::energy`]), static equilibria ([`statics::equilibrium`]), the tip force at a
-//!   posture and Castigliano's deflection, chains that stand for a beam with Richardson
-//!   extrapolation ([`statics::beam`]), and the elastica they converge to
-//!   ([`statics::elastica`]).
+//!   posture ([`statics::tip_force`](mod@statics::tip_force)) and Castigliano's deflection
+//!   ([`statics::castigliano`]), chains that stand for a beam with Richardson extrapolation
+//!   ([`statics::beam`]), and the elastica they converge to ([`statics::elastica`]).
 //! - [`wall`]: walls (line, polyline, sinusoid) with a solid side and surface zones; signed
 //!   distance and the deepest point of a link against a wall (docs/model.md 6).
 //! - [`contact`]: quasi-static contact of the chain and its hairs with walls: the step, its
 //!   semismooth Newton solve and the independent check of a state.
-//! - [`sweep`]: a scene's sweep (placement, then the base driven through its motion).
+//! - [`sweep`]: quasi-static sweeps: a placement, then the base moved in fixed steps, each a
+//!   contact step with the wall-following metrics.
 //! - [`follow`]: closed-loop wall following (a robot, its controller, the antenna as its only
 //!   sensor).
-//! - [`sensing`]: sensors as they are, wall-following metrics of a posture (point of bend,
-//!   point of contact, preview distance, flip), contact points estimated from 12-bit joint
-//!   angles and touch bits scored against the true wall, and the wall's coverage
+//! - [`sensing`]: sensors as they are ([`sensing::sensor`]), wall-following metrics of a
+//!   posture ([`sensing::metrics`]: point of bend, point of contact, preview distance, flip),
+//!   contact points estimated from 12-bit joint angles and touch bits scored against the true
+//!   wall ([`sensing::mapping`]), and the wall's coverage ([`sensing::coverage`])
 //!   (docs/model.md 8, thesis 4.2.2).
 //! - `numerics` (crate-private): the building blocks of the solvers, one per file, each with its
 //!   tests: a Gragg-Bulirsch-Stoer extrapolation step and Carlson's elliptic integrals (the
@@ -60,7 +64,8 @@
 //!
 //! # Example: the tip Jacobian
 //! ```
-//! use sim_core::{tip_jacobian, tip_pose, Chain, JointLimit};
+//! use sim_core::kinematics::jacobian::tip_jacobian;
+//! use sim_core::{tip_pose, Chain, JointLimit};
 //! use std::f64::consts::FRAC_PI_2;
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -105,74 +110,42 @@ pub mod statics;
 pub mod sweep;
 pub mod wall;
 
+// The curated root: every item here is used by another crate of the workspace (the CLI, the
+// monitor, antennad, the cross-crate tests); everything else is reached by its path above.
 pub use design::identify::{
     DampingSource, FrequencySource, Identification, IdentifyError, IdentifyOptions,
-    identify_stiffness, wire_constant,
+    identify_stiffness,
 };
 pub use design::nitinol::{
-    Design, JointWire, NitinolError, RangeFlag, WireDiameter, WireModel, available_wires,
-    design as design_wires, wire_stiffness_n_m_per_rad,
+    NitinolError, RangeFlag, WireDiameter, available_wires, design as design_wires,
+    wire_stiffness_n_m_per_rad,
 };
 pub use design::profile::{ProfileError, StiffnessProfile, joint_positions};
-pub use kinematics::active_frames::{
-    active_frames_matrix, active_frames_matrix_from_vector, active_frames_vector,
-    all_frames_active_matrix, all_frames_matrix, all_frames_matrix_from_extremes,
-};
-pub use kinematics::chain::{Chain, ChainBuilder, JointLimit};
-pub use kinematics::error::{ChainError, ChainField, KinematicsError};
+pub use kinematics::chain::{Chain, JointLimit};
+pub use kinematics::error::{ChainError, KinematicsError};
 pub use kinematics::frame::Frame;
-pub use kinematics::hair::{
-    HAIR_BEND_MARGIN_RAD, Hair, HairDirection, HairPose, HairSide, HairVelocity, hair_pose,
-    hair_poses, hair_tip_jacobian, hair_velocities,
-};
-pub use kinematics::jacobian::{
-    JacobianKind, all_jacobians, all_jacobians_into, body_jacobian, hybrid_jacobian, jacobian,
-    jacobian_into, spatial_jacobian, tip_jacobian, tip_jacobian_into,
-};
-pub use kinematics::joint_limits::{d2theta_dq2, dtheta_dq, q_from_theta, theta_from_q};
-pub use kinematics::positions::{
-    FramePoses, Pose2, frame_pose, frame_poses, frame_poses_into, tip_pose,
-};
-pub use kinematics::velocity::{
-    FrameVelocities, Twist2, frame_velocities, frame_velocities_into, frame_velocity,
-};
+pub use kinematics::hair::{Hair, HairDirection, HairSide, hair_poses};
+pub use kinematics::positions::{frame_poses, tip_pose};
 pub use sensing::coverage::{
-    Coverage, CoverageAccumulator, CoverageError, CoverageSettings, MAX_SAMPLES, Section,
-    WallSample, wall_coverage,
+    Coverage, CoverageAccumulator, CoverageError, CoverageSettings, Section, WallSample,
+    wall_coverage,
 };
 pub use sensing::mapping::{
     EstimatedContact, MappingAccumulator, MappingError, MappingScore, SWITCHES_PER_SEGMENT,
-    TouchLayout, estimate_contacts, mapping_score, point_error_mm, quantize_angle_rad,
-    sensed_theta_rad, switch_for_fraction, touch_bits_from_contacts,
+    TouchLayout, estimate_contacts, point_error_mm, sensed_theta_rad, switch_for_fraction,
+    touch_bits_from_contacts,
 };
-pub use sensing::metrics::{
-    ChainContact, FlipState, PointOfContact, angle_to_wall_rad, flip_state, pearson_correlation,
-    point_of_bend, point_of_contact, preview_distance_m, spearman_correlation,
-};
+pub use sensing::metrics::{ChainContact, pearson_correlation, spearman_correlation};
 pub use sensing::sensor::{
     CalibrationError, FIRMWARE_DEBOUNCE_SAMPLES, SensorError, SensorField, SensorSettings, Sensors,
     closes_switch,
 };
-pub use statics::beam::{
-    Beam, BeamError, BeamLayout, BeamTip, RichardsonOptions, RichardsonTip, richardson_tip,
-    solve_beam_chain,
-};
-pub use statics::castigliano::castigliano_deflection_rad;
-pub use statics::elastica::{
-    BendingStiffness, ElasticaError, ElasticaOptions, ElasticaProblem, ElasticaSolution,
-    PerpendicularLoadClosedForm, ShapePoint, perpendicular_load_closed_form,
-    solve as solve_elastica,
-};
-pub use statics::energy::{Potential, joint_torques_nm, strain_energy_j};
+pub use statics::energy::strain_energy_j;
 pub use statics::equilibrium::{
     Equilibrium, EquilibriumError, EquilibriumProblem, InitialGuess, LimitSide, MinimaSearch,
     SolveOptions, all_minima, solve_equilibrium,
 };
-pub use statics::tip_force::{
-    FreeBodyForces, TIP_FORCE_RANK_TOLERANCE, TipForce, TipForceError, joints_on_limit,
-    tip_force_free_body, tip_force_least_squares, tip_wrench_least_squares,
-};
 pub use wall::{
-    ConcavePiece, ConvexFeature, FeatureContact, Line, Polyline, SMOOTH_MU_DEFAULT, SegmentContact,
-    Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError, WallPoint, WallShape, ZoneAxis,
+    Line, Polyline, SMOOTH_MU_DEFAULT, Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError,
+    WallShape, ZoneAxis,
 };

@@ -606,9 +606,8 @@ mod tests {
     use crate::contact::feature::FrictionLaw;
     use crate::contact::pair::{ChainPoint, PairKey};
     use crate::contact::posture::Posture;
-    use crate::{
-        Chain, ConvexFeature, Hair, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall,
-    };
+    use crate::wall::ConvexFeature;
+    use crate::{Chain, Hair, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall};
 
     fn lcg(state: &mut u64) -> f64 {
         *state = state

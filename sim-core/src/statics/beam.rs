@@ -33,7 +33,7 @@
 //! ```
 //! use nalgebra::Vector2;
 //! use sim_core::statics::beam::{Beam, RichardsonOptions, richardson_tip};
-//! use sim_core::perpendicular_load_closed_form;
+//! use sim_core::statics::elastica::perpendicular_load_closed_form;
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! // A 0.36 m cantilever, EI = 0.02 N m^2, clamped along x, loaded across at alpha = 5.

@@ -10,7 +10,7 @@
 //!
 //! This is the first-order response about an **unloaded** posture: it neglects how the
 //! posture change turns the load's lever arms (the load part of the Hessian in
-//! [`crate::Potential::hessian_theta`]). About a posture already carrying a load `F_0`, the
+//! [`crate::statics::energy::Potential::hessian_theta`]). About a posture already carrying a load `F_0`, the
 //! first-order response is `H^-1 J^T (dF, dM)` with `H = K + [F_0 . (p_n - p_(max(i,j)-1))]`
 //! instead; Castigliano's formula is then off by a relative `O(|F_0| L / k)`.
 
@@ -31,7 +31,8 @@ use crate::statics::tip_force::{TipForceError, check_finite, check_theta, cross,
 /// # Example
 /// ```
 /// use nalgebra::Vector2;
-/// use sim_core::{Chain, castigliano_deflection_rad};
+/// use sim_core::statics::castigliano::castigliano_deflection_rad;
+/// use sim_core::Chain;
 ///
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// // A straight horizontal 3-joint chain, 0.05 m links, k = 0.1 N m/rad, pushed up at the

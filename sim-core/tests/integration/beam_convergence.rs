@@ -12,8 +12,8 @@ use sim_core::statics::beam::{
     Beam, BeamLayout, RichardsonOptions, richardson_tip, solve_beam_chain,
 };
 use sim_core::statics::elastica::{BendingStiffness, ElasticaOptions};
+use sim_core::statics::elastica::{perpendicular_load_closed_form, solve as solve_elastica};
 use sim_core::statics::equilibrium::{InitialGuess, SolveOptions};
-use sim_core::{perpendicular_load_closed_form, solve_elastica};
 
 const ALPHAS: [f64; 5] = [0.5, 1.0, 2.0, 5.0, 10.0];
 const LENGTH_M: f64 = 0.36;
