@@ -11,13 +11,13 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, SamplingMode, criterion_group, criterion_main};
 use nalgebra::{DMatrix, Matrix3xX};
-use sim_core::matrix_forms::{
+use sim_core::kinematics::jacobian::{all_jacobians_into, tip_jacobian_into};
+use sim_core::kinematics::matrix_forms::{
     seed_all_jacobians, seed_frame_poses, seed_frame_velocities, seed_hybrid_jacobian,
 };
-use sim_core::{
-    Chain, Frame, FramePoses, FrameVelocities, all_jacobians_into, frame_poses_into,
-    frame_velocities_into, tip_jacobian_into,
-};
+use sim_core::kinematics::positions::{FramePoses, frame_poses_into};
+use sim_core::kinematics::velocity::{FrameVelocities, frame_velocities_into};
+use sim_core::{Chain, Frame};
 
 /// The sizes measured: the thesis's robot (n = 8 gives 9 links), the cockroach's ~150 annuli,
 /// and long chains for the O(n) ratio time(4096) / time(512).
@@ -109,7 +109,10 @@ fn fast_paths(c: &mut Criterion) {
         // The tip force that explains the joint angles (tests/integration/tip_force.rs
         // `long_chain` checks its answer at n = 4096; its O(n) cost is measured here).
         g.bench_with_input(BenchmarkId::new("tip_force", n), &n, |b, _| {
-            b.iter(|| sim_core::tip_force_least_squares(&chain, black_box(&theta)).unwrap())
+            b.iter(|| {
+                sim_core::statics::tip_force::tip_force_least_squares(&chain, black_box(&theta))
+                    .unwrap()
+            })
         });
     }
     g.finish();

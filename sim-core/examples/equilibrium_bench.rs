@@ -6,7 +6,7 @@
 //! 1. A cantilever (L = 0.36 m, EI = 0.02 N m^2, clamped along x) with a perpendicular dead
 //!    tip load, `alpha = F L^2 / EI` in {0.5, 1, 2, 5, 10}: relative error of the tip
 //!    deflection against the elastica (the Bisshopp-Drucker closed form) and time per solve,
-//!    for chains of n = 8..4096 flexible joints in both layouts of `sim_core::beam` and for
+//!    for chains of n = 8..4096 flexible joints in both layouts of `sim_core::statics::beam` and for
 //!    Richardson extrapolation over 2, 3 and 4 Hencky chains.
 //! 2. The thesis's robot with its tip pinned (9 links of 40 mm: 8 flexible joints; fast-exponential
 //!    stiffness 0.004..0.082 N m/rad, base angle 30 deg): time per solve from a straight
@@ -21,10 +21,17 @@ use std::time::Instant;
 
 use nalgebra::Vector2;
 use plotters::prelude::*;
-use sim_core::beam::{Beam, BeamLayout, RichardsonOptions, richardson_tip, solve_beam_chain};
-use sim_core::equilibrium::{EquilibriumProblem, InitialGuess, SolveOptions, solve_equilibrium};
-use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
-use sim_core::{Chain, ElasticaOptions, perpendicular_load_closed_form, solve_elastica};
+use sim_core::Chain;
+use sim_core::design::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
+use sim_core::statics::beam::{
+    Beam, BeamLayout, RichardsonOptions, richardson_tip, solve_beam_chain,
+};
+use sim_core::statics::elastica::{
+    ElasticaOptions, perpendicular_load_closed_form, solve as solve_elastica,
+};
+use sim_core::statics::equilibrium::{
+    EquilibriumProblem, InitialGuess, SolveOptions, solve_equilibrium,
+};
 
 type BoxResult<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -390,7 +397,7 @@ fn section(
     )?;
     writeln!(
         s,
-        "**Cantilever.** L = {LENGTH_M} m, EI = {EI_N_M2} N m^2, clamped along x, dead tip load perpendicular to the clamp, `alpha = F L^2 / EI`. Error: `|y_tip / y_elastica - 1|` of the tip deflection, the elastica from the Bisshopp-Drucker closed form (`perpendicular_load_closed_form`; the shooting solver agrees to 1e-10). Chains (`sim_core::beam`) are solved by `solve_equilibrium`, every n-link chain to KKT tolerance 1e-13 / n (`RichardsonOptions::tolerance_times_links`: the tip sums n joint errors), plain chains from a straight start; `n` is the number of flexible joints (of the finest chain for Richardson, which solves n/2^(m-1), ..., n/2, n, each finer chain warm-started from the coarser answer). Equal links: docs/model.md 5 read literally, `n + 1` links of `L/(n+1)`, the base link rigid. Hencky: springs at the midpoints of `n` pieces of `L/n`, half-length end links.\n"
+        "**Cantilever.** L = {LENGTH_M} m, EI = {EI_N_M2} N m^2, clamped along x, dead tip load perpendicular to the clamp, `alpha = F L^2 / EI`. Error: `|y_tip / y_elastica - 1|` of the tip deflection, the elastica from the Bisshopp-Drucker closed form (`perpendicular_load_closed_form`; the shooting solver agrees to 1e-10). Chains (`sim_core::statics::beam`) are solved by `solve_equilibrium`, every n-link chain to KKT tolerance 1e-13 / n (`RichardsonOptions::tolerance_times_links`: the tip sums n joint errors), plain chains from a straight start; `n` is the number of flexible joints (of the finest chain for Richardson, which solves n/2^(m-1), ..., n/2, n, each finer chain warm-started from the coarser answer). Equal links: docs/model.md 5 read literally, `n + 1` links of `L/(n+1)`, the base link rigid. Hencky: springs at the midpoints of `n` pieces of `L/n`, half-length end links.\n"
     )?;
     writeln!(
         s,
@@ -523,7 +530,7 @@ fn section(
     } = pinned;
     writeln!(
         s,
-        "\n**Pinned tip, 9 links.** The thesis's robot: 9 links of 40 mm (a base link at 30 deg and 8 flexible joints, as docs/scene-format.md counts `links`), fast-exponential stiffness {SEED_K_MIN_N_M_PER_RAD}..{SEED_K_MAX_N_M_PER_RAD} N m/rad (`profile.rs`), joint limits +-90 deg, no load; the tip pinned at ({}, {}) m and moved in {steps} steps of 0.5 mm to ({:.3}, {}) m. The sweep starts from a C at the first pin and then from each previous answer; the cold starts solve every pin point afresh. Default solver options (KKT tolerance 1e-10). Time: median over the pin points of each point's median time per solve.\n",
+        "\n**Pinned tip, 9 links.** The thesis's robot: 9 links of 40 mm (a base link at 30 deg and 8 flexible joints, as docs/scene-format.md counts `links`), fast-exponential stiffness {SEED_K_MIN_N_M_PER_RAD}..{SEED_K_MAX_N_M_PER_RAD} N m/rad (`design/profile.rs`), joint limits +-90 deg, no load; the tip pinned at ({}, {}) m and moved in {steps} steps of 0.5 mm to ({:.3}, {}) m. The sweep starts from a C at the first pin and then from each previous answer; the cold starts solve every pin point afresh. Default solver options (KKT tolerance 1e-10). Time: median over the pin points of each point's median time per solve.\n",
         first[0], first[1], last[0], last[1]
     )?;
     writeln!(

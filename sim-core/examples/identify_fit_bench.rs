@@ -1,4 +1,4 @@
-//! The ring-down fit of `sim_core::identify` side by side with varpro (issue #17): accuracy
+//! The ring-down fit of `sim_core::design::identify` side by side with varpro (issue #17): accuracy
 //! and time of fitting `c + exp(-sigma t)(a cos w t + b sin w t)` to seeded noisy ring-downs.
 //!
 //! Both fits start where `identify_stiffness` starts its fit: the spectrum peak `w0` and the
@@ -6,11 +6,11 @@
 //!
 //! - **hand LM**: the hand-written Levenberg-Marquardt fit of all five parameters that
 //!   identify.rs used before issue #17, kept here as the baseline.
-//! - **varpro**: identify.rs's fit now (through its hidden `fit_bench` hooks): variable
+//! - **varpro**: `design/identify/`'s fit now (through its hidden `fit_bench` hooks): variable
 //!   projection (`varpro` 0.14, its Levenberg-Marquardt on the two nonlinear parameters
 //!   `sigma, w`; `a, b, c` solved for at each step).
 //!
-//! Records: `ring_down` of identify.rs's tests (amplitude 0.3 rad, offset 0.05 rad, phase
+//! Records: `ring_down` of `design/identify/`'s tests (amplitude 0.3 rad, offset 0.05 rad, phase
 //! `0.37 seed`, xorshift64* Gaussian noise) over natural frequency, damping ratio, sample rate,
 //! record length in periods and noise level (0, 1 and 3 mrad as the tests use, and 10 mrad),
 //! three noise seeds per noisy configuration. Errors: `f_n = sqrt(sigma^2 + w^2) / 2 pi` and
@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use bench_common::{human, median};
 use nalgebra::{Matrix5, Vector5};
-use sim_core::identify::fit_bench::{self, cost_of, ring_down, scan_seed};
+use sim_core::design::identify::fit_bench::{self, cost_of, ring_down, scan_seed};
 
 const F_N_HZ: [f64; 4] = [2.0, 3.7, 8.0, 20.0];
 const ZETAS: [f64; 5] = [0.01, 0.03, 0.1, 0.2, 0.3];

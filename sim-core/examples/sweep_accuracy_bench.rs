@@ -37,7 +37,7 @@ use bench_common::{date, human, median, write_section};
 use nalgebra::Vector2;
 use plotters::prelude::*;
 use sim_core::contact::{ContactSettings, Feature};
-use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
+use sim_core::design::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene, SweepStep};
 use sim_core::{
     Chain, InitialGuess, JointLimit, Line, SolidSide, Surface, SurfaceMap, Wall,

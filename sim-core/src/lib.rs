@@ -17,37 +17,45 @@
 //!   `b` are relative to `C_s` and written in `C_s` (the thesis's `p_sb`, `theta_sb`,
 //!   `J_sb`). Per-frame lists hold frames `-1..=n` in order: entry `b + 1` is frame `b`.
 //! - **Velocities** are hybrid (the thesis's `V_h`): `(p_dot_sb, omega_sb)` in `C_s`; body and
-//!   spatial Jacobians are in [`JacobianKind`].
+//!   spatial Jacobians are in [`JacobianKind`](kinematics::jacobian::JacobianKind).
 //! - **Units** are SI and named: `_m`, `_rad`, `_nm` (newton-metres), `_n` (newtons),
 //!   `_per_s`.
 //!
 //! # What is where
-//! - [`chain`]: the validated description ([`Chain`], [`ChainBuilder`], [`JointLimit`]).
-//! - [`positions`]: poses of one frame (`O(|b - s|)`) or of all frames (`O(n)`).
-//! - [`velocity`]: hybrid velocities of one frame or of all frames (`O(n)`).
-//! - [`jacobian`](mod@jacobian): hybrid, body and spatial Jacobians of any pair (`O(n)`), and all frames'
-//!   Jacobians at once (`O(n^2)`).
-//! - [`joint_limits`]: the limit map `theta = g(q)`, its inverse and derivatives.
-//! - [`hair`]: hair parameters and hair tip kinematics.
-//! - [`energy`]: spring energy and tip load with gradient and Hessian, in `theta` and `q`.
-//! - [`tip_force`](mod@tip_force): the tip force at a posture (least squares `J^T F = -tau`,
-//!   and the free-body system with stop torques, base reaction and servo torque), and
-//!   [`castigliano`]: the deflection `K^-1 J^T (F, M)` of a small tip load (thesis 3.2.2).
-//! - [`active_frames`] and [`matrix_forms`]: the thesis's bookkeeping (`alpha_sb`, `A_sb`, `A`)
-//!   and matrix formulas, `O(n^2)` or worse: the reference the fast paths are tested against.
-//! - [`profile`]: joint stiffness profiles normalized to `[k_min, k_max]` (docs/model.md 5).
-//! - [`nitinol`]: the wire law `k = C r^4 + k_cable` and the nearest available wire per joint.
-//! - [`identify`]: joint stiffness from a free-oscillation recording (docs/model.md 9, thesis 6.2).
-//! - [`elastica`]: the reference solver for the clamped inextensible beam under a tip load.
+//! The crate is organized by concept, one folder each; the root re-exports what the toolkit's
+//! other crates use (the chain, its kinematics, equilibria, walls, profiles, wires,
+//! identification, sensing and mapping), everything else is reached by its path.
+//! - [`kinematics`]: the validated chain ([`Chain`], its
+//!   [`ChainBuilder`](kinematics::chain::ChainBuilder), [`JointLimit`]), frame indices
+//!   ([`Frame`]), poses ([`kinematics::positions`]), hybrid velocities
+//!   ([`kinematics::velocity`]) and Jacobians ([`kinematics::jacobian`](mod@kinematics::jacobian)) of any frame pair in
+//!   `O(n)`, the joint-limit map, the hairs' kinematics ([`kinematics::hair`]), the thesis's
+//!   matrix forms (the reference the fast paths are tested against), and the typed errors
+//!   ([`KinematicsError`], [`ChainError`]).
+//! - [`statics`]: spring energy and tip load with gradient and Hessian
+//!   ([`statics::energy`]), static equilibria ([`statics::equilibrium`]), the tip force at a
+//!   posture ([`statics::tip_force`](mod@statics::tip_force)) and Castigliano's deflection
+//!   ([`statics::castigliano`]), chains that stand for a beam with Richardson extrapolation
+//!   ([`statics::beam`]), and the elastica they converge to ([`statics::elastica`]).
 //! - [`wall`]: walls (line, polyline, sinusoid) with a solid side and surface zones; signed
 //!   distance and the deepest point of a link against a wall (docs/model.md 6).
-//! - [`metrics`]: point of bend, point of contact, preview distance, flip detection and
-//!   correlations (docs/model.md 8); [`mapping`]: wall contact points estimated from 12-bit joint
-//!   angles and touch bits, and their error against the true wall (thesis 4.2.2).
+//! - [`contact`]: quasi-static contact of the chain and its hairs with walls: the step, its
+//!   semismooth Newton solve and the independent check of a state.
+//! - [`sweep`]: quasi-static sweeps: a placement, then the base moved in fixed steps, each a
+//!   contact step with the wall-following metrics.
 //! - [`follow`]: closed-loop wall following (a robot, its controller, the antenna as its only
 //!   sensor).
-//! - [`beam`]: chains that stand for a beam (the first-order equal-links and the second-order
-//!   Hencky layouts) and Richardson extrapolation over the number of links.
+//! - [`sensing`]: sensors as they are ([`sensing::sensor`]), wall-following metrics of a
+//!   posture ([`sensing::metrics`]: point of bend, point of contact, preview distance, flip),
+//!   contact points estimated from 12-bit joint angles and touch bits scored against the true
+//!   wall ([`sensing::mapping`]), and the wall's coverage ([`sensing::coverage`])
+//!   (docs/model.md 8, thesis 4.2.2).
+//! - `numerics` (crate-private): the building blocks of the solvers, one per file, each with its
+//!   tests: a Gragg-Bulirsch-Stoer extrapolation step and Carlson's elliptic integrals (the
+//!   elastica's integrator and closed form).
+//! - [`design`]: joint stiffness profiles ([`design::profile`]), Nitinol wires per joint
+//!   ([`design::nitinol`]), and joint stiffness identified from a free-oscillation recording
+//!   ([`design::identify`], docs/model.md 9, thesis 6.2).
 //!
 //! Every function checks its arguments against the chain and returns a typed error
 //! ([`KinematicsError`], [`ChainError`]) rather than panicking. Functions that produce one
@@ -56,7 +64,8 @@
 //!
 //! # Example: the tip Jacobian
 //! ```
-//! use sim_core::{tip_jacobian, tip_pose, Chain, JointLimit};
+//! use sim_core::kinematics::jacobian::tip_jacobian;
+//! use sim_core::{tip_pose, Chain, JointLimit};
 //! use std::f64::consts::FRAC_PI_2;
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -91,100 +100,52 @@
 //! # }
 //! ```
 
-pub mod active_frames;
-pub mod beam;
-pub mod castigliano;
-pub mod chain;
 pub mod contact;
-pub mod coverage;
-pub mod elastica;
-pub mod energy;
-pub mod equilibrium;
-pub mod error;
+pub mod design;
 pub mod follow;
-pub mod frame;
-pub mod hair;
-pub mod identify;
-pub mod jacobian;
-pub mod joint_limits;
-pub mod mapping;
-pub mod matrix_forms;
-pub mod metrics;
-pub mod nitinol;
-pub mod positions;
-pub mod profile;
-pub mod sensor;
+pub mod kinematics;
+pub(crate) mod numerics;
+pub mod sensing;
+pub mod statics;
 pub mod sweep;
-pub mod tip_force;
-pub mod velocity;
 pub mod wall;
 
-pub use active_frames::{
-    active_frames_matrix, active_frames_matrix_from_vector, active_frames_vector,
-    all_frames_active_matrix, all_frames_matrix, all_frames_matrix_from_extremes,
-};
-pub use beam::{
-    Beam, BeamError, BeamLayout, BeamTip, RichardsonOptions, RichardsonTip, richardson_tip,
-    solve_beam_chain,
-};
-pub use castigliano::castigliano_deflection_rad;
-pub use chain::{Chain, ChainBuilder, JointLimit};
-pub use coverage::{
-    Coverage, CoverageAccumulator, CoverageError, CoverageSettings, MAX_SAMPLES, Section,
-    WallSample, wall_coverage,
-};
-pub use elastica::{
-    BendingStiffness, ElasticaError, ElasticaOptions, ElasticaProblem, ElasticaSolution,
-    PerpendicularLoadClosedForm, ShapePoint, perpendicular_load_closed_form,
-    solve as solve_elastica,
-};
-pub use energy::{Potential, joint_torques_nm, strain_energy_j};
-pub use equilibrium::{
-    Equilibrium, EquilibriumError, EquilibriumProblem, InitialGuess, LimitSide, MinimaSearch,
-    SolveOptions, all_minima, solve_equilibrium,
-};
-pub use error::{ChainError, ChainField, KinematicsError};
-pub use frame::Frame;
-pub use hair::{
-    HAIR_BEND_MARGIN_RAD, Hair, HairDirection, HairPose, HairSide, HairVelocity, hair_pose,
-    hair_poses, hair_tip_jacobian, hair_velocities,
-};
-pub use identify::{
+// The curated root: every item here is used by another crate of the workspace (the CLI, the
+// monitor, antennad, the cross-crate tests); everything else is reached by its path above.
+pub use design::identify::{
     DampingSource, FrequencySource, Identification, IdentifyError, IdentifyOptions,
-    identify_stiffness, wire_constant,
+    identify_stiffness,
 };
-pub use jacobian::{
-    JacobianKind, all_jacobians, all_jacobians_into, body_jacobian, hybrid_jacobian, jacobian,
-    jacobian_into, spatial_jacobian, tip_jacobian, tip_jacobian_into,
+pub use design::nitinol::{
+    NitinolError, RangeFlag, WireDiameter, available_wires, design as design_wires,
+    wire_stiffness_n_m_per_rad,
 };
-pub use joint_limits::{d2theta_dq2, dtheta_dq, q_from_theta, theta_from_q};
-pub use mapping::{
+pub use design::profile::{ProfileError, StiffnessProfile, joint_positions};
+pub use kinematics::chain::{Chain, JointLimit};
+pub use kinematics::error::{ChainError, KinematicsError};
+pub use kinematics::frame::Frame;
+pub use kinematics::hair::{Hair, HairDirection, HairSide, hair_poses};
+pub use kinematics::positions::{frame_poses, tip_pose};
+pub use sensing::coverage::{
+    Coverage, CoverageAccumulator, CoverageError, CoverageSettings, Section, WallSample,
+    wall_coverage,
+};
+pub use sensing::mapping::{
     EstimatedContact, MappingAccumulator, MappingError, MappingScore, SWITCHES_PER_SEGMENT,
-    TouchLayout, estimate_contacts, mapping_score, point_error_mm, quantize_angle_rad,
-    sensed_theta_rad, switch_for_fraction, touch_bits_from_contacts,
+    TouchLayout, estimate_contacts, point_error_mm, sensed_theta_rad, switch_for_fraction,
+    touch_bits_from_contacts,
 };
-pub use metrics::{
-    ChainContact, FlipState, PointOfContact, angle_to_wall_rad, flip_state, pearson_correlation,
-    point_of_bend, point_of_contact, preview_distance_m, spearman_correlation,
-};
-pub use nitinol::{
-    Design, JointWire, NitinolError, RangeFlag, WireDiameter, WireModel, available_wires,
-    design as design_wires, wire_stiffness_n_m_per_rad,
-};
-pub use positions::{FramePoses, Pose2, frame_pose, frame_poses, frame_poses_into, tip_pose};
-pub use profile::{ProfileError, StiffnessProfile, joint_positions};
-pub use sensor::{
+pub use sensing::metrics::{ChainContact, pearson_correlation, spearman_correlation};
+pub use sensing::sensor::{
     CalibrationError, FIRMWARE_DEBOUNCE_SAMPLES, SensorError, SensorField, SensorSettings, Sensors,
     closes_switch,
 };
-pub use tip_force::{
-    FreeBodyForces, TIP_FORCE_RANK_TOLERANCE, TipForce, TipForceError, joints_on_limit,
-    tip_force_free_body, tip_force_least_squares, tip_wrench_least_squares,
-};
-pub use velocity::{
-    FrameVelocities, Twist2, frame_velocities, frame_velocities_into, frame_velocity,
+pub use statics::energy::strain_energy_j;
+pub use statics::equilibrium::{
+    Equilibrium, EquilibriumError, EquilibriumProblem, InitialGuess, LimitSide, MinimaSearch,
+    SolveOptions, all_minima, solve_equilibrium,
 };
 pub use wall::{
-    ConcavePiece, ConvexFeature, FeatureContact, Line, Polyline, SMOOTH_MU_DEFAULT, SegmentContact,
-    Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError, WallPoint, WallShape, ZoneAxis,
+    Line, Polyline, SMOOTH_MU_DEFAULT, Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError,
+    WallShape, ZoneAxis,
 };

@@ -758,7 +758,7 @@ fn mapping_runs(md: &mut String, figures: bool) -> Result<(), Box<dyn std::error
          `sim_core::estimate_contacts`) and scored two ways: the **point error**, each \
          estimated point's distance to the true wall, and the **coverage**, each point of the \
          wall section passed (sampled every 0.5 mm of arclength) to its nearest estimated \
-         point: mean, 90th percentile, and the fraction within 5 mm (`sim_core::coverage`; \
+         point: mean, 90th percentile, and the fraction within 5 mm (`sim_core::sensing::coverage`; \
          the sweep summary's `mapping_coverage_error_mm`, `mapping_coverage_p90_mm`, \
          `mapping_completeness`). The thesis's \"mean spatial error from the ground truth\" \
          grows because troughs the antenna bridges are never touched: the coverage measures \

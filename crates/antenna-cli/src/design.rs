@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 
 use serde::{Deserialize, Serialize};
-use sim_core::nitinol::{CABLE_STIFFNESS_N_M_PER_RAD, WIRE_CONSTANT_N_M_PER_RAD_PER_M4};
+use sim_core::design::nitinol::{CABLE_STIFFNESS_N_M_PER_RAD, WIRE_CONSTANT_N_M_PER_RAD_PER_M4};
 use sim_core::{NitinolError, RangeFlag, design_wires};
 
 /// One joint of a design.

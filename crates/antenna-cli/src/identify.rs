@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 
 use serde::{Deserialize, Serialize};
-use sim_core::nitinol::{M_PER_INCH, WIRE_CONSTANT_N_M_PER_RAD_PER_M4};
+use sim_core::design::nitinol::{M_PER_INCH, WIRE_CONSTANT_N_M_PER_RAD_PER_M4};
 use sim_core::{Identification, IdentifyError, IdentifyOptions, identify_stiffness};
 
 /// What `antenna identify` reports. Symbols as in the seed: `f_d` damped frequency, `zeta`

@@ -14,7 +14,7 @@
 use std::fmt::Write as _;
 
 use sim_core::contact::Feature;
-use sim_core::equilibrium::count_inflections;
+use sim_core::statics::equilibrium::count_inflections;
 use sim_core::sweep::{Sweep, SweepStep};
 use sim_core::{Frame, frame_poses, strain_energy_j};
 

@@ -109,7 +109,9 @@ pub fn sinusoid_14_2(mu: f64) -> Result<sim_core::Wall, Box<dyn std::error::Erro
 /// angle 30 deg, joint limits +-90 deg, the fast-exponential profile scaled to stay the same
 /// beam (the thesis's 0.004..0.082 N m/rad for 40 mm links times 40 mm / link).
 pub fn scaled_antenna(links: usize) -> Result<sim_core::Chain, Box<dyn std::error::Error>> {
-    use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
+    use sim_core::design::profile::{
+        SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile,
+    };
     let n = links - 1;
     let l = ANTENNA_LENGTH_M / links as f64;
     let lengths = vec![l; links];

@@ -20,7 +20,7 @@ use super::pair::{ChainPoint, Pair, PairKey, PairKind};
 use super::posture::{Pose, Posture};
 use super::quasistatic::{QuasiStatic, theta_of};
 use crate::wall::lerp;
-use crate::{ConvexFeature, FeatureContact, WallPoint};
+use crate::wall::{ConvexFeature, FeatureContact, WallPoint};
 
 /// How many pieces per chain point, and corners or crests per link, the broad phase keeps
 /// (the nearest).

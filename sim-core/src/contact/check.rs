@@ -11,7 +11,8 @@ use nalgebra::Vector2;
 
 use super::feature::{Contact, Feature, FrictionLaw, Slip};
 use super::quasistatic::QuasiStatic;
-use crate::{Frame, HairPose, hair_poses};
+use crate::kinematics::hair::HairPose;
+use crate::{Frame, hair_poses};
 
 /// How far a state is from a frictional-contact equilibrium; every field is `0` for an
 /// exact one, and `NaN` where something was not finite (which fails [`Self::holds`]).

@@ -1,6 +1,6 @@
 //! The semismooth Newton system of a step ([`super::equations`]) with exact derivatives,
 //! built in the chain's `O(n)` structure and solved by
-//! [`crate::equilibrium::bordered::BorderedSystem`] in `O(n k + k^3)` (`k` the pairs'
+//! [`crate::statics::equilibrium::bordered::BorderedSystem`] in `O(n k + k^3)` (`k` the pairs'
 //! force unknowns and a few rank-one terms).
 //!
 //! # The Jacobian
@@ -34,7 +34,7 @@ use super::feature::Slip;
 use super::geometry::{PairGeometry, Turn, generalized, hair_of};
 use super::pair::Pair;
 use super::posture::{cross, perp};
-use crate::equilibrium::bordered::{BorderedSystem, SolveStats};
+use crate::statics::equilibrium::bordered::{BorderedSystem, SolveStats};
 
 /// A least-squares step leaving more than this fraction of the constraint rows' right-hand
 /// side means the linearized constraints are inconsistent.
@@ -606,9 +606,8 @@ mod tests {
     use crate::contact::feature::FrictionLaw;
     use crate::contact::pair::{ChainPoint, PairKey};
     use crate::contact::posture::Posture;
-    use crate::{
-        Chain, ConvexFeature, Hair, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall,
-    };
+    use crate::wall::ConvexFeature;
+    use crate::{Chain, Hair, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall};
 
     fn lcg(state: &mut u64) -> f64 {
         *state = state

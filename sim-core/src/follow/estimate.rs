@@ -245,10 +245,10 @@ impl BendTable {
 }
 
 /// The continuous point of bend: the joint with the greatest `|theta_j|`
-/// ([`crate::point_of_bend`]) moved by the vertex of the parabola through it and its two
+/// ([`crate::sensing::metrics::point_of_bend`]) moved by the vertex of the parabola through it and its two
 /// neighbours (half a joint at most); `None` where no joint qualifies.
 pub fn bend_coordinate(theta_rad: &[f64]) -> Option<f64> {
-    let j = crate::point_of_bend(theta_rad)?;
+    let j = crate::sensing::metrics::point_of_bend(theta_rad)?;
     let magnitude = |k: usize| theta_rad.get(k).map(|t| t.abs());
     let (Some(a), Some(b), Some(c)) = (
         (j >= 2).then(|| magnitude(j - 1)).flatten(),

@@ -12,7 +12,7 @@ use super::sensed::SensedWall;
 use super::summary::{FollowStatus, FollowSummary, SummaryAccumulator};
 use super::{FollowError, footprint};
 use crate::contact::{Contact, QuasiStatic};
-use crate::sensor::{SensorSettings, Sensors};
+use crate::sensing::sensor::{SensorSettings, Sensors};
 use crate::sweep::{BasePose, Motion, Placement, SweepScene, place_at};
 use crate::{Line, SolidSide, Wall};
 

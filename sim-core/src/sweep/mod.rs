@@ -45,10 +45,10 @@ mod placement;
 use nalgebra::Vector2;
 
 use crate::contact::{Contact, ContactError, ContactSettings, QuasiStatic, StepReport};
-use crate::{
-    Chain, ChainContact, EquilibriumError, FlipState, InitialGuess, flip_state, point_of_bend,
-    point_of_contact, preview_distance_m, touch_bits_from_contacts,
+use crate::sensing::metrics::{
+    FlipState, flip_state, point_of_bend, point_of_contact, preview_distance_m,
 };
+use crate::{Chain, ChainContact, EquilibriumError, InitialGuess, touch_bits_from_contacts};
 use crate::{MappingError, Wall};
 
 pub use driven::{BasePose, TURN_CLEARANCE_M, place_at, step_base_to, turn_base};

@@ -1,4 +1,4 @@
-//! Chains converge to the elastica (docs/model.md 5), at the orders `sim_core::beam` documents:
+//! Chains converge to the elastica (docs/model.md 5), at the orders `sim_core::statics::beam` documents:
 //! measured here for a cantilever with a perpendicular tip load, `alpha = F L^2 / EI` in
 //! {0.5, 1, 2, 5, 10}, against the Bisshopp-Drucker closed form, and for a tapered beam with an
 //! oblique load against the elastica shooting solver.
@@ -8,10 +8,12 @@
 #![allow(clippy::unwrap_used)]
 
 use nalgebra::Vector2;
-use sim_core::beam::{Beam, BeamLayout, RichardsonOptions, richardson_tip, solve_beam_chain};
-use sim_core::elastica::{BendingStiffness, ElasticaOptions};
-use sim_core::equilibrium::{InitialGuess, SolveOptions};
-use sim_core::{perpendicular_load_closed_form, solve_elastica};
+use sim_core::statics::beam::{
+    Beam, BeamLayout, RichardsonOptions, richardson_tip, solve_beam_chain,
+};
+use sim_core::statics::elastica::{BendingStiffness, ElasticaOptions};
+use sim_core::statics::elastica::{perpendicular_load_closed_form, solve as solve_elastica};
+use sim_core::statics::equilibrium::{InitialGuess, SolveOptions};
 
 const ALPHAS: [f64; 5] = [0.5, 1.0, 2.0, 5.0, 10.0];
 const LENGTH_M: f64 = 0.36;
@@ -164,8 +166,9 @@ fn warm_and_cold_richardson_agree_and_warm_saves_iterations() {
     };
     let (warm, cold) = (run(true), run(false));
     assert!((warm.tip_position_m - cold.tip_position_m).norm() < 1e-10 * LENGTH_M);
-    let its =
-        |r: &sim_core::beam::RichardsonTip| r.solves.iter().map(|s| s.iterations).sum::<usize>();
+    let its = |r: &sim_core::statics::beam::RichardsonTip| {
+        r.solves.iter().map(|s| s.iterations).sum::<usize>()
+    };
     eprintln!("iterations: warm {}, cold {}", its(&warm), its(&cold));
     assert!(its(&warm) < its(&cold));
     // The error estimate bounds the true error of the extrapolated tip here.

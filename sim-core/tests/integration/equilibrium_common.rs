@@ -6,7 +6,8 @@
 #![allow(dead_code, clippy::unwrap_used)]
 
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
-use sim_core::{Chain, Equilibrium, tip_jacobian, tip_pose};
+use sim_core::kinematics::jacobian::tip_jacobian;
+use sim_core::{Chain, Equilibrium, tip_pose};
 
 /// The thesis's robot as in docs/scene-format.md: 9 links (n = 8 flexible joints) of 40 mm, the
 /// fast-exponential profile of docs/model.md 5 between 0.004 and 0.082 N m/rad, limits +-90 deg.

@@ -9,10 +9,10 @@ use crate::equilibrium_common;
 use equilibrium_common::{potential, residual_torques, seed_exponential_chain, torque_scale};
 use nalgebra::{DVector, Vector2};
 use proptest::prelude::*;
-use sim_core::equilibrium::{LinearSolver, SolverSettings, solve_equilibrium_with};
+use sim_core::kinematics::jacobian::tip_jacobian;
+use sim_core::statics::equilibrium::{LinearSolver, SolverSettings, solve_equilibrium_with};
 use sim_core::{
-    Chain, EquilibriumProblem, InitialGuess, JointLimit, LimitSide, SolveOptions,
-    solve_equilibrium, tip_jacobian,
+    Chain, EquilibriumProblem, InitialGuess, JointLimit, LimitSide, SolveOptions, solve_equilibrium,
 };
 
 fn settings(linear: LinearSolver) -> SolverSettings {

@@ -10,7 +10,7 @@ use equilibrium_common::{
     first_joint, least_squares_pin_force, residual_torques, seed_exponential_chain, torque_scale,
 };
 use nalgebra::Vector2;
-use sim_core::equilibrium::{LinearSolver, SolverSettings, solve_equilibrium_with};
+use sim_core::statics::equilibrium::{LinearSolver, SolverSettings, solve_equilibrium_with};
 use sim_core::{
     Chain, EquilibriumError, EquilibriumProblem, InitialGuess, JointLimit, MinimaSearch,
     SolveOptions, all_minima, solve_equilibrium, tip_pose,

@@ -5,7 +5,7 @@
 
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
-use sim_core::equilibrium::SemiseparableMatrix;
+use sim_core::statics::equilibrium::SemiseparableMatrix;
 
 fn dense_product(m: &SemiseparableMatrix, x: &[f64]) -> Vec<f64> {
     let n = m.dim();

@@ -6,7 +6,7 @@
 //! `k_eq` is the mean over five trials of `J w_n^2`, not `J` times the square of the mean
 //! `f_n`; so a row agrees to its rounding (within 1.7 %), and `C` to within 1 %.
 
-use sim_core::identify::{
+use sim_core::design::identify::{
     CABLE_STIFFNESS_N_M_PER_RAD, SEGMENT_INERTIA_KG_M2, equivalent_stiffness_n_m_per_rad,
     natural_frequency_hz, wire_constant,
 };

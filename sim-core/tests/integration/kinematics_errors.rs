@@ -5,11 +5,13 @@
 #![allow(clippy::unwrap_used)]
 
 use nalgebra::Matrix3xX;
-use sim_core::{
-    Chain, ChainError, ChainField, Frame, FramePoses, Hair, JacobianKind, JointLimit,
-    KinematicsError, active_frames_vector, frame_pose, frame_poses_into, hair_pose,
-    hybrid_jacobian, jacobian_into, q_from_theta, tip_jacobian,
-};
+use sim_core::kinematics::active_frames::active_frames_vector;
+use sim_core::kinematics::error::ChainField;
+use sim_core::kinematics::hair::hair_pose;
+use sim_core::kinematics::jacobian::{JacobianKind, hybrid_jacobian, jacobian_into, tip_jacobian};
+use sim_core::kinematics::joint_limits::q_from_theta;
+use sim_core::kinematics::positions::{FramePoses, frame_pose, frame_poses_into};
+use sim_core::{Chain, ChainError, Frame, Hair, JointLimit, KinematicsError};
 
 #[test]
 fn non_positive_length_names_the_link() {

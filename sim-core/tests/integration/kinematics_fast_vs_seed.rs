@@ -11,16 +11,18 @@ use crate::common_kinematics;
 use common_kinematics::{Case, assert_close, assert_close_f, case};
 use nalgebra::{Matrix3xX, Vector2};
 use proptest::prelude::*;
-use sim_core::matrix_forms::{
+use sim_core::kinematics::hair::hair_velocities;
+use sim_core::kinematics::jacobian::{
+    all_jacobians, body_jacobian, hybrid_jacobian, spatial_jacobian, tip_jacobian,
+};
+use sim_core::kinematics::matrix_forms::{
     seed_all_jacobians, seed_body_jacobian, seed_frame_poses, seed_frame_velocities, seed_hair_tip,
     seed_hair_tip_velocity, seed_hybrid_jacobian, seed_pose, seed_spatial_jacobian, seed_transform,
     seed_velocity,
 };
-use sim_core::{
-    Chain, Frame, Hair, all_jacobians, body_jacobian, frame_pose, frame_poses, frame_velocities,
-    frame_velocity, hair_poses, hair_velocities, hybrid_jacobian, spatial_jacobian, tip_jacobian,
-    tip_pose,
-};
+use sim_core::kinematics::positions::frame_pose;
+use sim_core::kinematics::velocity::{frame_velocities, frame_velocity};
+use sim_core::{Chain, Frame, Hair, frame_poses, hair_poses, tip_pose};
 
 const TOL: f64 = 1e-12;
 

@@ -17,11 +17,16 @@ use crate::common_kinematics;
 use common_kinematics::{Case, assert_close, assert_close_planar, case, central_jacobian};
 use nalgebra::{DMatrix, DVector, Matrix3xX, Vector2};
 use proptest::prelude::*;
+use sim_core::kinematics::hair::{hair_tip_jacobian, hair_velocities};
+use sim_core::kinematics::jacobian::{
+    all_jacobians, body_jacobian, hybrid_jacobian, spatial_jacobian, tip_jacobian,
+};
+use sim_core::kinematics::joint_limits::{d2theta_dq2, dtheta_dq, theta_from_q};
+use sim_core::kinematics::positions::frame_pose;
+use sim_core::kinematics::velocity::{frame_velocities, frame_velocity};
+use sim_core::statics::energy::Potential;
 use sim_core::{
-    Chain, Frame, Hair, HairDirection, HairSide, JointLimit, Potential, all_jacobians,
-    body_jacobian, d2theta_dq2, dtheta_dq, frame_pose, frame_poses, frame_velocities,
-    frame_velocity, hair_poses, hair_tip_jacobian, hair_velocities, hybrid_jacobian,
-    spatial_jacobian, theta_from_q, tip_jacobian, tip_pose,
+    Chain, Frame, Hair, HairDirection, HairSide, JointLimit, frame_poses, hair_poses, tip_pose,
 };
 
 const H: f64 = 1e-6;

@@ -10,10 +10,15 @@
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
 use nalgebra::{DMatrix, DVector, Matrix3xX, Vector2};
+use sim_core::kinematics::active_frames::{
+    active_frames_matrix, active_frames_vector, all_frames_matrix, all_frames_matrix_from_extremes,
+};
+use sim_core::kinematics::jacobian::{hybrid_jacobian, tip_jacobian};
+use sim_core::kinematics::joint_limits::{q_from_theta, theta_from_q};
+use sim_core::statics::energy::Potential;
 use sim_core::{
-    Chain, Frame, Hair, HairDirection, HairSide, JointLimit, Potential, active_frames_matrix,
-    active_frames_vector, all_frames_matrix, all_frames_matrix_from_extremes, frame_poses,
-    hair_poses, hybrid_jacobian, q_from_theta, strain_energy_j, theta_from_q, tip_jacobian,
+    Chain, Frame, Hair, HairDirection, HairSide, JointLimit, frame_poses, hair_poses,
+    strain_energy_j,
 };
 
 fn dv(v: &[f64]) -> DVector<f64> {

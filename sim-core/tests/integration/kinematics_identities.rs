@@ -10,12 +10,14 @@ use crate::common_kinematics;
 use common_kinematics::{assert_close, assert_close_f, case};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3};
 use proptest::prelude::*;
-use sim_core::{
-    Chain, Frame, JointLimit, active_frames_matrix, active_frames_matrix_from_vector,
-    active_frames_vector, all_frames_active_matrix, all_frames_matrix,
-    all_frames_matrix_from_extremes, body_jacobian, frame_pose, frame_poses, hybrid_jacobian,
-    q_from_theta, spatial_jacobian, theta_from_q,
+use sim_core::kinematics::active_frames::{
+    active_frames_matrix, active_frames_matrix_from_vector, active_frames_vector,
+    all_frames_active_matrix, all_frames_matrix, all_frames_matrix_from_extremes,
 };
+use sim_core::kinematics::jacobian::{body_jacobian, hybrid_jacobian, spatial_jacobian};
+use sim_core::kinematics::joint_limits::{q_from_theta, theta_from_q};
+use sim_core::kinematics::positions::frame_pose;
+use sim_core::{Chain, Frame, JointLimit, frame_poses};
 
 /// `C(x) = [cos(x)^T; sin(x)^T]`, 2 x len.
 fn c_of(x: &DVector<f64>) -> DMatrix<f64> {
@@ -206,7 +208,7 @@ fn base_is_fixed_in_the_limit_map() {
     let q = q_from_theta(&chain, &[0.7, 0.0, 0.0]).unwrap();
     assert_eq!(q[0], 0.0, "pseudo-inverse convention for equal limits");
     assert_eq!(
-        sim_core::dtheta_dq(&chain, &[1.0, 0.0, 0.0]).unwrap()[0],
+        sim_core::kinematics::joint_limits::dtheta_dq(&chain, &[1.0, 0.0, 0.0]).unwrap()[0],
         0.0
     );
 }

@@ -7,10 +7,11 @@
 use antenna_protocol::RAD_PER_COUNT;
 use nalgebra::Vector2;
 use proptest::prelude::*;
+use sim_core::sensing::mapping::{mapping_score, quantize_angle_rad};
 use sim_core::{
     Chain, ChainContact, EstimatedContact, Frame, Line, MappingAccumulator, MappingError,
-    SolidSide, TouchLayout, Wall, estimate_contacts, frame_poses, mapping_score, point_error_mm,
-    quantize_angle_rad, sensed_theta_rad, switch_for_fraction, touch_bits_from_contacts,
+    SolidSide, TouchLayout, Wall, estimate_contacts, frame_poses, point_error_mm, sensed_theta_rad,
+    switch_for_fraction, touch_bits_from_contacts,
 };
 
 fn v(x: f64, y: f64) -> Vector2<f64> {

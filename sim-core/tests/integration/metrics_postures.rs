@@ -7,9 +7,11 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use nalgebra::Vector2;
+use sim_core::sensing::metrics::{
+    angle_to_wall_rad, flip_state, point_of_bend, point_of_contact, preview_distance_m,
+};
 use sim_core::{
-    Chain, ChainContact, Frame, Line, Polyline, SolidSide, Wall, angle_to_wall_rad, flip_state,
-    frame_poses, pearson_correlation, point_of_bend, point_of_contact, preview_distance_m,
+    Chain, ChainContact, Frame, Line, Polyline, SolidSide, Wall, frame_poses, pearson_correlation,
     spearman_correlation,
 };
 

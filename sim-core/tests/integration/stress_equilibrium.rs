@@ -18,7 +18,7 @@
 use nalgebra::Vector2;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use sim_core::equilibrium::{SolverSettings, solve_equilibrium_with};
+use sim_core::statics::equilibrium::{SolverSettings, solve_equilibrium_with};
 use sim_core::{
     Chain, EquilibriumError, EquilibriumProblem, InitialGuess, JointLimit, SolveOptions,
 };

@@ -10,10 +10,12 @@ use crate::tip_force_common;
 
 use nalgebra::{DMatrix, DVector, Vector2};
 use proptest::prelude::*;
-use sim_core::{
-    Chain, Frame, Potential, frame_poses, joints_on_limit, tip_force_free_body,
-    tip_force_least_squares, tip_jacobian, tip_pose, tip_wrench_least_squares,
+use sim_core::kinematics::jacobian::tip_jacobian;
+use sim_core::statics::energy::Potential;
+use sim_core::statics::tip_force::{
+    joints_on_limit, tip_force_free_body, tip_force_least_squares, tip_wrench_least_squares,
 };
+use sim_core::{Chain, Frame, frame_poses, tip_pose};
 use tip_force_common::{
     Equilibrium, close, close2, free_equilibrium, geometry, jt, limited_equilibrium,
     singular_values_2,
@@ -132,7 +134,7 @@ proptest! {
         let fb = tip_force_free_body(&chain, &theta, &vec![false; n + 1]).unwrap();
         prop_assert_eq!(&fb.tip, &ls);
         prop_assert!(fb.stop_torques_nm.iter().all(|&s| s == 0.0));
-        let tau = sim_core::joint_torques_nm(&chain, &theta).unwrap();
+        let tau = sim_core::statics::energy::joint_torques_nm(&chain, &theta).unwrap();
         for jj in 1..=n {
             prop_assert_eq!(fb.joint_torques_nm[jj], tau[jj]);
         }

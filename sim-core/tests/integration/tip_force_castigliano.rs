@@ -12,7 +12,10 @@ use std::f64::consts::PI;
 
 use nalgebra::{DVector, Vector2, Vector3};
 use proptest::prelude::*;
-use sim_core::{Chain, Potential, castigliano_deflection_rad, tip_jacobian};
+use sim_core::Chain;
+use sim_core::kinematics::jacobian::tip_jacobian;
+use sim_core::statics::castigliano::castigliano_deflection_rad;
+use sim_core::statics::energy::Potential;
 
 /// Equilibrium of `P = U - F . p_n - M phi_n` with `theta_0` held, by Newton's method from
 /// `start` (dense; small `n`). Panics if it does not converge.

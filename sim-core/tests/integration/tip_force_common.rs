@@ -5,14 +5,15 @@
 //! that `k_j (theta_j - rest_j) = (J_Gn^T F)_j + s_j` holds (up to rounding) at every
 //! flexible joint, and put each joint with `s_j != 0` on the stop that pushes that way
 //! (`s_j > 0`: the clockwise stop sits at `theta_j`). `J_Gn^T F` comes from
-//! `sim_core::tip_jacobian`, not from the code under test.
+//! `sim_core::kinematics::jacobian::tip_jacobian`, not from the code under test.
 #![allow(dead_code, clippy::unwrap_used)]
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use nalgebra::{DMatrix, DVector, Vector2};
 use proptest::prelude::*;
-use sim_core::{Chain, JointLimit, tip_jacobian};
+use sim_core::kinematics::jacobian::tip_jacobian;
+use sim_core::{Chain, JointLimit};
 
 /// An exact equilibrium.
 #[derive(Clone, Debug)]

@@ -3,10 +3,12 @@
 #![allow(clippy::unwrap_used)]
 
 use nalgebra::Vector2;
-use sim_core::{
-    Chain, KinematicsError, TipForceError, castigliano_deflection_rad, joints_on_limit,
-    tip_force_free_body, tip_force_least_squares, tip_wrench_least_squares,
+use sim_core::statics::castigliano::castigliano_deflection_rad;
+use sim_core::statics::tip_force::{
+    TipForceError, joints_on_limit, tip_force_free_body, tip_force_least_squares,
+    tip_wrench_least_squares,
 };
+use sim_core::{Chain, KinematicsError};
 
 fn chain(n: usize) -> Chain {
     Chain::builder(n)

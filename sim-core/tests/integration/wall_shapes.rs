@@ -4,9 +4,9 @@
 #![allow(clippy::unwrap_used)]
 
 use nalgebra::Vector2;
+use sim_core::wall::SegmentContact;
 use sim_core::{
-    Line, Polyline, SegmentContact, Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError,
-    ZoneAxis,
+    Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError, ZoneAxis,
 };
 
 fn v(x: f64, y: f64) -> Vector2<f64> {

@@ -4,7 +4,7 @@
 //! angles and touch bits through a scene's `[sensors]` (ideal, or the robot's of
 //! `examples/mapping_4_2_2_sensors.toml`), scored against the true wall two ways: each
 //! estimated point's distance to the wall (the point error), and each point of the wall
-//! section passed to its nearest estimated point (the coverage, `sim_core::coverage`: what
+//! section passed to its nearest estimated point (the coverage, `sim_core::sensing::coverage`: what
 //! the thesis's "mean spatial error from the ground truth" grows with).
 //! `examples/mapping_4_2_2.toml` is the base scene of the sinusoids (its wall's frequency and
 //! the profile are varied here), `examples/mapping_trapezoid_4_2_2.toml` the trapezoid's.

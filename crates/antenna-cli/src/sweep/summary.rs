@@ -65,7 +65,7 @@ pub struct SweepSummary {
     /// The wall section the antenna passed (per wall, between its first and last true contact
     /// along the motion), sampled every 0.5 mm of arclength: each sample's mean distance to
     /// the nearest estimated point, millimetres (`null` without points or contacts; see
-    /// `sim_core::coverage`).
+    /// `sim_core::sensing::coverage`).
     pub mapping_coverage_error_mm: Option<f64>,
     /// The 90th percentile (nearest rank) of that distance, millimetres.
     pub mapping_coverage_p90_mm: Option<f64>,

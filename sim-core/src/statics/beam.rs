@@ -3,7 +3,7 @@
 //! of links, which turns chain answers into beam-accurate ones fastest.
 //!
 //! A [`Beam`] has length `L`, bending stiffness `EI(s)` along the arc length `s` and a clamp
-//! angle; its reference answer is the elastica ([`crate::elastica`]). A chain with `n`
+//! angle; its reference answer is the elastica ([`crate::statics::elastica`]). A chain with `n`
 //! flexible joints stands for it in one of two layouts ([`BeamLayout`]):
 //!
 //! - [`BeamLayout::EqualLinks`], docs/model.md 5 read literally: `n + 1` links of `l = L / (n + 1)`,
@@ -32,8 +32,8 @@
 //! # Example: a beam-accurate tip from three small chains
 //! ```
 //! use nalgebra::Vector2;
-//! use sim_core::beam::{Beam, RichardsonOptions, richardson_tip};
-//! use sim_core::perpendicular_load_closed_form;
+//! use sim_core::statics::beam::{Beam, RichardsonOptions, richardson_tip};
+//! use sim_core::statics::elastica::perpendicular_load_closed_form;
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! // A 0.36 m cantilever, EI = 0.02 N m^2, clamped along x, loaded across at alpha = 5.
@@ -51,8 +51,8 @@
 
 use nalgebra::Vector2;
 
-use crate::elastica::{BendingStiffness, ElasticaError, ElasticaProblem};
-use crate::equilibrium::{
+use crate::statics::elastica::{BendingStiffness, ElasticaError, ElasticaProblem};
+use crate::statics::equilibrium::{
     EquilibriumError, EquilibriumProblem, InitialGuess, LimitSide, SolveOptions, solve_equilibrium,
 };
 use crate::{Chain, ChainError, JointLimit, KinematicsError, tip_pose};

@@ -9,11 +9,12 @@
 
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix3xX, Vector2};
 
-use crate::active_frames::{
+use crate::kinematics::active_frames::{
     active_frames_matrix, active_frames_vector, all_frames_active_matrix, all_frames_matrix,
 };
-use crate::velocity::{FrameVelocities, Twist2};
-use crate::{Chain, Frame, FramePoses, KinematicsError, Pose2};
+use crate::kinematics::positions::{FramePoses, Pose2};
+use crate::kinematics::velocity::{FrameVelocities, Twist2};
+use crate::{Chain, Frame, KinematicsError};
 
 /// `C(x) diag(l)` (`rot90 = false`) or `W(x) diag(l)` (`rot90 = true`).
 fn trig_rows(x: &DVector<f64>, lengths: &[f64], rot90: bool) -> DMatrix<f64> {

@@ -17,14 +17,17 @@
 //!
 //! The thesis's own parametrisation (3.2.1.1: `R' = -I`, `p' = (-l/2, 0)`, hair angle
 //! `theta'` in a base frame turned by pi) is the left, distal, centred hair with
-//! `beta = theta' + pi`; [`crate::matrix_forms::seed_hair_tip`] computes it as printed.
+//! `beta = theta' + pi`; [`crate::kinematics::matrix_forms::seed_hair_tip`] computes it as printed.
 
 use nalgebra::{Matrix3xX, Vector2};
 
-use crate::chain::finite;
-use crate::jacobian::hybrid_into_unchecked;
-use crate::positions::frame_pose_unchecked;
-use crate::{Chain, ChainError, ChainField, Frame, FramePoses, JointLimit, KinematicsError, Pose2};
+use crate::kinematics::chain::finite;
+use crate::kinematics::error::ChainField;
+use crate::kinematics::jacobian::hybrid_into_unchecked;
+use crate::kinematics::positions::frame_pose_unchecked;
+use crate::kinematics::positions::{FramePoses, Pose2};
+use crate::kinematics::velocity::frame_velocities;
+use crate::{Chain, ChainError, Frame, JointLimit, KinematicsError};
 
 /// How close to its own link a hair with a compliant root may bend past its stop: its angle
 /// stays at most `pi - HAIR_BEND_MARGIN_RAD` (5 degrees short of the rod lying folded back
@@ -388,7 +391,7 @@ pub fn hair_velocities(
     chain.check_len("hair_angles_rad", hair_angles_rad.len())?;
     chain.check_len("hair_rates_rad_per_s", hair_rates_rad_per_s.len())?;
     let poses = crate::frame_poses(chain, theta, s)?;
-    let vels = crate::frame_velocities(chain, theta, theta_dot, s)?;
+    let vels = frame_velocities(chain, theta, theta_dot, s)?;
     Ok(chain
         .hairs()
         .iter()

@@ -1,6 +1,6 @@
 //! The `O(n)` linear algebra of the chain: matrices `H = diag(d) + A` with
 //! `A_ij = a_max(i,j)`, the shape of the Hessian of a tip load
-//! (`a_m = f . (p_n - p_(m-1))`, [`crate::Potential`]).
+//! (`a_m = f . (p_n - p_(m-1))`, [`crate::statics::energy::Potential`]).
 //!
 //! # Elimination along the chain
 //! Eliminating the most distal unknown `m` of such a matrix leaves a Schur complement of the

@@ -8,8 +8,9 @@
 
 use nalgebra::{DMatrix, Matrix3xX, Vector2};
 
-use crate::positions::frame_poses_into;
-use crate::{Chain, Frame, FramePoses, KinematicsError};
+use crate::kinematics::positions::FramePoses;
+use crate::kinematics::positions::frame_poses_into;
+use crate::{Chain, Frame, KinematicsError};
 
 /// Which Jacobian of the pair `(s, b)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -235,7 +236,7 @@ pub(crate) fn hybrid_into_unchecked(
 /// The hybrid Jacobians of every frame relative to `s`, stacked `3(n+2) x (n+1)`: rows
 /// `3(b+1)..3(b+1)+3` are `J_sb` for `b = -1..=n` (the thesis's `P_dot_s` / `Theta_dot_s`
 /// Jacobian, 2.2.3.6-7, regrouped per frame). `O(n^2)`, the size of the answer; use
-/// [`hybrid_jacobian`] or [`crate::frame_velocities`] when less is needed.
+/// [`hybrid_jacobian`] or [`crate::kinematics::velocity::frame_velocities`] when less is needed.
 ///
 /// # Errors
 /// [`KinematicsError::WrongLength`] if `theta` does not have `n + 1` entries,

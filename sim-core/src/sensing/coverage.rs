@@ -2,7 +2,7 @@
 //! antenna passed, sampled evenly along its arclength, each sample scored by its distance to
 //! the nearest estimated contact point.
 //!
-//! The point error of [`crate::mapping`] asks "is each estimated point on the wall?"; a map
+//! The point error of [`crate::sensing::mapping`] asks "is each estimated point on the wall?"; a map
 //! can pass it and still miss the wall's shape: troughs the antenna bridges are never
 //! touched. The coverage asks the converse, "is each wall point near an estimated point?",
 //! which is what the thesis's "mean spatial error from the ground truth" grows with.

@@ -1,8 +1,9 @@
 //! The validated chain description: link lengths, base angle, joint limits, stiffness, rest
 //! angles and hairs (thesis 2.2, docs/model.md 1, 3, 4, 7).
 
-use crate::hair::Hair;
-use crate::{ChainError, ChainField, Frame, KinematicsError};
+use crate::kinematics::error::ChainField;
+use crate::kinematics::hair::Hair;
+use crate::{ChainError, Frame, KinematicsError};
 
 /// The limits of one joint, `cw_rad <= theta_j <= ccw_rad` (thesis 2.2.4), measured relative to
 /// the proximal neighbouring frame `C_{j-1}`.

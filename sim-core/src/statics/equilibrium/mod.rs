@@ -10,7 +10,7 @@
 //!
 //! # Method
 //! - **Newton with analytic derivatives.** Gradient `K (theta - rest) - J^T f` and Hessian
-//!   `K + [f . (p_n - p_(max(i,j)-1))]` ([`crate::Potential`]), `J` the tip Jacobian.
+//!   `K + [f . (p_n - p_(max(i,j)-1))]` ([`crate::statics::energy::Potential`]), `J` the tip Jacobian.
 //! - **`O(n)` per iteration.** The Hessian is diagonal plus a `max(i,j)`-semiseparable
 //!   matrix; it is factored by elimination from the tip inwards in `O(n)`
 //!   ([`structured`]). The pin adds a 2-column term handled by the Woodbury identity

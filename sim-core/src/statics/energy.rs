@@ -1,7 +1,7 @@
 //! Potential energy (thesis 2.2.4.7-8, docs/model.md 4): the joint springs
 //! `U(theta) = 1/2 sum_{j>=1} k_j (theta_j - rest_j)^2` plus an optional dead load `F` at the
 //! tip, `-F . p_Gn(theta)`; with gradient and Hessian in `theta` and in the limit coordinates
-//! `q` (`theta = g(q)`, [`crate::joint_limits`]).
+//! `q` (`theta = g(q)`, [`crate::kinematics::joint_limits`]).
 //!
 //! The load term has gradient `-J_Gn^T F`, column `j` being `-F . R90 (p_n - p_(j-1))`, and
 //! Hessian `d2/dtheta_i dtheta_j = F . (p_n - p_(m-1))` with `m = max(i, j)`. In `q`, by the
@@ -10,8 +10,8 @@
 
 use nalgebra::{DMatrix, DVector, Vector2};
 
-use crate::joint_limits::theta_from_q;
-use crate::positions::tip_pose;
+use crate::kinematics::joint_limits::theta_from_q;
+use crate::kinematics::positions::tip_pose;
 use crate::{Chain, KinematicsError};
 
 /// Joint torques from the springs, `tau_j = -k_j (theta_j - rest_j)` (thesis 3.2.2.1), N m.

@@ -27,7 +27,7 @@
 //!   Figure 4.16).
 //!
 //! With [`SensorSettings::IDEAL`] every function here returns exactly what the ideal functions
-//! of [`crate::mapping`] return ([`crate::sensed_theta_rad`], [`crate::touch_bits_from_contacts`]).
+//! of [`crate::sensing::mapping`] return ([`crate::sensed_theta_rad`], [`crate::touch_bits_from_contacts`]).
 //!
 //! ```
 //! use sim_core::{SensorSettings, Sensors, sensed_theta_rad};
@@ -52,7 +52,9 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::contact::Contact;
-use crate::mapping::{MappingError, SWITCHES_PER_SEGMENT, quantize_angle_rad, switch_for_fraction};
+use crate::sensing::mapping::{
+    MappingError, SWITCHES_PER_SEGMENT, quantize_angle_rad, switch_for_fraction,
+};
 
 /// The segment firmware's touch debouncing: a bit changes after three agreeing reads.
 pub const FIRMWARE_DEBOUNCE_SAMPLES: u32 = 3;

@@ -173,8 +173,8 @@ impl BorderedSystem {
     /// Where the columns of `P` and the rows of `Q` end ([`Self::p_len`], [`Self::q_len`]).
     /// A point force on link `L` touches only the joints `m <= L`, and the angle of a hair
     /// not in contact (most of a long antenna's hairs) none: the products below skip the
-    /// zeros (the same sums, term for term; over soak 1911, 150 links with distal hairs,
-    /// 40 of some 45 border unknowns on average were such hair angles).
+    /// zeros (the same sums, term for term; on a 150-link antenna with distal hairs sweeping
+    /// a digitized line, 40 of some 45 border unknowns on average were such hair angles).
     fn measure_supports(&mut self) {
         let (n, k) = (self.n, self.k);
         let end = |v: &[f64]| v.iter().rposition(|e| *e != 0.0).map_or(0, |i| i + 1);

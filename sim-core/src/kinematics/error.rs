@@ -55,7 +55,7 @@ impl fmt::Display for ChainField {
     }
 }
 
-/// An invalid chain description, found by [`crate::ChainBuilder::build`].
+/// An invalid chain description, found by [`crate::kinematics::chain::ChainBuilder::build`].
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum ChainError {
     /// A value is NaN or infinite.

@@ -8,13 +8,13 @@
 //!   frame, newtons: the wall reaction, the thesis's `F_E`. The force the antenna exerts on the
 //!   environment, the thesis's `F_(n,E)`, is `-F` ([`TipForce::force_on_environment_n`]).
 //! - `tau_j = -k_j (theta_j - rest_j)` is the torque of spring `j` on link `j`
-//!   ([`crate::joint_torques_nm`], thesis 3.2.2.1). A stop torque `s_j` is the torque a joint's
+//!   ([`crate::statics::energy::joint_torques_nm`], thesis 3.2.2.1). A stop torque `s_j` is the torque a joint's
 //!   stop exerts on link `j`: `>= 0` from a clockwise stop, `<= 0` from a counter-clockwise
 //!   one, as in the equilibrium solver.
 //! - Equilibrium of the links distal to joint `j` (moments about joint `j`, at `p_(j-1)`):
 //!   `tau_j + s_j + (p_n - p_(j-1)) x F = 0`, that is
 //!   `k_j (theta_j - rest_j) = (J_Gn^T F)_j + s_j` with `(J_Gn^T F)_j = F . R90 (p_n - p_(j-1))`,
-//!   the translational rows of the hybrid tip Jacobian ([`crate::tip_jacobian`]). This is
+//!   the translational rows of the hybrid tip Jacobian ([`crate::kinematics::jacobian::tip_jacobian`]). This is
 //!   the stationarity of `U - F . p_n` (what the solver minimizes), and the thesis's
 //!   `tau = J_Gn^T F_(n,E)` (3.2.2.10) with `F_(n,E) = -F`.
 //! - The base joint (`j = 0`) is held by the servo, which is always an unknown: it never
@@ -156,7 +156,9 @@ pub struct FreeBodyForces {
 /// # Example
 /// ```
 /// use nalgebra::Vector2;
-/// use sim_core::{Chain, tip_force_least_squares, tip_jacobian};
+/// use sim_core::kinematics::jacobian::tip_jacobian;
+/// use sim_core::statics::tip_force::tip_force_least_squares;
+/// use sim_core::Chain;
 ///
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// // A posture and a wall force; rest angles chosen so that the springs balance it exactly:
@@ -198,7 +200,8 @@ pub fn tip_force_least_squares(chain: &Chain, theta: &[f64]) -> Result<TipForce,
 ///
 /// # Example
 /// ```
-/// use sim_core::{Chain, tip_wrench_least_squares};
+/// use sim_core::statics::tip_force::tip_wrench_least_squares;
+/// use sim_core::Chain;
 ///
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// // A pure moment M at the tip bends every joint by M / k.
@@ -234,7 +237,9 @@ pub fn tip_wrench_least_squares(chain: &Chain, theta: &[f64]) -> Result<TipForce
 /// # Example
 /// ```
 /// use nalgebra::Vector2;
-/// use sim_core::{Chain, JointLimit, tip_force_free_body, tip_force_least_squares, tip_jacobian};
+/// use sim_core::kinematics::jacobian::tip_jacobian;
+/// use sim_core::statics::tip_force::{tip_force_free_body, tip_force_least_squares};
+/// use sim_core::{Chain, JointLimit};
 ///
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// // Joint 2 rests on its clockwise stop at -0.3 rad, which pushes it with 0.004 N m on top
@@ -487,7 +492,7 @@ fn rotate(m: &mut DMatrix<f64>, p: usize, q: usize, c: f64, s: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tip_jacobian;
+    use crate::kinematics::jacobian::tip_jacobian;
 
     #[test]
     fn lever_arms_match_the_jacobian() {

@@ -4,20 +4,20 @@
 //! With the spring energy written in the joint torques, `U = 1/2 sum tau_j^2 / k_j`
 //! (3.2.2.13), Castigliano's second theorem gives `delta theta_j = dU/dtau_j = tau_j / k_j`
 //! (3.2.2.14), and a tip load `(F, M)` loads the joints with `tau = J_Gn^T (F, M)` (3.2.2.10),
-//! hence 3.2.2.15. Signs as in [`crate::tip_force`]: `F` and `M` act on the tip (ground
+//! hence 3.2.2.15. Signs as in [`crate::statics::tip_force`]: `F` and `M` act on the tip (ground
 //! frame, counter-clockwise positive), and the base (`theta_0`, held by the servo) does not
 //! move.
 //!
 //! This is the first-order response about an **unloaded** posture: it neglects how the
 //! posture change turns the load's lever arms (the load part of the Hessian in
-//! [`crate::Potential::hessian_theta`]). About a posture already carrying a load `F_0`, the
+//! [`crate::statics::energy::Potential::hessian_theta`]). About a posture already carrying a load `F_0`, the
 //! first-order response is `H^-1 J^T (dF, dM)` with `H = K + [F_0 . (p_n - p_(max(i,j)-1))]`
 //! instead; Castigliano's formula is then off by a relative `O(|F_0| L / k)`.
 
 use nalgebra::Vector2;
 
 use crate::Chain;
-use crate::tip_force::{TipForceError, check_finite, check_theta, cross, lever_arms_m};
+use crate::statics::tip_force::{TipForceError, check_finite, check_theta, cross, lever_arms_m};
 
 /// `delta theta_j = (J_Gn^T (F, M))_j / k_j` for `j = 1..=n`, radians, `n + 1` entries with
 /// `delta theta_0 = 0` (the base is held). `tip_force_n` is the force on the tip (ground
@@ -31,7 +31,8 @@ use crate::tip_force::{TipForceError, check_finite, check_theta, cross, lever_ar
 /// # Example
 /// ```
 /// use nalgebra::Vector2;
-/// use sim_core::{Chain, castigliano_deflection_rad};
+/// use sim_core::statics::castigliano::castigliano_deflection_rad;
+/// use sim_core::Chain;
 ///
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// // A straight horizontal 3-joint chain, 0.05 m links, k = 0.1 N m/rad, pushed up at the
