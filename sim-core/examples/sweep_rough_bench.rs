@@ -26,7 +26,7 @@ use std::time::Instant;
 
 use bench_common::{human, median, write_section};
 use nalgebra::Vector2;
-use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
+use sim_core::design::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
 use sim_core::{
     Chain, InitialGuess, JointLimit, Line, Polyline, SolidSide, Surface, SurfaceMap, Wall,
