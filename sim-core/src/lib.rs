@@ -37,7 +37,7 @@
 //!   posture ([`statics::tip_force`](mod@statics::tip_force)) and Castigliano's deflection
 //!   ([`statics::castigliano`]), chains that stand for a beam with Richardson extrapolation
 //!   ([`statics::beam`]), and the elastica they converge to ([`statics::elastica`]).
-//! - [`wall`]: walls (line, polyline, sinusoid) with a solid side and surface zones; signed
+//! - [`walls`]: walls (line, polyline, sinusoid) with a solid side and surface zones; signed
 //!   distance and the deepest point of a link against a wall (docs/model.md 6).
 //! - [`contact`]: quasi-static contact of the chain and its hairs with walls: the step, its
 //!   semismooth Newton solve and the independent check of a state.
@@ -108,7 +108,7 @@ pub(crate) mod numerics;
 pub mod sensing;
 pub mod statics;
 pub mod sweep;
-pub mod wall;
+pub mod walls;
 
 // The curated root: every item here is used by another crate of the workspace (the CLI, the
 // monitor, antennad, the cross-crate tests); everything else is reached by its path above.
@@ -145,7 +145,7 @@ pub use statics::equilibrium::{
     Equilibrium, EquilibriumError, EquilibriumProblem, InitialGuess, LimitSide, MinimaSearch,
     SolveOptions, all_minima, solve_equilibrium,
 };
-pub use wall::{
+pub use walls::{
     Line, Polyline, SMOOTH_MU_DEFAULT, Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError,
     WallShape, ZoneAxis,
 };

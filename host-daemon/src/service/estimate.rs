@@ -32,7 +32,7 @@ use nalgebra::Vector2;
 use sim_core::follow::estimate::{Estimate, NoEstimate, Odometry};
 use sim_core::follow::{SensedWall, calibrate_bend_at};
 use sim_core::sweep::{BasePose, SweepScene};
-use sim_core::wall::first_ray_hit;
+use sim_core::walls::first_ray_hit;
 use sim_core::{Chain, TouchLayout, Wall};
 
 /// How far the truth's ray looks for a wall, m.

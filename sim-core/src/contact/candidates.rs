@@ -19,8 +19,8 @@ use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
 use super::posture::{Pose, Posture};
 use super::quasistatic::{QuasiStatic, theta_of};
-use crate::wall::lerp;
-use crate::wall::{ConvexFeature, FeatureContact, WallPoint};
+use crate::walls::lerp;
+use crate::walls::{ConvexFeature, FeatureContact, WallPoint};
 
 /// How many pieces per chain point, and corners or crests per link, the broad phase keeps
 /// (the nearest).

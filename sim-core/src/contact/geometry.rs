@@ -12,7 +12,7 @@
 //! - against a surface, `X` is material and the normal turns as `X` moves along the
 //!   tangent: `dn = k (t . dX) t`, `dt = -k (t . dX) n`, `k` the curvature of the distance's
 //!   level set (`1 / gap` about a corner, `kappa / (1 + kappa gap)` along a curve,
-//!   [`crate::wall::WallPoint::normal_turn_rate_per_m`]);
+//!   [`crate::walls::WallPoint::normal_turn_rate_per_m`]);
 //! - a feature against a link turns `n` and `t` with the link (`dn = R90 n dphi_L`) and
 //!   slides `X` along it: with `dir` the link's direction, `l` its length, `a` its proximal
 //!   end and `sigma = -n . R90 dir`, `l ds = (sigma g + roll) dphi_L - dir . da`, where
@@ -23,7 +23,7 @@ use nalgebra::Vector2;
 
 use super::pair::{ChainPoint, PairKey, PairKind};
 use super::posture::{Posture, perp};
-use crate::wall::WallPoint;
+use crate::walls::WallPoint;
 use crate::{Chain, Hair, Wall};
 
 /// How a pair's normal, tangent and contact point move to first order (see the module

@@ -606,7 +606,7 @@ mod tests {
     use crate::contact::feature::FrictionLaw;
     use crate::contact::pair::{ChainPoint, PairKey};
     use crate::contact::posture::Posture;
-    use crate::wall::ConvexFeature;
+    use crate::walls::ConvexFeature;
     use crate::{Chain, Hair, Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall};
 
     fn lcg(state: &mut u64) -> f64 {

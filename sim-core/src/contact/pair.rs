@@ -25,7 +25,7 @@ use nalgebra::Vector2;
 
 use super::feature::{Feature, FrictionLaw, Slip};
 use super::geometry::PairGeometry;
-use crate::wall::ConvexFeature;
+use crate::walls::ConvexFeature;
 
 /// A point of the chain that can touch a wall surface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

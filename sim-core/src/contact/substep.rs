@@ -321,7 +321,7 @@ impl QuasiStatic {
 mod tests {
     use super::super::pair::{ChainPoint, PairKey};
     use super::taking_turns;
-    use crate::wall::ConvexFeature;
+    use crate::walls::ConvexFeature;
 
     /// Rounds that hand a crest's force from link 102's end to joint 102 and back take
     /// turns (`A B A B`); rounds that change their pairs each time, or keep them, do not.

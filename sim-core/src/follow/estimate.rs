@@ -6,7 +6,7 @@
 use nalgebra::Vector2;
 
 use crate::Wall;
-use crate::wall::first_ray_hit;
+use crate::walls::first_ray_hit;
 
 /// An estimate of the wall in the body frame (x ahead, y toward the wall).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,7 +6,7 @@
 
 use nalgebra::Vector2;
 
-use crate::wall::Wall;
+use crate::walls::Wall;
 
 /// The rectangle's corners, ground frame, counter-clockwise from the rear corner on the
 /// right: rear right, front right, front left, rear left (left: toward the wall in the
@@ -58,7 +58,7 @@ mod tests {
     use core::f64::consts::FRAC_PI_2;
 
     use super::*;
-    use crate::wall::{Line, Polyline, Sinusoid, SolidSide};
+    use crate::walls::{Line, Polyline, Sinusoid, SolidSide};
 
     fn v(x: f64, y: f64) -> Vector2<f64> {
         Vector2::new(x, y)

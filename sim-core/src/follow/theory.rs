@@ -23,7 +23,7 @@
 //! The closed loop itself ([`super::Follow`] without an antenna) runs the template
 //! ([`super::body::step_body`], RK4) along a straight wall; each step the
 //! ideal preview `d` is measured by a ray cast from the point `l` ahead of the POR along the
-//! body's normal toward the wall ([`crate::wall::first_ray_hit`]), `dd/dt` is the backward
+//! body's normal toward the wall ([`crate::walls::first_ray_hit`]), `dd/dt` is the backward
 //! difference of successive `d`, and `u` is held over the step (a zero-order hold, which
 //! acts like a delay of about half a step and moves the boundary: about 1 % at a step of
 //! 1 ms). [`envelope_growth_rate_per_s`] fits the growth rate of the error's envelope, and
@@ -46,7 +46,7 @@
 use nalgebra::{Matrix3, Vector2};
 
 use super::{BodyModel, Estimator, Follow, FollowConfig};
-use crate::wall::{Line, SolidSide, Wall};
+use crate::walls::{Line, SolidSide, Wall};
 
 /// The template's closed loop under an ideal-preview PD controller, linearized about the
 /// setpoint.

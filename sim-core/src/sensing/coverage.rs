@@ -31,7 +31,7 @@
 use nalgebra::Vector2;
 
 use crate::contact::Contact;
-use crate::wall::{Wall, WallShape};
+use crate::walls::{Wall, WallShape};
 
 /// How the wall is sampled and what counts as captured.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -13,7 +13,7 @@
 
 use nalgebra::Vector2;
 
-use crate::wall::{SegmentContact, Wall};
+use crate::walls::{SegmentContact, Wall};
 
 /// One point of the chain touching a wall: plain input to the metrics.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used)]
 
 use nalgebra::Vector2;
-use sim_core::wall::SegmentContact;
+use sim_core::walls::SegmentContact;
 use sim_core::{
     Line, Polyline, Sinusoid, SolidSide, Surface, SurfaceMap, Wall, WallError, ZoneAxis,
 };
