@@ -37,8 +37,12 @@
 //!   posture ([`statics::tip_force`](mod@statics::tip_force)) and Castigliano's deflection
 //!   ([`statics::castigliano`]), chains that stand for a beam with Richardson extrapolation
 //!   ([`statics::beam`]), and the elastica they converge to ([`statics::elastica`]).
-//! - [`walls`]: walls (line, polyline, sinusoid) with a solid side and surface zones; signed
-//!   distance and the deepest point of a link against a wall (docs/model.md 6).
+//! - [`walls`]: walls (line, polyline, sinusoid) with a solid side and surface zones
+//!   (docs/model.md 6): the dispatch over shapes ([`Wall`], [`WallShape`]) and what the
+//!   queries answer ([`walls::WallPoint`], [`walls::SegmentContact`], convex features) at the
+//!   top, each shape a folder with one query a file (signed distance, a segment's deepest
+//!   point, convex corners or crests, bounds, rays), and the bounding boxes over a long
+//!   polyline's edges that make its queries cost what is near them.
 //! - [`contact`]: quasi-static contact of the chain and its hairs with walls: the step, its
 //!   semismooth Newton solve and the independent check of a state.
 //! - [`sweep`]: quasi-static sweeps: a placement, then the base moved in fixed steps, each a
