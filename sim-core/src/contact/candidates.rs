@@ -29,8 +29,8 @@ const NEAREST: usize = 3;
 /// A feature poking through a link's line by `d` is inside the link only where the link's
 /// point there is at least this fraction of `d` inside the wall. A corner turning by at
 /// most 85 degrees, pushed `d` through a link whose normal lies at the edge of its cone,
-/// leaves the link's point `d cos(85 deg) = 0.087 d` inside (soak 176); a crest across a
-/// steep tip link, out of the link's reach, leaves it on the wall (soak 258: `d` = 6 cm,
+/// leaves the link's point `d cos(85 deg) = 0.087 d` inside (replay `soak:4221:176`, kept by `soak_sweeps_fixed_since_still_finish`); a crest across a
+/// steep tip link, out of the link's reach, leaves it on the wall (replay `soak:4221:258`, kept by `soak_sweeps_fixed_since_still_finish`: `d` = 6 cm,
 /// the tip resting on the wall).
 const THROUGH_LINE_DEPTH_FRACTION: f64 = 0.02;
 
@@ -339,7 +339,7 @@ impl QuasiStatic {
             // link, and a tip resting on the corner that needs more than that (pressed on
             // the edge past it) was never an equilibrium of a plain solve: the solve slid
             // the corner past the tip along the link's line, and the snap's flow came to
-            // rest where no plain solve converged (soak 1261, 4 links on a digitized
+            // rest where no plain solve converged (replay `soak:4221:1261`, 4 links on a digitized
             // trapezoid: its placement's settle stopped after 100,000 Newton iterations).
             if point == ChainPoint::Vertex(self.chain.n()) && links[1].is_none() {
                 links[1] = self.corner_point_pairs(point, piece, wall_point, x_m)[0];
@@ -505,7 +505,7 @@ impl QuasiStatic {
     /// joint 64 handed a crest to link 65 that stayed past its start (20 -> 21). Only on a
     /// surface with friction (dropped for the step or not: under 4 links, where friction
     /// locks the antenna in most steps, step 1019 took 1,118 -> 6 Newton iterations): on a
-    /// frictionless sinusoid of 1.2 mm crests under 150 links (soak 181) the hand-over took
+    /// frictionless sinusoid of 1.2 mm crests under 150 links (replay `soak:4221:181`) the hand-over took
     /// 8,448 -> 11,720 Newton iterations.
     fn hand_sliding_joints_onto_links(&self, pairs: &mut Vec<Pair>, goal: Pose) {
         // The sliding joints and the crest pairs past them, by index in `pairs`.
@@ -768,7 +768,7 @@ impl QuasiStatic {
     /// did from 60 links on) and at most 6 of 2,000 take more than 40 Newton iterations
     /// (the p99 77 -> 7 under 110 links, 147 -> 7 under 150). Handed on where the other
     /// link cannot rest on the crest, 16 soak sweeps failed (13 of them placements on
-    /// sinusoids of 20-30 mm crest radius under 40 mm links; soak 603, 1125). A crest
+    /// sinusoids of 20-30 mm crest radius under 40 mm links; replays `soak:4221:603`, `soak:4221:1125`). A crest
     /// pair that handed its crest on once in a (sub)step hands it on no more: past its link's
     /// end again (within [`HAND_BACK_FRACTION`]), the crest lies between the two links'
     /// lines, each foot past the joint, and the joint rides over it; its pair takes the
@@ -849,7 +849,7 @@ impl QuasiStatic {
                         if resting.contains(&other_key) {
                             // The joint's other link rests on the corner: its pair takes
                             // the force over (started unloaded, the solve found no way
-                            // from one link to the other, soak 1590).
+                            // from one link to the other, replay `soak:4221:1590`).
                             taken_over.push((other_key, *c));
                         } else if self.crest_passes_on(&other_key) && !handed_over.contains(&c.key)
                         {
