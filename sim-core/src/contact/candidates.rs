@@ -17,6 +17,7 @@ use super::ContactError;
 use super::feature::Slip;
 use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
+use super::pieces::CUT_REACH_M;
 use super::posture::{Pose, Posture};
 use super::quasistatic::{QuasiStatic, theta_of};
 use crate::wall::lerp;
@@ -158,6 +159,9 @@ impl QuasiStatic {
         // Per wall, its own nearest point to the chain point at hand (only where a piece of
         // it is cut, and once).
         let mut real: Vec<Option<WallPoint>> = Vec::with_capacity(self.walls.len());
+        // The pieces near the chain point or link at hand (the broad phase over pieces: a
+        // digitized wall is thousands of them).
+        let mut near_pieces: Vec<usize> = Vec::new();
         let take = |near: &mut Vec<(f64, PairKey)>, keys: &mut Vec<PairKey>| {
             near.sort_by(|a, b| a.0.total_cmp(&b.0));
             keys.extend(near.drain(..).take(keep).map(|(_, k)| k));
@@ -171,7 +175,27 @@ impl QuasiStatic {
                 let (_, _, x) = chain_point(&self.chain, posture, beta, point);
                 real.clear();
                 real.resize(self.walls.len(), None);
-                for (w, piece) in self.pieces.walls.iter().enumerate() {
+                // A piece cut at both ends can hold the point only within
+                // `Pieces::may_touch`'s reach of its vertices' box; the reach takes each cut
+                // wall's own gap at the point (the one the loop below uses).
+                let mut reach_m = within_m.max(0.0);
+                for (wall, at) in real.iter_mut().enumerate() {
+                    if self.pieces.wall_is_cut(wall) {
+                        let gap_m = at
+                            .get_or_insert_with(|| self.walls[wall].signed_distance(&x))
+                            .gap_m;
+                        reach_m = reach_m.max(gap_m.abs());
+                    }
+                }
+                let reach_m = reach_m + CUT_REACH_M + self.settings.penetration_tolerance_m;
+                self.pieces.near_box(
+                    &x.add_scalar(-reach_m),
+                    &x.add_scalar(reach_m),
+                    true,
+                    &mut near_pieces,
+                );
+                for &w in &near_pieces {
+                    let piece = &self.pieces.walls[w];
                     // The broad phase: a piece the point cannot come within `within_m` of.
                     if piece.gap_lower_bound_m(&x) >= within_m {
                         continue;
@@ -208,7 +232,18 @@ impl QuasiStatic {
                 }
                 take(&mut near, &mut keys);
             }
-            for (w, piece) in self.pieces.walls.iter().enumerate() {
+            // The pieces whose corners can be near the link (`features_near_segment`'s own
+            // box: the link's grown by the margin and half its length).
+            let (a_m, b_m) = (posture.start_of(link), posture.end_m[link]);
+            let reach_m = within_m.max(0.0) + 0.5 * (b_m - a_m).norm();
+            self.pieces.near_box(
+                &a_m.inf(&b_m).add_scalar(-reach_m),
+                &a_m.sup(&b_m).add_scalar(reach_m),
+                false,
+                &mut near_pieces,
+            );
+            for &w in &near_pieces {
+                let piece = &self.pieces.walls[w];
                 features.clear();
                 piece.shape.features_near_segment(
                     &posture.start_of(link),

@@ -42,7 +42,7 @@
 //! # }
 //! ```
 
-mod edge_tree;
+pub(crate) mod edge_tree;
 mod error;
 mod line;
 mod polyline;
