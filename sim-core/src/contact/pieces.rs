@@ -59,6 +59,9 @@ pub(crate) struct Pieces {
 /// contact equations degenerate. The allowance is a Newton iterate's wander about a corner.
 pub(crate) const CUT_REACH_M: f64 = 1e-4;
 
+/// Up to this many pieces, [`Pieces::near_box`] hands them all out.
+const FEW_PIECES: usize = 16;
+
 impl Pieces {
     /// Cuts `walls` into pieces.
     pub fn new(walls: &[Wall]) -> Pieces {
@@ -133,6 +136,11 @@ impl Pieces {
         out: &mut Vec<usize>,
     ) {
         out.clear();
+        if self.walls.len() <= FEW_PIECES {
+            // (Few pieces: each is checked by the caller's own tests; a query costs more.)
+            out.extend(0..self.walls.len());
+            return;
+        }
         out.extend_from_slice(&self.unboxed);
         if open {
             out.extend_from_slice(&self.open);
