@@ -125,6 +125,19 @@ impl QuasiStatic {
         self.start.update(&self.chain, self.base_m, &self.theta);
         self.probe.update_at(&self.chain, goal, &self.theta);
         let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
+        // A solve gives up where its joint angles wander farther than twice the largest jump
+        // threshold from its start: a plain step's answer there would be refused as a jump.
+        // A snap's pseudo-time step (proximal) starts off equilibrium, where Newton's first
+        // iterates swing out and come back: it keeps at least twice `jump_rad` (the bound
+        // before the threshold was scaled to the link; at 0.05 rad the flow of a held 18-link
+        // antenna brought onto a digitized wall failed to come to rest, CI sample 2).
+        let largest_rad = self
+            .settings
+            .max_jump_threshold_rad(self.chain.link_lengths_m());
+        let departure_rad = match proximal {
+            Some(_) => 2.0 * largest_rad.max(self.settings.jump_rad),
+            None => 2.0 * largest_rad,
+        };
         let mut anchoring = super::anchoring::AnchorRounds::default();
         let mut handed_over = Vec::new();
         // The pairs each round left for the next.
@@ -179,10 +192,7 @@ impl QuasiStatic {
                 // looser one lets the flow creep by stalled solves where a contact sits on
                 // the edge of its friction cone, and never come to rest.
                 acceptable_m: self.settings.acceptable_m,
-                max_departure_rad: 2.0
-                    * self
-                        .settings
-                        .max_jump_threshold_rad(self.chain.link_lengths_m()),
+                max_departure_rad: departure_rad,
                 max_iterations: if self.quick_attempt {
                     QUICK_ITERATIONS.min(self.settings.max_iterations)
                 } else {
