@@ -44,7 +44,7 @@ impl QuasiStatic {
         // The posture before the last accepted pseudo-time step.
         let mut x_before_last: Option<Vec<f64>> = None;
         let mut hard_in_a_row = 0_usize;
-        for _ in 0..self.settings.max_snap_steps {
+        for _ in 0..self.settings.snap_step_budget(self.chain.n()) {
             if report.iterations > budget {
                 break;
             }
