@@ -620,7 +620,7 @@ impl QuasiStatic {
                     // modes refuse: a tip stuck beyond its friction cone, or let go where
                     // its plain modes press it again) fails again however short: the
                     // halvings creep towards the fold, each failing the same way, and the
-                    // snap comes at the end all the same (soak 375, 150 links with distal
+                    // snap comes at the end all the same (replay `soak:4221:375`, 150 links with distal
                     // hairs on a line wall with mu = 1: 14 halvings of some 235 Newton
                     // iterations each before each of six snaps). After two such failures
                     // in a row the snap is followed from where the posture stands: soak

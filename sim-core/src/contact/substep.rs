@@ -247,7 +247,7 @@ impl QuasiStatic {
             if !outcome.converged && !pairs.iter().any(Pair::has_friction) {
                 // Without friction the fixed point's Tresca problems are this very problem:
                 // it would only solve it again (up to hundreds of iterations per attempt in
-                // a frictionless snap, soak 1747), so the attempt fails here.
+                // a frictionless snap, replay `soak:4221:1747`, kept by `soak_sweeps_fixed_since_still_finish`), so the attempt fails here.
                 return Err(Reject::NoConvergence);
             }
             if !outcome.converged {
@@ -295,7 +295,7 @@ impl QuasiStatic {
                 // next to the next one, and the step's start may be a snap away from it
                 // (the 14.2 cycles/m sinusoid under 150 links: 47 -> 38 steps over 40 Newton
                 // iterations of 2,000, 17 -> 15 snaps). Where a point was found inside a
-                // wall, the answer that put it there is no start (soak 1361: a swing of
+                // wall, the answer that put it there is no start (replay `soak:4221:1361`: a swing of
                 // the distal links through a corner, 661 -> 18,095 Newton iterations when
                 // started from it), nor is one that jumped. A snap's proximal steps start
                 // afresh: started there, the flow of CI sample 4's placement took another

@@ -14,7 +14,7 @@
 
 use nalgebra::Vector2;
 use sim_core::contact::ContactSettings;
-use sim_core::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
+use sim_core::design::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
 use sim_core::{Chain, InitialGuess, JointLimit, Line, SolidSide, Surface, SurfaceMap, Wall};
 
