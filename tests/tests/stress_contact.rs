@@ -13,7 +13,9 @@
 //! - `ANTENNA_SOAK=1 cargo test -p antenna-tests --release --test stress_contact --
 //!   --nocapture`: at least 2,000 sweeps (`ANTENNA_SOAK_SWEEPS`, default 2000) from
 //!   `ANTENNA_SOAK_SEED` (default below), longer ones, the table, every unfinished sweep.
-//! - `ANTENNA_STRESS_REPLAY=ci:SEED:INDEX[,INDEX...]` (or `soak:...`): reruns those cases
+//! - `ANTENNA_SOAK=wide ...`: the same soak with `N` drawn from {4, 9, 18, 36, 72, 150, 300}
+//!   (`Sample::SoakWide`, issue #49: the solver's budgets and jump test at every `N`).
+//! - `ANTENNA_STRESS_REPLAY=ci:SEED:INDEX[,INDEX...]` (or `soak:...`, `soak-wide:...`): reruns those cases
 //!   alone, in this process and without a time limit, and prints what happened (the replay
 //!   lines printed for unfinished sweeps say which). With `ANTENNA_STRESS_TRACE=1` it also
 //!   prints what each step cost and why (Newton iterations, substeps, snaps, jams, the fixed
@@ -185,7 +187,7 @@ const MAIN_TEST: &str = "contact_sweeps_finish_with_every_step_certified";
 fn time_limit(optimized: bool, sample: Sample) -> TimeLimit {
     let scale = match sample {
         Sample::Ci => 10.0,
-        Sample::Soak => 1.0,
+        Sample::Soak | Sample::SoakWide => 1.0,
     };
     let tight = if optimized {
         TimeLimit {
@@ -217,12 +219,17 @@ fn contact_sweeps_finish_with_every_step_certified() {
         replay(&spec);
         return;
     }
-    let soak = std::env::var("ANTENNA_SOAK").is_ok_and(|v| v.trim() == "1");
-    let (seed, count, sample) = if soak {
+    let soak_sample = match std::env::var("ANTENNA_SOAK").as_deref().map(str::trim) {
+        Ok("1") => Some(Sample::Soak),
+        Ok("wide") => Some(Sample::SoakWide),
+        _ => None,
+    };
+    let soak = soak_sample.is_some();
+    let (seed, count, sample) = if let Some(sample) = soak_sample {
         (
             env_u64("ANTENNA_SOAK_SEED").unwrap_or(SOAK_SEED),
             env_u64("ANTENNA_SOAK_SWEEPS").unwrap_or(SOAK_SWEEPS),
-            Sample::Soak,
+            sample,
         )
     } else {
         (CI_SEED, CI_SWEEPS, Sample::Ci)

@@ -120,7 +120,7 @@ const MAIN_TEST: &str = "follow_runs_end_in_a_typed_status";
 fn time_limit(optimized: bool, sample: Sample) -> TimeLimit {
     let scale = match sample {
         Sample::Ci => 2.0,
-        Sample::Soak => 1.0,
+        Sample::Soak | Sample::SoakWide => 1.0,
     };
     let tight = if optimized {
         TimeLimit {

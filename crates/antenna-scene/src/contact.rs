@@ -21,6 +21,9 @@ pub(crate) struct RawContact {
     tolerance_m: Option<Spanned<f64>>,
     max_iterations: Option<Spanned<i64>>,
     max_substep_depth: Option<Spanned<i64>>,
+    /// The jump threshold at a joint between links of sim-core's
+    /// `ContactSettings::jump_reference_link_m` (40 mm, the thesis's), degrees: sim-core
+    /// scales it with each joint's links (a change of curvature), docs/scene-format.md.
     jump_deg: Option<Spanned<f64>>,
     margin_m: Option<Spanned<f64>>,
 }
@@ -52,6 +55,7 @@ impl RawContact {
             )?;
         }
         if let Some(j) = &self.jump_deg {
+            // At the 40 mm reference link; the solver scales it to each joint's links.
             settings.jump_rad = positive(source, CONTACT, "jump_deg", j)?.to_radians();
         }
         if let Some(m) = &self.margin_m {

@@ -137,16 +137,20 @@ pub const ANTENNA_LENGTH_M: f64 = 0.36;
 /// The thesis's link, metres.
 pub const SEED_LINK_M: f64 = 0.04;
 
-/// The solver's settings for `links` links: the defaults, or with the jump threshold scaled to
-/// the link (`jump_rad` x link / 40 mm: the same change of curvature flags a jump at every N).
-pub fn scaled_settings(links: usize, scaled_jump: bool) -> sim_core::contact::ContactSettings {
+/// The solver's settings for `links` links: the defaults (the jump threshold scaled to the
+/// link by the solver, `jump_rad` x link / 40 mm: the same change of curvature flags a jump at
+/// every N; the budgets scaled with the joints), or, with `scaled_jump` false, the rule
+/// before issue #49 (`jump_rad` per joint whatever the link, the budgets as given at every N).
+/// (The solver scales both to the chain itself: `_links` is no longer needed.)
+pub fn scaled_settings(_links: usize, scaled_jump: bool) -> sim_core::contact::ContactSettings {
     let default = sim_core::contact::ContactSettings::default();
     if scaled_jump {
+        default
+    } else {
         sim_core::contact::ContactSettings {
-            jump_rad: default.jump_rad * (ANTENNA_LENGTH_M / links as f64) / SEED_LINK_M,
+            jump_reference_link_m: None,
+            budget_reference_joints: None,
             ..default
         }
-    } else {
-        default
     }
 }

@@ -17,6 +17,7 @@ use super::ContactError;
 use super::feature::Slip;
 use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
+use super::pieces::CUT_REACH_M;
 use super::posture::{Pose, Posture};
 use super::quasistatic::{QuasiStatic, theta_of};
 use crate::walls::lerp;
@@ -29,8 +30,8 @@ const NEAREST: usize = 3;
 /// A feature poking through a link's line by `d` is inside the link only where the link's
 /// point there is at least this fraction of `d` inside the wall. A corner turning by at
 /// most 85 degrees, pushed `d` through a link whose normal lies at the edge of its cone,
-/// leaves the link's point `d cos(85 deg) = 0.087 d` inside (soak 176); a crest across a
-/// steep tip link, out of the link's reach, leaves it on the wall (soak 258: `d` = 6 cm,
+/// leaves the link's point `d cos(85 deg) = 0.087 d` inside (replay `soak:4221:176`, kept by `soak_sweeps_fixed_since_still_finish`); a crest across a
+/// steep tip link, out of the link's reach, leaves it on the wall (replay `soak:4221:258`, kept by `soak_sweeps_fixed_since_still_finish`: `d` = 6 cm,
 /// the tip resting on the wall).
 const THROUGH_LINE_DEPTH_FRACTION: f64 = 0.02;
 
@@ -158,6 +159,9 @@ impl QuasiStatic {
         // Per wall, its own nearest point to the chain point at hand (only where a piece of
         // it is cut, and once).
         let mut real: Vec<Option<WallPoint>> = Vec::with_capacity(self.walls.len());
+        // The pieces near the chain point or link at hand (the broad phase over pieces: a
+        // digitized wall is thousands of them).
+        let mut near_pieces: Vec<usize> = Vec::new();
         let take = |near: &mut Vec<(f64, PairKey)>, keys: &mut Vec<PairKey>| {
             near.sort_by(|a, b| a.0.total_cmp(&b.0));
             keys.extend(near.drain(..).take(keep).map(|(_, k)| k));
@@ -171,7 +175,27 @@ impl QuasiStatic {
                 let (_, _, x) = chain_point(&self.chain, posture, beta, point);
                 real.clear();
                 real.resize(self.walls.len(), None);
-                for (w, piece) in self.pieces.walls.iter().enumerate() {
+                // A piece cut at both ends can hold the point only within
+                // `Pieces::may_touch`'s reach of its vertices' box; the reach takes each cut
+                // wall's own gap at the point (the one the loop below uses).
+                let mut reach_m = within_m.max(0.0);
+                for (wall, at) in real.iter_mut().enumerate() {
+                    if self.pieces.wall_is_cut(wall) {
+                        let gap_m = at
+                            .get_or_insert_with(|| self.walls[wall].signed_distance(&x))
+                            .gap_m;
+                        reach_m = reach_m.max(gap_m.abs());
+                    }
+                }
+                let reach_m = reach_m + CUT_REACH_M + self.settings.penetration_tolerance_m;
+                self.pieces.near_box(
+                    &x.add_scalar(-reach_m),
+                    &x.add_scalar(reach_m),
+                    true,
+                    &mut near_pieces,
+                );
+                for &w in &near_pieces {
+                    let piece = &self.pieces.walls[w];
                     // The broad phase: a piece the point cannot come within `within_m` of.
                     if piece.gap_lower_bound_m(&x) >= within_m {
                         continue;
@@ -208,7 +232,18 @@ impl QuasiStatic {
                 }
                 take(&mut near, &mut keys);
             }
-            for (w, piece) in self.pieces.walls.iter().enumerate() {
+            // The pieces whose corners can be near the link (`features_near_segment`'s own
+            // box: the link's grown by the margin and half its length).
+            let (a_m, b_m) = (posture.start_of(link), posture.end_m[link]);
+            let reach_m = within_m.max(0.0) + 0.5 * (b_m - a_m).norm();
+            self.pieces.near_box(
+                &a_m.inf(&b_m).add_scalar(-reach_m),
+                &a_m.sup(&b_m).add_scalar(reach_m),
+                false,
+                &mut near_pieces,
+            );
+            for &w in &near_pieces {
+                let piece = &self.pieces.walls[w];
                 features.clear();
                 piece.shape.features_near_segment(
                     &posture.start_of(link),
@@ -339,7 +374,7 @@ impl QuasiStatic {
             // link, and a tip resting on the corner that needs more than that (pressed on
             // the edge past it) was never an equilibrium of a plain solve: the solve slid
             // the corner past the tip along the link's line, and the snap's flow came to
-            // rest where no plain solve converged (soak 1261, 4 links on a digitized
+            // rest where no plain solve converged (replay `soak:4221:1261`, 4 links on a digitized
             // trapezoid: its placement's settle stopped after 100,000 Newton iterations).
             if point == ChainPoint::Vertex(self.chain.n()) && links[1].is_none() {
                 links[1] = self.corner_point_pairs(point, piece, wall_point, x_m)[0];
@@ -505,7 +540,7 @@ impl QuasiStatic {
     /// joint 64 handed a crest to link 65 that stayed past its start (20 -> 21). Only on a
     /// surface with friction (dropped for the step or not: under 4 links, where friction
     /// locks the antenna in most steps, step 1019 took 1,118 -> 6 Newton iterations): on a
-    /// frictionless sinusoid of 1.2 mm crests under 150 links (soak 181) the hand-over took
+    /// frictionless sinusoid of 1.2 mm crests under 150 links (replay `soak:4221:181`) the hand-over took
     /// 8,448 -> 11,720 Newton iterations.
     fn hand_sliding_joints_onto_links(&self, pairs: &mut Vec<Pair>, goal: Pose) {
         // The sliding joints and the crest pairs past them, by index in `pairs`.
@@ -768,7 +803,7 @@ impl QuasiStatic {
     /// did from 60 links on) and at most 6 of 2,000 take more than 40 Newton iterations
     /// (the p99 77 -> 7 under 110 links, 147 -> 7 under 150). Handed on where the other
     /// link cannot rest on the crest, 16 soak sweeps failed (13 of them placements on
-    /// sinusoids of 20-30 mm crest radius under 40 mm links; soak 603, 1125). A crest
+    /// sinusoids of 20-30 mm crest radius under 40 mm links; replays `soak:4221:603`, `soak:4221:1125`). A crest
     /// pair that handed its crest on once in a (sub)step hands it on no more: past its link's
     /// end again (within [`HAND_BACK_FRACTION`]), the crest lies between the two links'
     /// lines, each foot past the joint, and the joint rides over it; its pair takes the
@@ -849,7 +884,7 @@ impl QuasiStatic {
                         if resting.contains(&other_key) {
                             // The joint's other link rests on the corner: its pair takes
                             // the force over (started unloaded, the solve found no way
-                            // from one link to the other, soak 1590).
+                            // from one link to the other, replay `soak:4221:1590`).
                             taken_over.push((other_key, *c));
                         } else if self.crest_passes_on(&other_key) && !handed_over.contains(&c.key)
                         {

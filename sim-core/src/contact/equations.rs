@@ -394,7 +394,7 @@ impl Equations {
                 Slip::Forward if y <= -bound + margin => Slip::Forward,
                 // A slip that reverses passes through sticking: flipped straight from one
                 // friction limit to the other, Newton's method cycles between the two
-                // (soak 426: +-B on one contact for dozens of iterations a step). Without
+                // (150 links on a digitized trapezoid, replay `soak:4221:426`: +-B on one contact for dozens of iterations a step). Without
                 // friction both limits are zero and the flip is harmless.
                 Slip::Backward | Slip::Forward if bound > 0.0 => Slip::Stuck,
                 Slip::Backward | Slip::Forward => free_mode(y, bound),

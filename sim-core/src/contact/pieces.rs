@@ -11,6 +11,7 @@
 
 use nalgebra::Vector2;
 
+use crate::walls::edge_tree::EdgeTree;
 use crate::{Surface, Wall, WallShape};
 
 /// The contact pieces of `walls` and the wall each belongs to.
@@ -31,6 +32,19 @@ pub(crate) struct Pieces {
     /// `bounds_m[i]`: the bounding box of piece `i`'s vertices where both its ends are cuts
     /// (its contacts then lie near it, see [`Pieces::may_touch`]), else `None`.
     pub bounds_m: Vec<Option<(Vector2<f64>, Vector2<f64>)>>,
+    /// The polyline pieces (`boxed[i]`: the piece of tree item `i`, in increasing order)
+    /// and a box hierarchy over their vertices' boxes: a digitized wall is cut into
+    /// thousands of pieces, and a chain point or a link is near a few of them
+    /// ([`Self::near_box`]).
+    boxed: Vec<usize>,
+    tree: EdgeTree,
+    /// The pieces without a vertices' box (lines, sinusoids): near everything.
+    unboxed: Vec<usize>,
+    /// The pieces without [`Self::bounds_m`] (not cut at both ends: their run-on reaches
+    /// everywhere).
+    open: Vec<usize>,
+    /// `wall_cut[w]`: wall `w` is cut into several pieces.
+    wall_cut: Vec<bool>,
 }
 
 /// How far past a cut a piece's straight run-on still counts, metres.
@@ -44,6 +58,9 @@ pub(crate) struct Pieces {
 /// of a corner it has nothing to do with, and three pieces pressing on one point make the
 /// contact equations degenerate. The allowance is a Newton iterate's wander about a corner.
 pub(crate) const CUT_REACH_M: f64 = 1e-4;
+
+/// Up to this many pieces, [`Pieces::near_box`] hands them all out.
+const FEW_PIECES: usize = 16;
 
 impl Pieces {
     /// Cuts `walls` into pieces.
@@ -73,6 +90,7 @@ impl Pieces {
                     }
                 }
                 _ => {
+                    pieces.unboxed.push(pieces.walls.len());
                     pieces.walls.push(wall.clone());
                     pieces.piece_of.push(w);
                     pieces.cut.push(false);
@@ -84,7 +102,60 @@ impl Pieces {
                 }
             }
         }
+        let mut boxes = Vec::new();
+        for (i, piece) in pieces.walls.iter().enumerate() {
+            if let WallShape::Polyline(p) = &piece.shape {
+                let v = p.vertices_m();
+                boxes.push(
+                    v.iter()
+                        .fold((v[0], v[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p))),
+                );
+                pieces.boxed.push(i);
+            }
+            if pieces.bounds_m[i].is_none() {
+                pieces.open.push(i);
+            }
+        }
+        pieces.tree = EdgeTree::over_boxes(&boxes);
+        pieces.wall_cut = vec![false; walls.len()];
+        for (i, &w) in pieces.piece_of.iter().enumerate() {
+            pieces.wall_cut[w] |= pieces.cut[i];
+        }
         pieces
+    }
+
+    /// The pieces whose vertices lie in part in the box `lo_m..hi_m` could, and the pieces
+    /// with no box (lines, sinusoids) and, with `open`, the pieces not cut at both ends:
+    /// into `out`, in increasing order. A broad phase: a piece whose vertices' box misses
+    /// the box is left out (through the tree, `O(log pieces)` where few are near).
+    pub fn near_box(
+        &self,
+        lo_m: &Vector2<f64>,
+        hi_m: &Vector2<f64>,
+        open: bool,
+        out: &mut Vec<usize>,
+    ) {
+        out.clear();
+        if self.walls.len() <= FEW_PIECES {
+            // (Few pieces: each is checked by the caller's own tests; a query costs more.)
+            out.extend(0..self.walls.len());
+            return;
+        }
+        out.extend_from_slice(&self.unboxed);
+        if open {
+            out.extend_from_slice(&self.open);
+        }
+        self.tree.edges_meeting_box(lo_m, hi_m, |item| {
+            out.push(self.boxed[item]);
+            true
+        });
+        out.sort_unstable();
+        out.dedup();
+    }
+
+    /// Whether wall `wall` is cut into several pieces.
+    pub fn wall_is_cut(&self, wall: usize) -> bool {
+        self.wall_cut[wall]
     }
 
     /// The arclengths along its wall between which a chain point's foot on piece `piece`

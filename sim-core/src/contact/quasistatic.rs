@@ -523,7 +523,7 @@ impl QuasiStatic {
                 )),
             }
         } else {
-            self.advance(goal, self.settings.max_step_iterations, &mut report)
+            self.advance(goal, self.step_budget(), &mut report)
         };
         if let Err(first) = result {
             // No frictional equilibrium nearby (friction locks the antenna: sliding would
@@ -531,7 +531,7 @@ impl QuasiStatic {
             // of the step, which the step reports; without friction either, it failed.
             result = if self.has_friction() {
                 self.friction_off = true;
-                let retry = self.advance(goal, self.settings.max_step_iterations, &mut report);
+                let retry = self.advance(goal, self.step_budget(), &mut report);
                 self.friction_off = false;
                 match retry {
                     Ok(()) => {
@@ -553,7 +553,7 @@ impl QuasiStatic {
             // friction, in full (substeps, the fixed point, snaps), before it fails.
             self.restore_state(saved);
             self.friction_locked = false;
-            result = self.advance(goal, self.settings.max_step_iterations, &mut report);
+            result = self.advance(goal, self.step_budget(), &mut report);
         }
         report.dense_solves = self.ssn.system.dense_solves - dense_before;
         if let Err(e) = result {
@@ -583,7 +583,7 @@ impl QuasiStatic {
             if report.iterations > budget {
                 return Err(ContactError::no_convergence(
                     goal.base_m,
-                    "the step took more Newton iterations than max_step_iterations",
+                    "the step took more Newton iterations than its budget (max_step_iterations, scaled with the joints)",
                     report.iterations,
                 ));
             }
@@ -620,7 +620,7 @@ impl QuasiStatic {
                     // modes refuse: a tip stuck beyond its friction cone, or let go where
                     // its plain modes press it again) fails again however short: the
                     // halvings creep towards the fold, each failing the same way, and the
-                    // snap comes at the end all the same (soak 375, 150 links with distal
+                    // snap comes at the end all the same (replay `soak:4221:375`, 150 links with distal
                     // hairs on a line wall with mu = 1: 14 halvings of some 235 Newton
                     // iterations each before each of six snaps). After two such failures
                     // in a row the snap is followed from where the posture stands: soak
@@ -649,6 +649,12 @@ impl QuasiStatic {
             }
         }
         Ok(())
+    }
+
+    /// The Newton iterations a step may take ([`ContactSettings::step_iteration_budget`]:
+    /// `max_step_iterations`, scaled with the chain's joints by default).
+    fn step_budget(&self) -> usize {
+        self.settings.step_iteration_budget(self.chain.n())
     }
 
     /// Whether any wall has friction (or anchoring) anywhere.

@@ -19,10 +19,10 @@ const EASY_ITERATIONS: usize = 40;
 
 /// After this many hard pseudo-time steps in a row (each over [`EASY_ITERATIONS`]), the
 /// next is longer all the same. A flow whose every solve is hard kept a tiny step for good:
-/// soak 329's placement (36 links let go on a polyline, the flow at `gamma` = 5e5) crept 3
+/// the placement of replay `soak:4221:329` (36 links let go on a polyline, the flow at `gamma` = 5e5) crept 3
 /// micro-radians per step for 2,000 steps, 101,159 Newton iterations; it now comes to rest
 /// after 5,332 (3,230 with the repair's cone test of `super::ssn` since). By measurement on
-/// the two settles it changes most: after 3 hard steps, 4,912 and soak 73's 61,885 (a
+/// the two settles it changes most: after 3 hard steps, 4,912 and replay `soak:4221:73`'s 61,885 (a
 /// longer step failing there at some 1,000 iterations a time); after 6, 5,332 and 31,134;
 /// after 10, 5,893 and 44,051; never, 101,159 and 42,538.
 const HARD_IN_A_ROW: usize = 6;
@@ -44,7 +44,7 @@ impl QuasiStatic {
         // The posture before the last accepted pseudo-time step.
         let mut x_before_last: Option<Vec<f64>> = None;
         let mut hard_in_a_row = 0_usize;
-        for _ in 0..self.settings.max_snap_steps {
+        for _ in 0..self.settings.snap_step_budget(self.chain.n()) {
             if report.iterations > budget {
                 break;
             }

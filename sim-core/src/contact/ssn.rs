@@ -100,7 +100,7 @@ pub(super) const STALL_ITERATIONS: usize = 14;
 /// that the cap on a coordinate's change ([`MAX_CHANGE_RAD`]) cut it to at most
 /// [`CREEP_STEP`] of itself, with no halving of its best merit over them, creeps along a
 /// direction of a nearly singular Newton matrix (a stuck tip whose slip the joints can
-/// barely move, soak 1102 at 150 links, where the step would change the joint angles by
+/// barely move, 150 links, replay `soak:4221:1102`, where the step would change the joint angles by
 /// some 2,000 rad) and stops there at its best point, as a stall. Counting any step the
 /// line search shrank that far instead stopped solves that creep towards a repairable
 /// stall (`a_stall_between_two_walls_one_joint_cannot_both_touch_is_repaired`) and a tip
@@ -132,19 +132,19 @@ const REPAIR_ITERATIONS: usize = 20;
 
 /// Newton iterations a repair spends in all before it gives up (the caller then falls back
 /// to the fixed point or refines the step): a chain lying along a wall has a part to try
-/// for each of its contacts, some 14 iterations each (soak 988, 150 links: 172 parts, 2,463
+/// for each of its contacts, some 14 iterations each (150 links, replay `soak:4221:988`: 172 parts, 2,463
 /// iterations, none settling it; the fixed point then took 20). A snap's proximal step is
 /// held to it too: one that fails had tried every part, up to some 600 Newton iterations
-/// a failure (soak 375, 150 links with hairs along a line wall with mu = 1: its flows
+/// a failure (150 links with hairs along a line wall with mu = 1, replay `soak:4221:375`: its flows
 /// 21,790 -> 20,668 Newton iterations for the sweep, 7.4 s -> 6.2 s alone; the CI sample
-/// 37,034 -> 36,946). Tried at 40d476c, the same budget failed soak 138's snap ("did not
+/// 37,034 -> 36,946). Tried at 40d476c, the same budget failed the snap of replay `soak:4221:138` ("did not
 /// come to rest"); since a substep at a fold snaps without halving to the end
 /// (`QuasiStatic::advance`), the soak finishes every sweep with it.
 const REPAIR_BUDGET: usize = 100;
 
 /// A repair tries the sliding contacts stuck before letting any go where at most this many
 /// slide ([`Ssn::repair`]): a few contacts on a link flat on a wall, not a whole chain
-/// lying along it (soak 1371: 56 sliding contacts, each tried stuck first, took twice the
+/// lying along it (replay `soak:4221:1371`: 56 sliding contacts, each tried stuck first, took twice the
 /// Newton iterations of letting the contacts go first). 2 gave a Newton p99 of 24 and 96
 /// at 72 and 150 links over the soak; 4 and 8 gave 22 and 93.
 const FEW_SLIDING: usize = 4;
@@ -301,7 +301,7 @@ impl Ssn {
             return;
         }
         // The part that settled the last repair first: the next step's stall is most often
-        // the same one (soak 426, 150 links on a digitized trapezoid: the last of three
+        // the same one (150 links on a digitized trapezoid, replay `soak:4221:426`: the last of three
         // sliding contacts stuck, step after step, after 35 iterations on the other two).
         if let Some(last) = self.last_repair
             && let Some(i) = parts
@@ -313,7 +313,7 @@ impl Ssn {
         // The row with the largest residual may be a part that none of the above holds: a
         // hair tip let go whose normal force the stall left nonzero (touching with next to
         // no force, its normal row taking turns between pressed and let go). Its letting
-        // go is tried first (soak 1911, 150 links with distal hairs on a digitized line:
+        // go is tried first (150 links with distal hairs on a digitized line, replay `soak:4221:1911`:
         // 43,108 -> 29,897 Newton iterations). Only for hair tips: for any pair it cost the
         // CI sample 49,972 -> 51,003 and the 150-link 4.2.1 sweep (no hairs) a p99 of 58
         // -> 80; and moved ahead of the parts above as well, the CI sample 51,952.
@@ -451,7 +451,7 @@ impl Ssn {
         let mut creeping = 0_usize;
         // The stop fires below the acceptable residual too: a solve creeping there between
         // mode sets at a degenerate point (a contact touching with no force) would spend
-        // its whole budget to end where it stood (soak 545, 150 links: 60 iterations per
+        // its whole budget to end where it stood (150 links, replay `soak:4221:545`: 60 iterations per
         // step at 1e-11 m).
         let can_stall = p.stall_after.is_some();
         if can_stall {
@@ -470,7 +470,7 @@ impl Ssn {
                 break;
             }
             // A snap's step stalled within the acceptable residual is accepted there rather
-            // than spend its budget to end where it stands (soak 73: a placement settling
+            // than spend its budget to end where it stands (replay `soak:4221:73`: a placement settling
             // with friction took 100,199 Newton iterations over 324 pseudo-time steps, many
             // of their solves 60 iterations at an acceptable residual).
             if !can_stall
@@ -650,7 +650,7 @@ mod tests {
 
     /// The row with the largest residual names the part a repair tries first when no other
     /// part holds it: a hair tip let go whose normal force is not zero (touching with next
-    /// to no force, soak 1911) is let go; another pair, or a free joint, names none.
+    /// to no force, as in replay `soak:4221:1911`) is let go; another pair, or a free joint, names none.
     #[test]
     fn the_worst_row_of_a_let_go_pair_with_a_force_is_its_letting_go() {
         let length_m = 0.05;

@@ -17,7 +17,7 @@ use super::tresca::solve_by_fixed_point;
 pub(super) enum Reject {
     /// Newton did not converge.
     NoConvergence,
-    /// It converged, but a joint moved more than the jump threshold.
+    /// It converged, but a joint moved more than its jump threshold.
     Jump,
 }
 
@@ -47,13 +47,6 @@ const QUICK_ITERATIONS: usize = 12;
 /// them).
 const QUICK_STALL_ITERATIONS: usize = 4;
 
-/// The largest change of a joint angle between two postures, radians.
-fn max_change_rad(x: &[f64], from: &[f64]) -> f64 {
-    x.iter()
-        .zip(from)
-        .fold(0.0_f64, |a, (x, t)| a.max((x - t).abs()))
-}
-
 /// Whether the last four rounds left two sets of pairs in turn (`A B A B`).
 fn taking_turns(round_keys: &[Vec<PairKey>]) -> bool {
     match round_keys {
@@ -72,6 +65,17 @@ fn taking_turns_with(round_keys: &mut Vec<Vec<PairKey>>, pairs: &[Pair]) -> bool
 }
 
 impl QuasiStatic {
+    /// Whether the joint angles `x` (`theta_1..theta_n`) change some joint from the committed
+    /// posture by more than its jump threshold ([`super::ContactSettings::jump_threshold_rad`]:
+    /// scaled with the links by default, a bound on the change of curvature).
+    fn jumps(&self, x: &[f64]) -> bool {
+        let lengths = self.chain.link_lengths_m();
+        x.iter()
+            .zip(&self.theta[1..])
+            .enumerate()
+            .any(|(i, (x, t))| (x - t).abs() > self.settings.jump_threshold_rad(lengths, i + 1))
+    }
+
     /// The secant predictor of the joint angles `theta_1..theta_n` with the base at
     /// `goal`: the last plain step's change, scaled to this step's change of the base pose
     /// (up to twice the last one; displacement and turn weighed together, the turn by the
@@ -121,6 +125,19 @@ impl QuasiStatic {
         self.start.update(&self.chain, self.base_m, &self.theta);
         self.probe.update_at(&self.chain, goal, &self.theta);
         let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
+        // A solve gives up where its joint angles wander farther than twice the largest jump
+        // threshold from its start: a plain step's answer there would be refused as a jump.
+        // A snap's pseudo-time step (proximal) starts off equilibrium, where Newton's first
+        // iterates swing out and come back: it keeps at least twice `jump_rad` (the bound
+        // before the threshold was scaled to the link; at 0.05 rad the flow of a held 18-link
+        // antenna brought onto a digitized wall failed to come to rest, CI sample 2).
+        let largest_rad = self
+            .settings
+            .max_jump_threshold_rad(self.chain.link_lengths_m());
+        let departure_rad = match proximal {
+            Some(_) => 2.0 * largest_rad.max(self.settings.jump_rad),
+            None => 2.0 * largest_rad,
+        };
         let mut anchoring = super::anchoring::AnchorRounds::default();
         let mut handed_over = Vec::new();
         // The pairs each round left for the next.
@@ -175,7 +192,7 @@ impl QuasiStatic {
                 // looser one lets the flow creep by stalled solves where a contact sits on
                 // the edge of its friction cone, and never come to rest.
                 acceptable_m: self.settings.acceptable_m,
-                max_departure_rad: 2.0 * self.settings.jump_rad,
+                max_departure_rad: departure_rad,
                 max_iterations: if self.quick_attempt {
                     QUICK_ITERATIONS.min(self.settings.max_iterations)
                 } else {
@@ -230,7 +247,7 @@ impl QuasiStatic {
             if !outcome.converged && !pairs.iter().any(Pair::has_friction) {
                 // Without friction the fixed point's Tresca problems are this very problem:
                 // it would only solve it again (up to hundreds of iterations per attempt in
-                // a frictionless snap, soak 1747), so the attempt fails here.
+                // a frictionless snap, replay `soak:4221:1747`, kept by `soak_sweeps_fixed_since_still_finish`), so the attempt fails here.
                 return Err(Reject::NoConvergence);
             }
             if !outcome.converged {
@@ -278,21 +295,17 @@ impl QuasiStatic {
                 // next to the next one, and the step's start may be a snap away from it
                 // (the 14.2 cycles/m sinusoid under 150 links: 47 -> 38 steps over 40 Newton
                 // iterations of 2,000, 17 -> 15 snaps). Where a point was found inside a
-                // wall, the answer that put it there is no start (soak 1361: a swing of
+                // wall, the answer that put it there is no start (replay `soak:4221:1361`: a swing of
                 // the distal links through a corner, 661 -> 18,095 Newton iterations when
                 // started from it), nor is one that jumped. A snap's proximal steps start
                 // afresh: started there, the flow of CI sample 4's placement took another
                 // path to another posture (204 -> 10,582 Newton iterations for the sweep).
-                if proximal.is_none()
-                    && none_missed
-                    && max_change_rad(&x[..n], &self.theta[1..]) <= self.settings.jump_rad
-                {
+                if proximal.is_none() && none_missed && !self.jumps(&x[..n]) {
                     warm = Some(x[..n].to_vec());
                 }
                 continue;
             }
-            let jump = max_change_rad(&x[..n], &self.theta[1..]);
-            if jump > self.settings.jump_rad {
+            if self.jumps(&x[..n]) {
                 return Err(Reject::Jump);
             }
             if self.friction_off {

@@ -40,7 +40,7 @@ pub(crate) fn solve_by_fixed_point(
         if !outcome.converged && round == 0 {
             // The first Tresca problem does not solve either: the iteration tells nothing of
             // normal forces that keep growing, so nothing is called jammed (a failed solve's
-            // drift was, before: soak 1982, 150 links on a digitized wall, whose whole steps
+            // drift was, before: 150 links on a digitized wall (replay `soak:4221:1982`), whose whole steps
             // then failed at 60 Newton iterations where their halves took 3 each). The
             // caller refines the step.
             for c in pairs.iter_mut() {

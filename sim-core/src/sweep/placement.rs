@@ -10,8 +10,11 @@ use crate::{EquilibriumProblem, InitialGuess, SolveOptions, Wall, solve_equilibr
 
 /// How the antenna starts. Every placement ends by letting the antenna settle where it was
 /// put, which may be a long snap (a held antenna let go springing onto the wall): that
-/// settle has ten times a sweep step's `max_step_iterations` and `max_snap_steps`
-/// ([`crate::contact::ContactSettings`]), and the placement's note says what a snap took.
+/// settle has ten times a sweep step's budgets, `max_step_iterations` and `max_snap_steps`
+/// scaled with the chain's joints ([`crate::contact::ContactSettings::step_iteration_budget`]),
+/// and the placement's note says what a snap took. A release that lands on another
+/// equilibrium is refined and followed as a snap at every N (the jump test bounds the
+/// change of curvature, [`crate::contact::ContactSettings::jump_threshold_rad`]).
 /// A held antenna that cannot be brought onto the wall is refused with the jam in words
 /// (the contacts, the joints on their stops).
 #[derive(Clone, Debug, PartialEq)]
@@ -446,10 +449,15 @@ fn motion_direction(scene: &SweepScene) -> Vector2<f64> {
 
 /// A placement's settle may follow a long snap (a held antenna let go springs onto the
 /// wall): it gets this many times the Newton iterations and snap steps of a sweep's step.
+/// The factor applies to `max_step_iterations` and `max_snap_steps` as set; the solver then
+/// scales both with the chain's joints
+/// ([`crate::contact::ContactSettings::budget_reference_joints`]), so the settle's budget
+/// grows with N as a step's does (N = 9: 100,000 Newton iterations and 20,000 snap steps,
+/// as before; N = 150: 18.6 times that).
 const SETTLE_BUDGET_FACTOR: usize = 10;
 
 /// Settles the placed posture (a step of length zero), with [`SETTLE_BUDGET_FACTOR`] times
-/// the step's budget.
+/// the step's budget (each scaled with the joints by the solver).
 fn settle(sim: &mut QuasiStatic) -> Result<StepReport, SweepError> {
     let as_step = |source| SweepError::Step {
         step: 0,

@@ -19,8 +19,8 @@ const LEAF_EDGES: usize = 8;
 const MAX_DEPTH: usize = 64;
 
 /// The hierarchy (see the module documentation).
-#[derive(Clone, Debug, PartialEq)]
-pub(super) struct EdgeTree {
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct EdgeTree {
     /// The nodes; the root is node 0.
     nodes: Vec<Node>,
 }
@@ -92,6 +92,45 @@ impl EdgeTree {
         index as u32
     }
 
+    /// A hierarchy over items `0..boxes.len()`, item `i` in the box `boxes[i]` (`(lo, hi)`):
+    /// the same runs of consecutive items, for items that lie together in order (the pieces
+    /// of a wall cut at its concave corners). Its queries visit item indices.
+    pub(crate) fn over_boxes(boxes: &[(Vector2<f64>, Vector2<f64>)]) -> EdgeTree {
+        let mut tree = EdgeTree { nodes: Vec::new() };
+        if !boxes.is_empty() {
+            tree.nodes.reserve(2 * (boxes.len() / LEAF_EDGES + 1));
+            tree.build_over_boxes(boxes, 0, boxes.len());
+        }
+        tree
+    }
+
+    /// Builds the node over items `first..end` of `boxes` and returns its index.
+    fn build_over_boxes(
+        &mut self,
+        boxes: &[(Vector2<f64>, Vector2<f64>)],
+        first: usize,
+        end: usize,
+    ) -> u32 {
+        let index = self.nodes.len();
+        let (lo_m, hi_m) = boxes[first + 1..end]
+            .iter()
+            .fold(boxes[first], |(lo, hi), (l, h)| (lo.inf(l), hi.sup(h)));
+        self.nodes.push(Node {
+            first_edge: first,
+            end_edge: end,
+            lo_m,
+            hi_m,
+            children: None,
+        });
+        if end - first > LEAF_EDGES {
+            let mid = first + (end - first) / 2;
+            let left = self.build_over_boxes(boxes, first, mid);
+            let right = self.build_over_boxes(boxes, mid, end);
+            self.nodes[index].children = Some([left, right]);
+        }
+        index as u32
+    }
+
     /// Whether the tree is empty (fewer than three edges).
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
@@ -99,7 +138,7 @@ impl EdgeTree {
 
     /// Calls `visit` with every finite edge of the leaves whose box meets `lo_m..hi_m`, in
     /// increasing order, until `visit` returns `false`. Returns `false` if it stopped early.
-    pub fn edges_meeting_box(
+    pub(crate) fn edges_meeting_box(
         &self,
         lo_m: &Vector2<f64>,
         hi_m: &Vector2<f64>,

@@ -32,9 +32,9 @@
 //! - `sinusoid/`: [`Sinusoid`], the shape in `mod.rs`, then `distance.rs`,
 //!   `segment_contact.rs`, `features.rs` (its crests), `bounds.rs` (gap lower bounds without
 //!   a search), `ray.rs`;
-//! - `edge_tree.rs`: the bounding boxes, a hierarchy over a long polyline's edges that makes
-//!   its queries cost what is near them, with the point, segment and box distances it prunes
-//!   by;
+//! - `edge_tree.rs`: the bounding boxes, a hierarchy over runs of a long polyline's edges
+//!   that makes its queries cost what is near them, with the point, segment and box
+//!   distances it prunes by (the contact's broad phase builds one over a wall's pieces);
 //! - `surface.rs`: surfaces and their zones ([`Surface`], [`SurfaceMap`]); `error.rs`:
 //!   [`WallError`]; `ray_tests.rs`: the ray and mirror tests across the shapes.
 //!
@@ -62,7 +62,7 @@
 //! # }
 //! ```
 
-mod edge_tree;
+pub(crate) mod edge_tree;
 mod error;
 mod line;
 mod polyline;

@@ -13,6 +13,7 @@ mod tip_force_common;
 mod beam_convergence;
 mod contact_broad_phase;
 mod contact_friction;
+mod contact_jumps_many_links;
 mod coverage;
 mod equilibrium_dead_load;
 mod equilibrium_limits;

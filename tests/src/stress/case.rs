@@ -51,6 +51,8 @@ use crate::reproduce::{K_MAX_N_M_PER_RAD, K_MIN_N_M_PER_RAD, TABLE_4_1_PROFILES}
 pub const ANTENNA_LENGTH_M: f64 = 0.36;
 /// The link counts `N` (the base link included).
 pub const LINK_COUNTS: [usize; 6] = [4, 9, 18, 36, 72, 150];
+/// The link counts of the wide soak ([`Sample::SoakWide`]): [`LINK_COUNTS`] and 300.
+pub const WIDE_LINK_COUNTS: [usize; 7] = [4, 9, 18, 36, 72, 150, 300];
 /// The friction coefficients.
 pub const MUS: [f64; 4] = [0.0, 0.3, 0.6, 1.0];
 /// The base speeds, m/s.
@@ -73,6 +75,9 @@ pub enum Sample {
     Ci,
     /// `ANTENNA_SOAK=1`.
     Soak,
+    /// `ANTENNA_SOAK=wide`: the soak with `N` drawn from [`WIDE_LINK_COUNTS`] (up to 300
+    /// links: budgets and jump tests that scale with `N`, issue #49).
+    SoakWide,
 }
 
 impl Sample {
@@ -81,6 +86,7 @@ impl Sample {
         match self {
             Sample::Ci => "ci",
             Sample::Soak => "soak",
+            Sample::SoakWide => "soak-wide",
         }
     }
 
@@ -89,12 +95,16 @@ impl Sample {
         match name {
             "ci" => Some(Sample::Ci),
             "soak" => Some(Sample::Soak),
+            "soak-wide" => Some(Sample::SoakWide),
             _ => None,
         }
     }
 
     /// Relative weights of [`LINK_COUNTS`] in the soak.
     pub const SOAK_LINK_WEIGHTS: [f64; 6] = [20.0, 25.0, 20.0, 15.0, 12.0, 8.0];
+
+    /// Relative weights of [`WIDE_LINK_COUNTS`] in the wide soak.
+    pub const SOAK_WIDE_LINK_WEIGHTS: [f64; 7] = [18.0, 20.0, 17.0, 14.0, 11.0, 10.0, 10.0];
 
     /// The CI sample's link counts, in turn (every 25 cases: 8 of `N = 4`, 7 of 9, 5 of 18,
     /// 3 of 36, one each of 72 and 150), so a small sample has them all in fixed shares.
@@ -107,6 +117,7 @@ impl Sample {
         match self {
             Sample::Ci => Self::CI_LINK_CYCLE[(index % Self::CI_LINK_CYCLE.len() as u64) as usize],
             Sample::Soak => LINK_COUNTS[weighted(rng, &Self::SOAK_LINK_WEIGHTS)],
+            Sample::SoakWide => WIDE_LINK_COUNTS[weighted(rng, &Self::SOAK_WIDE_LINK_WEIGHTS)],
         }
     }
 
@@ -115,8 +126,8 @@ impl Sample {
         match (self, links >= 72) {
             (Sample::Ci, false) => rng.random_range(0.5..=2.0),
             (Sample::Ci, true) => 0.5,
-            (Sample::Soak, false) => rng.random_range(2.0..=6.0),
-            (Sample::Soak, true) => rng.random_range(1.0..=2.0),
+            (Sample::Soak | Sample::SoakWide, false) => rng.random_range(2.0..=6.0),
+            (Sample::Soak | Sample::SoakWide, true) => rng.random_range(1.0..=2.0),
         }
     }
 }

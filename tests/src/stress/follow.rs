@@ -289,7 +289,9 @@ impl FollowCase {
         let links = match sample {
             // Every 8 cases: 3 of N = 4, 3 of 9, one each of 18 and 36.
             Sample::Ci => [4, 9, 4, 18, 9, 4, 36, 9][(index % 8) as usize],
-            Sample::Soak => FOLLOW_LINK_COUNTS[weighted(rng, &[30.0, 35.0, 20.0, 15.0])],
+            Sample::Soak | Sample::SoakWide => {
+                FOLLOW_LINK_COUNTS[weighted(rng, &[30.0, 35.0, 20.0, 15.0])]
+            }
         };
         let link_m = ANTENNA_LENGTH_M / links as f64;
         let profile = TABLE_4_1_PROFILES[rng.random_range(0..TABLE_4_1_PROFILES.len())].clone();
@@ -301,7 +303,7 @@ impl FollowCase {
         let speed_m_per_s = log_uniform(rng, SPEED_RANGE_M_PER_S.0, SPEED_RANGE_M_PER_S.1);
         let duration_s = match sample {
             Sample::Ci => rng.random_range(0.5..=2.0),
-            Sample::Soak => rng.random_range(1.0..=4.0),
+            Sample::Soak | Sample::SoakWide => rng.random_range(1.0..=4.0),
         };
         let travel_m = speed_m_per_s * duration_s;
         let body = draw_body(rng);

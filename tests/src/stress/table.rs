@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use super::case::{LINK_COUNTS, PlacementKind};
+use super::case::{PlacementKind, WIDE_LINK_COUNTS};
 use super::outcome::{Outcome, SweepRecord};
 use super::walls::WallKind;
 
@@ -90,7 +90,7 @@ pub fn summary_markdown(records: &[SweepRecord]) -> String {
     );
     let all: Vec<&SweepRecord> = records.iter().collect();
     let _ = writeln!(out, "{}", row("all", &all));
-    for n in LINK_COUNTS {
+    for n in WIDE_LINK_COUNTS {
         let group: Vec<&SweepRecord> = records.iter().filter(|r| r.links == n).collect();
         if !group.is_empty() {
             let _ = writeln!(out, "{}", row(&format!("N = {n}"), &group));
