@@ -12,7 +12,7 @@ use crate::walls::{ConvexFeature, FeatureContact, SolidSide, WallPoint};
 /// to the solve's precision. A link pressed flat on a digitized wall's edge, resting on the
 /// edge's corner with its joint on the wall beyond, ends its solves up to `2e-7` outside the
 /// cone; at `1e-9` it lost the corner on every other solve and took turns between the
-/// corner and its joint for the whole step (soak 1093). `1e-6` radians tilts a 9 cm link's
+/// corner and its joint for the whole step (replay `soak:4221:1093`, kept by `soak_sweeps_fixed_since_still_finish`). `1e-6` radians tilts a 9 cm link's
 /// far end `9e-8` m at most, which the link's own end pairs hold.
 const CONE_ROUNDING: f64 = 1e-6;
 

@@ -25,7 +25,7 @@ impl Polyline {
     /// `O(edges)` where the segment stays in free space; where part of it may be in the
     /// solid, the stretches of it that can dip below the best point found so far are halved
     /// until few edges are within their reach, and the pairs of those features are checked,
-    /// each by a nearest-point query (soak 835, a 4-link antenna along a digitized wall of
+    /// each by a nearest-point query (replay `soak:4221:835`, a 4-link antenna along a digitized wall of
     /// 300 points: its sweep took 6.3 s with the pairs of every feature within reach of a
     /// whole link, 0.1 s by halves, step for step the same).
     pub fn segment_contact(&self, a_m: &Vector2<f64>, b_m: &Vector2<f64>) -> SegmentContact {
@@ -271,7 +271,7 @@ impl Polyline {
         // The edges within reach lie in one span of indices besides the two end rays, and
         // every corner within reach ends one of them: the loops below run over that span
         // only, in the same order (on a digitized wall of hundreds of edges a stretch deep
-        // in the solid scanned every edge for every edge within reach, soak 1274: 9 s of a
+        // in the solid scanned every edge for every edge within reach, replay `soak:4221:1274`: 9 s of a
         // placement).
         let (first, last) = self
             .edges_within_reach(&p0, &p1, gaps_m)
@@ -418,7 +418,7 @@ fn for_roots(qa: f64, qb: f64, qc: f64, f: &mut impl FnMut(f64)) {
 /// is at most `|g0| + l` from the boundary, so its nearest edge is within `|g0| + 2 l` of
 /// `p0` (and `|g1| + 2 l` of `p1`); as no edge is nearer to `p0` than `|g0|`, for a short
 /// stretch deep in the solid that is a thin ring, where the box held every edge within
-/// `|g|` (soak 1274: a placement measuring links 90 mm inside a digitized wall spent 9 s
+/// `|g|` (replay `soak:4221:1274`: a placement measuring links 90 mm inside a digitized wall spent 9 s
 /// enumerating pairs of them).
 struct Reach {
     lo_m: Vector2<f64>,
