@@ -26,11 +26,8 @@ use std::time::Instant;
 
 use bench_common::{human, median, write_section};
 use nalgebra::Vector2;
-use sim_core::design::profile::{SEED_K_MAX_N_M_PER_RAD, SEED_K_MIN_N_M_PER_RAD, StiffnessProfile};
 use sim_core::sweep::{Motion, Placement, Sweep, SweepScene};
-use sim_core::{
-    Chain, InitialGuess, JointLimit, Line, Polyline, SolidSide, Surface, SurfaceMap, Wall,
-};
+use sim_core::{Chain, InitialGuess, Line, Polyline, SolidSide, Surface, SurfaceMap, Wall};
 
 type BoxResult<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -45,19 +42,7 @@ const LINE: &str = "4.2.1 line, 10 s";
 
 /// The thesis's antenna (9 links of 40 mm, fast-exponential).
 fn antenna() -> BoxResult<Chain> {
-    let n = 8;
-    let lengths = vec![0.04; n + 1];
-    let k = StiffnessProfile::FastExponential.stiffness_n_m_per_rad(
-        &lengths,
-        SEED_K_MIN_N_M_PER_RAD,
-        SEED_K_MAX_N_M_PER_RAD,
-    )?;
-    Ok(Chain::builder(n)
-        .link_length_m(0.04)
-        .base_angle_rad(30f64.to_radians())
-        .stiffnesses_nm_per_rad(k)
-        .joint_limit(JointLimit::new((-90f64).to_radians(), 90f64.to_radians()))
-        .build()?)
+    bench_common::scaled_antenna(9)
 }
 
 /// A polyline wall from a points file of `examples/walls/` (read here: the scene reader

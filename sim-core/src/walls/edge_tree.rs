@@ -59,73 +59,58 @@ impl EdgeTree {
     /// polyline of fewer than three edges: its edges are all rays or one edge between them).
     pub fn new(vertices_m: &[Vector2<f64>]) -> EdgeTree {
         let edges = vertices_m.len().saturating_sub(1);
-        let mut tree = EdgeTree { nodes: Vec::new() };
-        if edges >= 3 {
-            tree.nodes.reserve(2 * (edges / LEAF_EDGES + 1));
-            tree.build(vertices_m, 1, edges - 1);
+        if edges < 3 {
+            return EdgeTree { nodes: Vec::new() };
         }
-        tree
-    }
-
-    /// Builds the node over edges `first..end` and returns its index.
-    fn build(&mut self, vertices_m: &[Vector2<f64>], first: usize, end: usize) -> u32 {
-        let index = self.nodes.len();
-        let mut lo_m = vertices_m[first];
-        let mut hi_m = lo_m;
-        for v in &vertices_m[first..=end] {
-            lo_m = lo_m.inf(v);
-            hi_m = hi_m.sup(v);
-        }
-        self.nodes.push(Node {
-            first_edge: first,
-            end_edge: end,
-            lo_m,
-            hi_m,
-            children: None,
-        });
-        if end - first > LEAF_EDGES {
-            let mid = first + (end - first) / 2;
-            let left = self.build(vertices_m, first, mid);
-            let right = self.build(vertices_m, mid, end);
-            self.nodes[index].children = Some([left, right]);
-        }
-        index as u32
+        // Edge `i` (from 1) is item `i - 1`, in the box of its two vertices.
+        let boxes: Vec<(Vector2<f64>, Vector2<f64>)> = vertices_m[1..edges]
+            .windows(2)
+            .map(|w| (w[0].inf(&w[1]), w[0].sup(&w[1])))
+            .collect();
+        Self::over_items(&boxes, 1)
     }
 
     /// A hierarchy over items `0..boxes.len()`, item `i` in the box `boxes[i]` (`(lo, hi)`):
     /// the same runs of consecutive items, for items that lie together in order (the pieces
     /// of a wall cut at its concave corners). Its queries visit item indices.
     pub(crate) fn over_boxes(boxes: &[(Vector2<f64>, Vector2<f64>)]) -> EdgeTree {
+        Self::over_items(boxes, 0)
+    }
+
+    /// The hierarchy over `boxes`, item `i` named `i + first` in the queries.
+    fn over_items(boxes: &[(Vector2<f64>, Vector2<f64>)], first: usize) -> EdgeTree {
         let mut tree = EdgeTree { nodes: Vec::new() };
         if !boxes.is_empty() {
             tree.nodes.reserve(2 * (boxes.len() / LEAF_EDGES + 1));
-            tree.build_over_boxes(boxes, 0, boxes.len());
+            tree.build(boxes, first, 0, boxes.len());
         }
         tree
     }
 
-    /// Builds the node over items `first..end` of `boxes` and returns its index.
-    fn build_over_boxes(
+    /// Builds the node over items `start..end` of `boxes` (named from `first`) and returns
+    /// its index.
+    fn build(
         &mut self,
         boxes: &[(Vector2<f64>, Vector2<f64>)],
         first: usize,
+        start: usize,
         end: usize,
     ) -> u32 {
         let index = self.nodes.len();
-        let (lo_m, hi_m) = boxes[first + 1..end]
+        let (lo_m, hi_m) = boxes[start + 1..end]
             .iter()
-            .fold(boxes[first], |(lo, hi), (l, h)| (lo.inf(l), hi.sup(h)));
+            .fold(boxes[start], |(lo, hi), (l, h)| (lo.inf(l), hi.sup(h)));
         self.nodes.push(Node {
-            first_edge: first,
-            end_edge: end,
+            first_edge: first + start,
+            end_edge: first + end,
             lo_m,
             hi_m,
             children: None,
         });
-        if end - first > LEAF_EDGES {
-            let mid = first + (end - first) / 2;
-            let left = self.build_over_boxes(boxes, first, mid);
-            let right = self.build_over_boxes(boxes, mid, end);
+        if end - start > LEAF_EDGES {
+            let mid = start + (end - start) / 2;
+            let left = self.build(boxes, first, start, mid);
+            let right = self.build(boxes, first, mid, end);
             self.nodes[index].children = Some([left, right]);
         }
         index as u32
