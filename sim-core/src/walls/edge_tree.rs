@@ -127,6 +127,64 @@ impl EdgeTree {
         &self,
         lo_m: &Vector2<f64>,
         hi_m: &Vector2<f64>,
+        visit: impl FnMut(usize) -> bool,
+    ) -> bool {
+        // (Every node that meets the box has "distance" 0: ties keep the left half first.)
+        self.walk(
+            |node| if node.meets(lo_m, hi_m) { 0.0 } else { 1.0 },
+            || 0.0,
+            visit,
+        )
+    }
+
+    /// Calls `visit` with the finite edges of every leaf whose box is within
+    /// `sqrt(best_d2())` of `p_m` (`best_d2` read again before each node: the caller's best
+    /// squared distance so far, which `visit` lowers), nearer halves first. A leaf farther
+    /// than the best is skipped, one as far is not: ties are seen.
+    pub fn edges_near_point(
+        &self,
+        p_m: &Vector2<f64>,
+        best_d2: impl FnMut() -> f64,
+        mut visit: impl FnMut(usize),
+    ) {
+        self.walk(
+            |node| node.distance2(p_m),
+            best_d2,
+            |edge| {
+                visit(edge);
+                true
+            },
+        );
+    }
+
+    /// Calls `visit` with the finite edges of every leaf whose box is within
+    /// `sqrt(best_d2())` of the segment `a_m -> b_m`, nearer halves first (as
+    /// [`Self::edges_near_point`], for a segment).
+    pub fn edges_near_segment(
+        &self,
+        a_m: &Vector2<f64>,
+        b_m: &Vector2<f64>,
+        best_d2: impl FnMut() -> f64,
+        mut visit: impl FnMut(usize),
+    ) {
+        self.walk(
+            |node| segment_box_distance2(a_m, b_m, &node.lo_m, &node.hi_m),
+            best_d2,
+            |edge| {
+                visit(edge);
+                true
+            },
+        );
+    }
+
+    /// The one walk of every query: a node whose `distance2` is above `bound()` is skipped,
+    /// of two halves the nearer comes first (the left one on a tie, so that a box query's
+    /// edges come in increasing order), and `visit` gets each edge of the leaves reached
+    /// until it returns `false` (then the walk returns `false`).
+    fn walk(
+        &self,
+        distance2: impl Fn(&Node) -> f64,
+        mut bound: impl FnMut() -> f64,
         mut visit: impl FnMut(usize) -> bool,
     ) -> bool {
         if self.nodes.is_empty() {
@@ -137,54 +195,14 @@ impl EdgeTree {
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
-            if !node.meets(lo_m, hi_m) {
-                continue;
-            }
-            match node.children {
-                // Right pushed first: the left half comes out first.
-                Some([left, right]) => {
-                    stack[top] = right;
-                    stack[top + 1] = left;
-                    top += 2;
-                }
-                None => {
-                    for edge in node.first_edge..node.end_edge {
-                        if !visit(edge) {
-                            return false;
-                        }
-                    }
-                }
-            }
-        }
-        true
-    }
-
-    /// Calls `visit` with the finite edges of every leaf whose box is within
-    /// `sqrt(best_d2())` of `p_m` (`best_d2` read again before each node: the caller's best
-    /// squared distance so far, which `visit` lowers), nearer halves first. A leaf farther
-    /// than the best is skipped, one as far is not: ties are seen.
-    pub fn edges_near_point(
-        &self,
-        p_m: &Vector2<f64>,
-        mut best_d2: impl FnMut() -> f64,
-        mut visit: impl FnMut(usize),
-    ) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack = [0u32; MAX_DEPTH];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let node = &self.nodes[stack[top] as usize];
-            if node.distance2(p_m) > best_d2() {
+            if distance2(node) > bound() {
                 continue;
             }
             match node.children {
                 Some([left, right]) => {
                     let (dl, dr) = (
-                        self.nodes[left as usize].distance2(p_m),
-                        self.nodes[right as usize].distance2(p_m),
+                        distance2(&self.nodes[left as usize]),
+                        distance2(&self.nodes[right as usize]),
                     );
                     // The nearer half on top of the stack.
                     let (near, far) = if dr < dl {
@@ -198,55 +216,14 @@ impl EdgeTree {
                 }
                 None => {
                     for edge in node.first_edge..node.end_edge {
-                        visit(edge);
+                        if !visit(edge) {
+                            return false;
+                        }
                     }
                 }
             }
         }
-    }
-
-    /// Calls `visit` with the finite edges of every leaf whose box is within
-    /// `sqrt(best_d2())` of the segment `a_m -> b_m`, nearer halves first (as
-    /// [`Self::edges_near_point`], for a segment).
-    pub fn edges_near_segment(
-        &self,
-        a_m: &Vector2<f64>,
-        b_m: &Vector2<f64>,
-        mut best_d2: impl FnMut() -> f64,
-        mut visit: impl FnMut(usize),
-    ) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack = [0u32; MAX_DEPTH];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let node = &self.nodes[stack[top] as usize];
-            if segment_box_distance2(a_m, b_m, &node.lo_m, &node.hi_m) > best_d2() {
-                continue;
-            }
-            match node.children {
-                Some([left, right]) => {
-                    let (l, r) = (&self.nodes[left as usize], &self.nodes[right as usize]);
-                    let dl = segment_box_distance2(a_m, b_m, &l.lo_m, &l.hi_m);
-                    let dr = segment_box_distance2(a_m, b_m, &r.lo_m, &r.hi_m);
-                    let (near, far) = if dr < dl {
-                        (right, left)
-                    } else {
-                        (left, right)
-                    };
-                    stack[top] = far;
-                    stack[top + 1] = near;
-                    top += 2;
-                }
-                None => {
-                    for edge in node.first_edge..node.end_edge {
-                        visit(edge);
-                    }
-                }
-            }
-        }
+        true
     }
 
     /// The tree of the polyline moved by `offset_m`.
