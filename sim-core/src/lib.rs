@@ -43,8 +43,11 @@
 //!   top, each shape a folder with one query a file (signed distance, a segment's deepest
 //!   point, convex corners or crests, bounds, rays), and the bounding boxes over a long
 //!   polyline's edges that make its queries cost what is near them.
-//! - [`contact`]: quasi-static contact of the chain and its hairs with walls: the step, its
-//!   semismooth Newton solve and the independent check of a state.
+//! - [`contact`]: quasi-static contact of the chain and its hairs with walls, in stages that
+//!   own their state: the broad phase (which pairs take part), the step solver (the step's
+//!   equations, semismooth Newton, Tresca's fixed point), the certifier (the independent
+//!   check of a state), and the driver ([`contact::QuasiStatic`]: substeps, snaps,
+//!   anchoring) that passes values between them.
 //! - [`sweep`]: quasi-static sweeps: a placement, then the base moved in fixed steps, each a
 //!   contact step with the wall-following metrics.
 //! - [`follow`]: closed-loop wall following (a robot, its controller, the antenna as its only

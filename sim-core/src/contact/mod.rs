@@ -28,7 +28,7 @@
 //!   slide with the surface's Coulomb friction.
 //!
 //! The equations of a step are a nonlinear complementarity problem, solved by a semismooth
-//! Newton method on the coordinates and the contact forces together (`ssn.rs`). A step that
+//! Newton method on the coordinates and the contact forces together (`step_solver/`). A step that
 //! fails to converge, or moves a joint by more than [`ContactSettings::jump_rad`], is split
 //! in halves, its displacement and its turn together (a step's size is
 //! `max(|d base|, reach |d angle|)`, [`QuasiStatic::reach_m`] the farthest a point of the
@@ -43,6 +43,24 @@
 //! A scene pays only for what it has: without walls a step does no contact work, hair angles
 //! are coordinates only while their tips are near a wall, and a frictionless contact has no
 //! stick state to carry.
+//!
+//! # The stages
+//! The solver is four stages and a driver, each owning its state (its fields private to its
+//! module: `tests/tests/cross/contact_stages.rs` checks that no module writes a field it does
+//! not own):
+//!
+//! | stage | owns | reads | gives |
+//! |---|---|---|---|
+//! | `world.rs` | the chain, the walls and their contact pieces, the loads, the settings | | every stage's inputs |
+//! | `committed.rs` | the equilibrium reached: base pose, joint and hair angles, contacts, the hand's force, the state the last (sub)step started from | an accepted answer | the start of the next step |
+//! | `broad_phase.rs` | the start and probe postures | the world, the committed state, the goal pose, the secant prediction | a step's candidate pairs; after a solve, pairs missed, let go, passed on or handed over |
+//! | `step_solver/` | the Newton scratch space, the last repair, its counters | a `StepProblem`, a start and the pairs | the answer and an outcome (converged, iterations, residual) |
+//! | `certifier.rs` | nothing | the world and the committed state | an [`EquilibriumCheck`] |
+//! | `driver/` ([`QuasiStatic`]) | the secant, friction dropped or locked, anchoring blocked | | the public API: steps split in substeps, snaps followed downhill, anchors, jams |
+//!
+//! One (sub)step (`driver/substep.rs`): the broad phase gives the pairs; rounds of the step
+//! solver's solve and the broad phase's revision (and the driver's anchoring) until the pairs
+//! stand; the answer, if no joint jumps, is committed; the certifier checks the state.
 //!
 //! # Example: a flexible antenna dragged along a smooth wall
 //! ```
@@ -82,33 +100,29 @@
 //! # }
 //! ```
 
-mod anchoring;
-mod candidates;
-mod check;
-mod equations;
+// The stages, each owning its state (private to its module): `world` (what a step is taken
+// in), `committed` (the equilibrium the last step reached), `broad_phase` (which pairs take
+// part), `step_solver` (a step's equations, solved), `certifier` (the independent check,
+// no state) and `driver` (substeps, snaps, anchoring, placement: `QuasiStatic`). The rest
+// are the values they pass: pairs, postures, geometry, the settings, the report, errors.
+mod broad_phase;
+mod certifier;
+mod committed;
+mod driver;
 mod error;
 mod feature;
 mod geometry;
-mod jam;
-mod newton_system;
 mod pair;
 mod pieces;
 mod posture;
-mod quasistatic;
 mod report;
 mod settings;
-mod snap;
-mod ssn;
-mod stability;
-mod substep;
-mod tresca;
-#[cfg(test)]
-mod turn_tests;
+mod step_solver;
+mod world;
 
-pub use check::{CertifyTolerances, EquilibriumCheck};
+pub use certifier::{CertifyTolerances, EquilibriumCheck};
+pub use driver::{Jam, JammedContact, QuasiStatic};
 pub use error::ContactError;
 pub use feature::{Contact, Feature, FrictionLaw, Slip};
-pub use jam::{Jam, JammedContact};
-pub use quasistatic::QuasiStatic;
 pub use report::StepReport;
 pub use settings::ContactSettings;

@@ -130,3 +130,11 @@ impl Posture {
         rotate(self.phi_rad[link], hair.tip_rate_in_link_m(beta_rad))
     }
 }
+
+/// `theta` with its flexible joints replaced by the first `n` coordinates of `x`.
+pub(crate) fn theta_of(theta: &[f64], x: &[f64]) -> Vec<f64> {
+    let mut out = theta.to_vec();
+    let n = out.len() - 1;
+    out[1..].copy_from_slice(&x[..n]);
+    out
+}

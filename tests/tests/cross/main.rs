@@ -10,6 +10,7 @@ mod c_shim_bit_exact;
 mod contact_compliant_hairs;
 mod contact_geometry;
 mod contact_newton_iterations;
+mod contact_stages;
 mod crate_boundaries;
 mod docs;
 mod reproduce_flipping;

@@ -6,8 +6,9 @@
 
 use nalgebra::Vector2;
 
-use super::posture::rotate;
-use super::{ContactError, ContactSettings, QuasiStatic, Slip};
+use crate::contact::certifier::Certifier;
+use crate::contact::posture::rotate;
+use crate::contact::{ContactError, ContactSettings, QuasiStatic, Slip};
 use crate::{Chain, Line, Polyline, SolidSide, Surface, SurfaceMap, Wall};
 
 /// A 7-link antenna (30 mm links, 0.01 N m/rad joints) with its base link at
@@ -400,18 +401,22 @@ fn the_certificate_recomputes_slip_from_the_committed_start() {
     assert_eq!(report.certificate, check);
     let tolerances = sim.certify_tolerances();
     assert!(check.holds_within(&tolerances));
-    assert!(sim.pairs.iter().any(|p| p.slip == Slip::Stuck));
+    assert!(
+        sim.committed()
+            .pairs()
+            .iter()
+            .any(|p| p.slip == Slip::Stuck)
+    );
     // The solver's own slips, wrong: the check does not read them.
-    let mut wrong = sim.pairs.clone();
-    for p in &mut wrong {
+    let mut wrong = sim.committed().clone();
+    for p in wrong.pairs_mut() {
         p.slip_m = 1.0;
     }
-    let solver_pairs = std::mem::replace(&mut sim.pairs, wrong);
-    assert_eq!(sim.check(), check);
-    sim.pairs = solver_pairs;
+    assert_eq!(Certifier::new(sim.world(), &wrong).check(), check);
     // The start the step was taken from, turned: the stuck contacts slipped by as much.
-    sim.step_start.theta[0] -= 1e-3;
-    let turned = sim.check();
+    let mut turned_start = sim.committed().clone();
+    turned_start.step_start_theta_mut()[0] -= 1e-3;
+    let turned = Certifier::new(sim.world(), &turned_start).check();
     assert!(turned.stuck_slip_m > 1e-5, "{turned:?}");
     assert!(!turned.holds_within(&tolerances));
 }

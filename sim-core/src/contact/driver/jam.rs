@@ -2,7 +2,7 @@
 
 use nalgebra::Vector2;
 
-use super::feature::Feature;
+use crate::contact::feature::Feature;
 
 /// The antenna jammed against the walls: no posture within the joints' limits keeps every
 /// link out of the walls with the base where it was to go; the contacts pin the chain and
@@ -38,11 +38,13 @@ pub struct JammedContact {
 // The diagnosis: a step the solver could not take, and the least penetration a posture near
 // the last one can reach with the base at the goal.
 
-use super::ContactError;
-use super::geometry::{PairGeometry, evaluate, generalized};
-use super::pair::{PairKey, PairKind};
-use super::posture::{Pose, Posture, perp};
-use super::quasistatic::{QuasiStatic, theta_of};
+use super::QuasiStatic;
+use crate::contact::ContactError;
+use crate::contact::broad_phase::Inputs;
+use crate::contact::geometry::{PairGeometry, evaluate, generalized};
+use crate::contact::pair::{PairKey, PairKind};
+use crate::contact::posture::theta_of;
+use crate::contact::posture::{Pose, Posture, perp};
 use nalgebra::{DMatrix, DVector};
 
 use crate::{Hair, JointLimit};
@@ -83,28 +85,38 @@ impl QuasiStatic {
     /// posture with the base at `goal` (pivot and angle), and what stays deepest ("link 3",
     /// "the hair tip of link 3").
     fn least_penetration(&mut self, goal: Pose) -> (f64, String) {
-        let n = self.chain.n();
+        let n = self.world.chain().n();
         // The coordinates: the joints `1..=n`, then the hair angle of each link with a hair.
         let hair_links: Vec<usize> = (0..=n)
-            .filter(|&l| self.chain.hairs().get(l).is_some_and(Option::is_some))
+            .filter(|&l| {
+                self.world
+                    .chain()
+                    .hairs()
+                    .get(l)
+                    .is_some_and(Option::is_some)
+            })
             .collect();
         let size = n + hair_links.len();
-        let mut limits: Vec<JointLimit> = self.chain.joint_limits()[1..].to_vec();
+        let mut limits: Vec<JointLimit> = self.world.chain().joint_limits()[1..].to_vec();
         limits.extend(
             hair_links
                 .iter()
-                .filter_map(|&l| self.chain.hairs()[l].as_ref().map(Hair::fold_limit)),
+                .filter_map(|&l| self.world.chain().hairs()[l].as_ref().map(Hair::fold_limit)),
         );
-        let mut x: Vec<f64> = self.theta[1..].to_vec();
-        x.extend(hair_links.iter().map(|&l| self.beta[l]));
+        let mut x: Vec<f64> = self.committed.theta()[1..].to_vec();
+        x.extend(hair_links.iter().map(|&l| self.committed.beta()[l]));
         let mut posture = Posture::default();
-        let mut beta = self.beta.clone();
+        let mut beta = self.committed.beta().to_vec();
         // A hand holding the tip carries it with the base: the tip stays where the hand
         // holds it now, moved by the base's displacement and turned about the pivot by its
         // turn.
-        let from = self.pose();
-        let hand_m = self.hand_offset_m.map(|_| {
-            posture.update(&self.chain, self.base_m, &self.theta);
+        let from = self.committed.pose();
+        let hand_m = self.world.holds_tip().then(|| {
+            posture.update(
+                self.world.chain(),
+                self.committed.base_m(),
+                self.committed.theta(),
+            );
             from.carry(&goal, posture.end_m[n])
         });
         // The penetrating pairs at `x`: each one's gap and geometry.
@@ -113,16 +125,28 @@ impl QuasiStatic {
                            beta: &mut Vec<f64>,
                            x: &[f64],
                            out: &mut Vec<(PairKey, PairGeometry)>| {
-            posture.update_at(&sim.chain, goal, &theta_of(&sim.theta, &x[..n]));
+            posture.update_at(
+                sim.world.chain(),
+                goal,
+                &theta_of(sim.committed.theta(), &x[..n]),
+            );
             for (k, &l) in hair_links.iter().enumerate() {
                 beta[l] = x[n + k];
             }
             out.clear();
-            for key in point_keys(sim.touching(posture, beta, 0.0, usize::MAX)) {
+            let inputs = Inputs {
+                world: &sim.world,
+                committed: &sim.committed,
+                friction_off: sim.friction_off,
+            };
+            let touching = sim
+                .broad_phase
+                .touching(inputs, posture, beta, 0.0, usize::MAX);
+            for key in point_keys(touching) {
                 let mut geo = PairGeometry::at(key.link, 1.0, Vector2::zeros());
                 evaluate(
-                    &sim.chain,
-                    &sim.pieces.walls[key.piece],
+                    sim.world.chain(),
+                    &sim.world.pieces().walls[key.piece],
                     posture,
                     beta,
                     &key,
@@ -245,10 +269,17 @@ impl QuasiStatic {
                 normal_force_n: c.normal_force_n,
             })
             .collect();
-        let limits = self.chain.joint_limits();
+        let limits = self.world.chain().joint_limits();
         let mut joints_on_stops = Vec::new();
         let mut stops = Vec::new();
-        for (j, (&t, lim)) in self.theta.iter().zip(limits).enumerate().skip(1) {
+        for (j, (&t, lim)) in self
+            .committed
+            .theta()
+            .iter()
+            .zip(limits)
+            .enumerate()
+            .skip(1)
+        {
             if t <= lim.cw_rad + ON_STOP_RAD {
                 joints_on_stops.push(j);
                 stops.push(format!("joint {j} on its clockwise stop"));
@@ -262,7 +293,7 @@ impl QuasiStatic {
             .map(|c| {
                 format!(
                     "{} against wall {} at ({:.4}, {:.4}) m with {:.3} N",
-                    describe(c.feature, self.chain.n()),
+                    describe(c.feature, self.world.chain().n()),
                     c.wall,
                     c.point_m.x,
                     c.point_m.y,
@@ -270,7 +301,7 @@ impl QuasiStatic {
                 )
             })
             .collect();
-        let turn_rad = goal.angle_rad - self.theta[0];
+        let turn_rad = goal.angle_rad - self.committed.theta()[0];
         let turning = if turn_rad == 0.0 {
             String::new()
         } else {
@@ -282,7 +313,7 @@ impl QuasiStatic {
         let description = format!(
             "no posture near the last one{turning}{} keeps {deepest} out of the walls (it \
              stays {:.3} mm inside); {}; pinned by {}",
-            if self.hand_offset_m.is_some() {
+            if self.world.holds_tip() {
                 " with the tip where the hand holds it"
             } else {
                 ""

@@ -4,10 +4,10 @@
 //! converges without a jump (docs/model.md 6: "follow the downhill path, not jump to whatever
 //! minimum a Newton step lands in").
 
-use super::ContactError;
-use super::posture::Pose;
-use super::quasistatic::QuasiStatic;
-use super::report::StepReport;
+use super::QuasiStatic;
+use crate::contact::ContactError;
+use crate::contact::posture::Pose;
+use crate::contact::report::StepReport;
 
 /// A pseudo-time step that changes no joint angle by more than this, radians, has come to
 /// rest: a plain solve from there ends the snap.
@@ -44,18 +44,22 @@ impl QuasiStatic {
         // The posture before the last accepted pseudo-time step.
         let mut x_before_last: Option<Vec<f64>> = None;
         let mut hard_in_a_row = 0_usize;
-        for _ in 0..self.settings.snap_step_budget(self.chain.n()) {
+        for _ in 0..self
+            .world
+            .settings()
+            .snap_step_budget(self.world.chain().n())
+        {
             if report.iterations > budget {
                 break;
             }
             report.snap_steps += 1;
-            let x_prev = self.coordinates();
+            let x_prev = self.committed.coordinates();
             let spent_before = report.iterations;
             let r = self.attempt(goal, Some((gamma, &x_prev)), report);
             let easy = report.iterations - spent_before <= EASY_ITERATIONS;
             match r {
                 Ok(accepted) => {
-                    let n = self.chain.n();
+                    let n = self.world.chain().n();
                     let distance = |to: &[f64]| {
                         accepted
                             .x
@@ -72,12 +76,12 @@ impl QuasiStatic {
                     let circling = x_before_last
                         .as_deref()
                         .is_some_and(|x| distance(x) < REST_RAD);
-                    report.note_residual(accepted.residual_m, &self.settings);
+                    report.note_residual(accepted.residual_m, self.world.settings());
                     self.commit(goal, accepted);
                     x_before_last = Some(x_prev);
                     let resting = moved < REST_RAD || circling || gamma < 1e-6;
                     if resting && let Ok(plain) = self.attempt(goal, None, report) {
-                        report.note_residual(plain.residual_m, &self.settings);
+                        report.note_residual(plain.residual_m, self.world.settings());
                         self.commit(goal, plain);
                         return Ok(());
                     }

@@ -7,13 +7,13 @@
 //! normal forces stop changing: then the answer is Coulomb's. Where the iteration does not
 //! settle, the contacts whose normal force keeps growing are **jammed** (a frictional
 //! paradox: sliding needs ever more normal force the more friction it has): they slide
-//! without friction for the step, which is reported ([`super::StepReport::jams`], counted
+//! without friction for the step, which is reported ([`crate::contact::StepReport::jams`], counted
 //! by the attempt that accepts the answer).
 
 use super::equations::StepProblem;
-use super::pair::Pair;
-use super::report::StepReport;
 use super::ssn::{Ssn, SsnOutcome};
+use crate::contact::pair::Pair;
+use crate::contact::report::StepReport;
 
 /// Fixed-point iterations on the normal forces before a step is given up.
 const TRESCA_ITERATIONS: usize = 30;
@@ -22,7 +22,7 @@ const TRESCA_TOLERANCE_N: f64 = 1e-10;
 
 /// Solves the step by the fixed point (see the module docs); `x` and the pairs are the
 /// start and receive the answer.
-pub(crate) fn solve_by_fixed_point(
+pub(super) fn solve_by_fixed_point(
     ssn: &mut Ssn,
     problem: &StepProblem<'_>,
     x: &mut [f64],

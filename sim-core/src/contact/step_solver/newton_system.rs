@@ -10,7 +10,7 @@
 //! - every point force `F` at `X` on link `L` (contacts, the tip load): `F . (X - p_(m-1))`
 //!   in entry `(i, j)` with `m = max(i, j) <= L`: together the semiseparable part `a_m`;
 //! - per pair, rank-one terms from its normal turning and its point sliding
-//!   ([`super::geometry::Turn`]): against a surface `-rate J^T (N t - T n) (J^T t)^T`; a
+//!   ([`crate::contact::geometry::Turn`]): against a surface `-rate J^T (N t - T n) (J^T t)^T`; a
 //!   feature on a link `-(R90 dir . F) e_L v_slide^T - J^T (R90 F) e_L^T` (`e_L` the
 //!   indicator of joints `<= L`, `v_slide . dx = l ds`); the hand spring `k J_tip^T J_tip`
 //!   (rank two);
@@ -30,10 +30,10 @@
 use nalgebra::Vector2;
 
 use super::equations::{Equations, StepProblem, hair_index, sliding_bound_of};
-use super::feature::Slip;
-use super::geometry::{PairGeometry, Turn, generalized, hair_of};
-use super::pair::Pair;
-use super::posture::{cross, perp};
+use crate::contact::feature::Slip;
+use crate::contact::geometry::{PairGeometry, Turn, generalized, hair_of};
+use crate::contact::pair::Pair;
+use crate::contact::posture::{cross, perp};
 use crate::statics::equilibrium::bordered::{BorderedSystem, SolveStats};
 
 /// A least-squares step leaving more than this fraction of the constraint rows' right-hand
@@ -45,7 +45,7 @@ const DUAL_REGULARIZATION: f64 = 1e-10;
 
 /// The Newton system's scratch space, reused from iteration to iteration.
 #[derive(Debug, Default)]
-pub(crate) struct NewtonSystem {
+pub(super) struct NewtonSystem {
     sys: BorderedSystem,
     /// Per pair, `J^T n` and `J^T t` on the joints (`n` entries each) and on the hair.
     gn: Vec<f64>,
@@ -60,8 +60,8 @@ pub(crate) struct NewtonSystem {
     ranks: Vec<RankOne>,
     /// Linear solves that fell back to the dense factorization, and that were rank
     /// deficient, since the counters were last read.
-    pub dense_solves: usize,
-    pub truncated_solves: usize,
+    pub(super) dense_solves: usize,
+    pub(super) truncated_solves: usize,
 }
 
 /// One border unknown standing for a rank-one term `u v^T` of `H`.
@@ -557,7 +557,7 @@ fn add_known(sys: &mut BorderedSystem, g: &[f64], g_hair: f64, hair_row: Option<
 /// its hair entry: the material point's Jacobian along `t`, plus the tangent's turning.
 fn slip_gradient(
     pair: &Pair,
-    posture: &super::posture::Posture,
+    posture: &crate::contact::posture::Posture,
     n: usize,
     gt: &[f64],
     gt_hair: f64,
@@ -835,7 +835,7 @@ mod tests {
             acceptable_m: 1e-9,
             max_departure_rad: 1.0,
             max_iterations: 10,
-            stall_after: Some(crate::contact::ssn::STALL_ITERATIONS),
+            stall_after: Some(super::super::ssn::STALL_ITERATIONS),
         }
     }
 

@@ -7,12 +7,12 @@
 //! wedge the antenna so that no posture nearby is an equilibrium, the anchors are torn out
 //! and the step is solved without them, which the step reports (a relaxation).
 
-use super::feature::FrictionLaw;
-use super::geometry::hair_of;
-use super::pair::{Pair, PairKey};
-use super::quasistatic::QuasiStatic;
-use super::report::StepReport;
+use super::QuasiStatic;
 use crate::Surface;
+use crate::contact::feature::FrictionLaw;
+use crate::contact::geometry::hair_of;
+use crate::contact::pair::{Pair, PairKey};
+use crate::contact::report::StepReport;
 
 /// The pairs anchored and let go during one (sub)step (each changes once per step).
 #[derive(Debug, Default)]
@@ -32,13 +32,13 @@ impl QuasiStatic {
         pairs: &mut [Pair],
         rounds: &mut AnchorRounds,
     ) -> bool {
-        let n = self.chain.n();
+        let n = self.world.chain().n();
         let mut changed = false;
         for pair in pairs.iter_mut() {
             let Some(link) = pair.key.hair_link() else {
                 continue;
             };
-            let hair = hair_of(&self.chain, link);
+            let hair = hair_of(self.world.chain(), link);
             // A hair tip that joined in this round (no coordinate yet) is open on its stop.
             let beta = hair_links
                 .iter()
@@ -47,9 +47,11 @@ impl QuasiStatic {
                 .copied()
                 .unwrap_or(hair.rest_angle_rad());
             let on_stop = hair.on_stop(beta, 1e-12);
-            let surface = self
-                .pieces
-                .surface_at(&self.walls, pair.key.piece, &pair.geo.point_m);
+            let surface = self.world.pieces().surface_at(
+                self.world.walls(),
+                pair.key.piece,
+                &pair.geo.point_m,
+            );
             match (pair.law, surface) {
                 (FrictionLaw::Anchored { hold_tension_n, .. }, _)
                     if !on_stop || pair.normal_force_n < -hold_tension_n =>
@@ -91,14 +93,10 @@ impl QuasiStatic {
     /// Tears out every anchored hair (they become Coulomb contacts) and blocks anchoring for
     /// the rest of the step; whether there was any.
     pub(super) fn release_anchors(&mut self, report: &mut StepReport) -> bool {
-        let mut released = 0;
-        for i in 0..self.pairs.len() {
-            let c = self.pairs[i];
-            if c.law.is_anchored() {
-                self.pairs[i].law = self.coulomb_at(c.key.piece, &c.geo.point_m);
-                released += 1;
-            }
-        }
+        let world = &self.world;
+        let released = self
+            .committed
+            .tear_out_anchors(|c| world.coulomb_at(c.key.piece, &c.geo.point_m));
         report.anchors_released += released;
         self.anchoring_blocked = released > 0;
         released > 0

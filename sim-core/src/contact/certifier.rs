@@ -1,7 +1,8 @@
 //! An independent check of a quasi-static state (docs/model.md 6: "every step is checked"):
 //! recomputed from the posture and the reported contact forces with the crate's own
 //! kinematics ([`crate::frame_poses`], [`crate::hair_poses`]) and the walls' own distance
-//! queries, not from the solver's equations. [`super::QuasiStatic::step_to_pose`] (and so
+//! queries, not from the solver's equations. It keeps no state: it reads the world and the
+//! committed state, and writes nothing. [`super::QuasiStatic::step_to_pose`] (and so
 //! [`super::QuasiStatic::step_to`]) runs it on every step it accepts and refuses a step that
 //! fails it ([`super::ContactError::Uncertified`]). A contact's slip is recomputed too: its
 //! material point now against where it was in the committed state the last (sub)step
@@ -9,10 +10,11 @@
 
 use nalgebra::Vector2;
 
+use super::committed::Committed;
 use super::feature::{Contact, Feature, FrictionLaw, Slip};
-use super::quasistatic::QuasiStatic;
+use super::world::World;
 use crate::kinematics::hair::HairPose;
-use crate::{Frame, hair_poses};
+use crate::{Chain, Frame, Wall, hair_poses};
 
 /// How far a state is from a frictional-contact equilibrium; every field is `0` for an
 /// exact one, and `NaN` where something was not finite (which fails [`Self::holds`]).
@@ -177,25 +179,71 @@ impl EquilibriumCheck {
     }
 }
 
-impl QuasiStatic {
-    /// The tolerances [`Self::step_to`] certifies every step against: ten times what the
+/// The independent check of a committed state among its world (see the module docs).
+pub(super) struct Certifier<'a> {
+    world: &'a World,
+    committed: &'a Committed,
+}
+
+impl<'a> Certifier<'a> {
+    pub fn new(world: &'a World, committed: &'a Committed) -> Certifier<'a> {
+        Certifier { world, committed }
+    }
+
+    fn chain(&self) -> &'a Chain {
+        self.world.chain()
+    }
+
+    fn walls(&self) -> &'a [Wall] {
+        self.world.walls()
+    }
+
+    fn theta_rad(&self) -> &'a [f64] {
+        self.committed.theta()
+    }
+
+    fn hair_angles_rad(&self) -> &'a [f64] {
+        self.committed.beta()
+    }
+
+    fn base_m(&self) -> Vector2<f64> {
+        self.committed.base_m()
+    }
+
+    fn tip_force_n(&self) -> Vector2<f64> {
+        self.world.tip_force_n()
+    }
+
+    fn hand_force_n(&self) -> Vector2<f64> {
+        self.committed.hand_force_n()
+    }
+
+    fn contacts(&self) -> Vec<Contact> {
+        let mut out = Vec::with_capacity(self.committed.pairs().len());
+        self.committed
+            .contacts_into(&self.world.pieces().piece_of, &mut out);
+        out
+    }
+
+    /// The tolerances [`super::QuasiStatic::step_to`] certifies every step against: ten times what the
     /// solver's acceptable residual ([`super::ContactSettings::acceptable_m`]) allows, in
     /// each unit (torques through the stiffest joint over the mean link length, forces
     /// through the contact scale `k_mean / L^2`), and the penetration tolerance.
-    pub fn certify_tolerances(&self) -> CertifyTolerances {
-        let k = &self.chain.stiffness_nm_per_rad()[1..];
+    pub fn tolerances(&self) -> CertifyTolerances {
+        let k = &self.chain().stiffness_nm_per_rad()[1..];
         let k_max = k.iter().copied().fold(1e-12_f64, f64::max);
         let k_mean = if k.is_empty() {
             k_max
         } else {
             k.iter().sum::<f64>() / k.len() as f64
         };
-        let lengths = self.chain.link_lengths_m();
+        let lengths = self.chain().link_lengths_m();
         let l_mean = lengths.iter().sum::<f64>() / lengths.len() as f64;
-        let residual_m = 10.0 * self.settings.acceptable_m.max(self.settings.tolerance_m);
+        let settings = self.world.settings();
+        let residual_m = 10.0 * settings.acceptable_m.max(settings.tolerance_m);
         CertifyTolerances {
             torque_nm: residual_m * k_max / l_mean,
-            length_m: residual_m.max(10.0 * self.settings.penetration_tolerance_m),
+            length_m: residual_m.max(10.0 * settings.penetration_tolerance_m),
             force_n: residual_m * k_mean.max(1e-3) / (l_mean * l_mean),
         }
     }
@@ -338,7 +386,7 @@ impl QuasiStatic {
             }
         }
         // Cone, Coulomb's law and complementarity.
-        let shear_zero_n = self.certify_tolerances().force_n.max(FORCE_ZERO_N);
+        let shear_zero_n = self.tolerances().force_n.max(FORCE_ZERO_N);
         for (c, &slip_m) in contacts.iter().zip(&slips) {
             // `N >= N_min` and the shear bound at normal force `normal_n`.
             let cone_at = |normal_n: f64| {
@@ -435,12 +483,12 @@ impl QuasiStatic {
     }
 }
 
-impl QuasiStatic {
+impl Certifier<'_> {
     /// The slip of each contact (in [`Self::contacts`]' order) over the last committed
     /// (sub)step, metres: along the contact's tangent, its material point (the point of the
     /// chain that touched at the start: a link end, a point along a link, a hair tip) in
     /// the current posture (`ends`, `hairs`, the pivot at `base`) less the same point in
-    /// the state the (sub)step started from ([`QuasiStatic::step_start`]), both from the
+    /// the state the (sub)step started from (the committed state's start), both from the
     /// crate's own kinematics. `NaN` where a point cannot be computed.
     fn recomputed_slips_m(
         &self,
@@ -448,24 +496,25 @@ impl QuasiStatic {
         hairs: &[HairPose],
         base: Vector2<f64>,
     ) -> Vec<f64> {
-        if self.pairs.is_empty() {
+        let pairs = self.committed.pairs();
+        if pairs.is_empty() {
             return Vec::new();
         }
         let chain = self.chain();
-        let start = &self.step_start;
+        let start = self.committed.step_start();
         let nan = Vector2::new(f64::NAN, f64::NAN);
-        let start_poses = crate::frame_poses(chain, &start.theta, Frame::GROUND).ok();
+        let start_poses = crate::frame_poses(chain, start.theta(), Frame::GROUND).ok();
         // The end of link `i` in the start state (the pivot for `i = None`).
         let start_end = |i: Option<usize>| match (i, &start_poses) {
-            (None, _) => start.base_m,
+            (None, _) => start.base_m(),
             (Some(i), Some(poses)) => {
-                start.base_m + poses.position_m(Frame::link(i)).unwrap_or(nan)
+                start.base_m() + poses.position_m(Frame::link(i)).unwrap_or(nan)
             }
             (Some(_), None) => nan,
         };
         // Hair tips only where a hair touches (their poses cost a second pass).
-        let start_hairs = if self.pairs.iter().any(|p| p.key.hair_link().is_some()) {
-            hair_poses(chain, &start.theta, &start.beta, Frame::GROUND).unwrap_or_default()
+        let start_hairs = if pairs.iter().any(|p| p.key.hair_link().is_some()) {
+            hair_poses(chain, start.theta(), start.beta(), Frame::GROUND).unwrap_or_default()
         } else {
             Vec::new()
         };
@@ -483,13 +532,13 @@ impl QuasiStatic {
                 .find(|h| h.link == link)
                 .map_or(nan, |h| base + h.tip_m)
         };
-        self.pairs
+        pairs
             .iter()
             .map(|pair| {
                 let (now, then) = match pair.key.hair_link() {
                     Some(link) => (
                         tip(hairs, base, link),
-                        tip(&start_hairs, start.base_m, link),
+                        tip(&start_hairs, start.base_m(), link),
                     ),
                     None => {
                         let (link, s) = (pair.material_link, pair.material_s);
@@ -507,7 +556,7 @@ mod tests {
     #![allow(clippy::unwrap_used)]
 
     use super::*;
-    use crate::contact::ContactSettings;
+    use crate::contact::{ContactSettings, QuasiStatic};
     use crate::{Chain, Polyline, SolidSide, Surface, SurfaceMap, Wall};
 
     /// A frictionless wedge under a straight antenna, lowered onto its corner (link 2
@@ -546,27 +595,26 @@ mod tests {
         }
         let check = sim.check();
         assert!(check.holds(1e-10, 1e-10, 1e-10), "{check:?}");
-        let loaded: Vec<usize> = (0..sim.pairs.len())
-            .filter(|&i| sim.pairs[i].normal_force_n > 1e-6)
+        let pairs = sim.committed().pairs();
+        let loaded: Vec<usize> = (0..pairs.len())
+            .filter(|&i| pairs[i].normal_force_n > 1e-6)
             .collect();
         assert!(!loaded.is_empty(), "nothing touches");
         let delta: f64 = 0.01;
         for &i in &loaded {
-            let mut turned = sim.pairs.clone();
-            let geo = &mut turned[i].geo;
+            let mut turned = sim.committed().clone();
+            let geo = &mut turned.pairs_mut()[i].geo;
             let (sin, cos) = delta.sin_cos();
             let turn = |v: Vector2<f64>| Vector2::new(v.x * cos - v.y * sin, v.x * sin + v.y * cos);
             geo.normal = turn(geo.normal);
             geo.tangent = turn(geo.tangent);
-            let saved = std::mem::replace(&mut sim.pairs, turned);
-            let check = sim.check();
-            let expected = sim.pairs[i].normal_force_n * delta.sin();
+            let check = Certifier::new(sim.world(), &turned).check();
+            let expected = pairs[i].normal_force_n * delta.sin();
             assert!(
                 (check.cone_violation_n - expected).abs() < 1e-6 * expected,
                 "pair {i}: cone violation {} N, expected {expected} N",
                 check.cone_violation_n
             );
-            sim.pairs = saved;
         }
     }
 }

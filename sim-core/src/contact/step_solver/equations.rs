@@ -35,10 +35,10 @@
 
 use nalgebra::Vector2;
 
-use super::feature::{FrictionLaw, Slip};
-use super::geometry::{evaluate as evaluate_geometry, hair_of};
-use super::pair::Pair;
-use super::posture::{Posture, cross};
+use crate::contact::feature::{FrictionLaw, Slip};
+use crate::contact::geometry::{evaluate as evaluate_geometry, hair_of};
+use crate::contact::pair::Pair;
+use crate::contact::posture::{Posture, cross};
 use crate::{Chain, Wall};
 
 /// A proximal term `gamma/2 sum_a s_a (x_a - x_prev_a)^2`: one implicit step of the
@@ -82,7 +82,7 @@ pub(crate) struct StepProblem<'a> {
 }
 
 /// The hand spring's stiffness in units of the chain's stiffness at its tip, `k_mean / R^2`.
-pub(crate) const HAND_STIFFNESS: f64 = 1e3;
+pub(super) const HAND_STIFFNESS: f64 = 1e3;
 
 /// The hysteresis of the contact modes, as a length (times `c` it is a force).
 const HYSTERESIS_M: f64 = 1e-11;
@@ -100,7 +100,7 @@ const KEEP_FREE_DEPTH_M: f64 = 1e-6;
 /// A mode a repair of a stalled solve forces on one part of the step's equations
 /// ([`super::ssn`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Forced {
+pub(super) enum Forced {
     /// A coordinate that is never held on its bounds (its row stays the balance).
     Free(usize),
     /// A pair whose normal row is never active (its forces go to zero).
@@ -112,47 +112,47 @@ pub(crate) enum Forced {
 /// The step's equations at the current unknowns, and their scratch space (reused from step
 /// to step).
 #[derive(Debug, Default)]
-pub(crate) struct Equations {
-    pub posture: Posture,
-    pub theta: Vec<f64>,
-    pub beta: Vec<f64>,
+pub(super) struct Equations {
+    pub(super) posture: Posture,
+    pub(super) theta: Vec<f64>,
+    pub(super) beta: Vec<f64>,
     /// The generalized force `r` (`m` entries).
-    pub r: Vec<f64>,
+    pub(super) r: Vec<f64>,
     /// The coordinates' scales (stiffnesses), bounds.
-    pub scale: Vec<f64>,
-    pub lo: Vec<f64>,
-    pub hi: Vec<f64>,
+    pub(super) scale: Vec<f64>,
+    pub(super) lo: Vec<f64>,
+    pub(super) hi: Vec<f64>,
     /// `Some(bound)` for a coordinate held on a bound by its mode.
-    pub held: Vec<Option<f64>>,
+    pub(super) held: Vec<Option<f64>>,
     /// The scaled residual `Phi` (`m + 2c`).
-    pub phi: Vec<f64>,
+    pub(super) phi: Vec<f64>,
     /// The unknowns `z`.
-    pub z: Vec<f64>,
+    pub(super) z: Vec<f64>,
     /// The mean link length `L`, metres.
-    pub length_m: f64,
+    pub(super) length_m: f64,
     /// The contact scale `c`, N/m.
-    pub c_n_per_m: f64,
+    pub(super) c_n_per_m: f64,
     /// The hand spring's stiffness, N/m.
-    pub hand_stiffness_n_per_m: f64,
+    pub(super) hand_stiffness_n_per_m: f64,
     /// The hand's force on the tip at the current posture.
-    pub hand_force_n: Vector2<f64>,
+    pub(super) hand_force_n: Vector2<f64>,
     /// Per link `0..=n`: the sum of the forces on points of the link (contacts, and the tip
     /// load on link `n`), of their moments `cross(X, F)` and of `F . X`.
-    pub link_force_n: Vec<Vector2<f64>>,
-    pub link_moment_nm: Vec<f64>,
-    pub link_work_nm: Vec<f64>,
+    pub(super) link_force_n: Vec<Vector2<f64>>,
+    pub(super) link_moment_nm: Vec<f64>,
+    pub(super) link_work_nm: Vec<f64>,
     /// The mode forced by a repair of a stalled solve ([`super::ssn`]); `None`: no mode
     /// is forced.
-    pub forced: Option<Forced>,
+    pub(super) forced: Option<Forced>,
     /// Keep the modes (coordinates held, pairs' normal and tangent modes) as they are
     /// instead of updating them (tests of the Jacobian on a given piece).
     #[cfg(test)]
-    pub frozen_modes: bool,
+    pub(super) frozen_modes: bool,
     /// Keep the pressed pairs pressed, and the stuck ones among them stuck, in the next
     /// evaluation (a solve's first: the modes the last step ended in, see [`super::ssn`]);
     /// and the unloaded pairs let go, unless deeper in their wall than
     /// [`KEEP_FREE_DEPTH_M`].
-    pub keep_last_modes: bool,
+    pub(super) keep_last_modes: bool,
 }
 
 impl Equations {
@@ -439,7 +439,7 @@ impl Equations {
 }
 
 /// The shear bound `B` of a pair and `dB/dN` (Tresca: the bound of the held normal force).
-pub(crate) fn bound_of(pair: &Pair) -> (f64, f64) {
+pub(super) fn bound_of(pair: &Pair) -> (f64, f64) {
     if pair.frictionless {
         return (0.0, 0.0);
     }
@@ -459,11 +459,11 @@ pub(crate) fn bound_of(pair: &Pair) -> (f64, f64) {
 /// until the solve stalled and the fixed point settled it (the sweep's Newton p99 per step
 /// 43, now 4; the stress soak's relaxed steps 6,643 -> 4,970). The modes still read the
 /// cone's bound, [`bound_of`].
-pub(crate) fn sliding_bound_of(pair: &Pair) -> (f64, f64) {
+pub(super) fn sliding_bound_of(pair: &Pair) -> (f64, f64) {
     if pair.normal_active
         && pair.tresca_n.is_none()
         && !pair.frictionless
-        && let super::feature::FrictionLaw::Coulomb { mu } = pair.law
+        && let crate::contact::feature::FrictionLaw::Coulomb { mu } = pair.law
     {
         return (mu * pair.normal_force_n, mu);
     }
@@ -482,7 +482,7 @@ fn free_mode(y: f64, bound: f64) -> Slip {
 }
 
 /// The position of `link` in `hair_links`.
-pub(crate) fn hair_index(hair_links: &[usize], link: usize) -> usize {
+pub(super) fn hair_index(hair_links: &[usize], link: usize) -> usize {
     hair_links
         .iter()
         .position(|&l| l == link)
@@ -491,7 +491,7 @@ pub(crate) fn hair_index(hair_links: &[usize], link: usize) -> usize {
 
 /// Whether `law` makes the normal row bilateral (an anchored hair tip).
 #[allow(dead_code)]
-pub(crate) fn is_bilateral(law: &FrictionLaw) -> bool {
+pub(super) fn is_bilateral(law: &FrictionLaw) -> bool {
     law.min_normal_n() == f64::NEG_INFINITY
 }
 
@@ -499,9 +499,9 @@ pub(crate) fn is_bilateral(law: &FrictionLaw) -> bool {
 mod tests {
     use nalgebra::Vector2;
 
-    use super::super::feature::FrictionLaw;
-    use super::super::pair::{ChainPoint, Pair, PairKey};
     use super::{bound_of, sliding_bound_of};
+    use crate::contact::feature::FrictionLaw;
+    use crate::contact::pair::{ChainPoint, Pair, PairKey};
 
     fn pair(normal_force_n: f64, normal_active: bool) -> Pair {
         let mut p = Pair::new(

@@ -5,13 +5,13 @@
 
 use nalgebra::Vector2;
 
-use super::equations::{Proximal, StepProblem};
-use super::pair::{Pair, PairKey};
-use super::posture::Pose;
-use super::quasistatic::{QuasiStatic, theta_of};
-use super::report::StepReport;
-use super::ssn::STALL_ITERATIONS;
-use super::tresca::solve_by_fixed_point;
+use super::QuasiStatic;
+use crate::contact::broad_phase::Inputs;
+use crate::contact::pair::{Pair, PairKey};
+use crate::contact::posture::Pose;
+use crate::contact::report::StepReport;
+use crate::contact::step_solver::STALL_ITERATIONS;
+use crate::contact::step_solver::{Proximal, StepProblem};
 
 /// Why one attempt at a (sub)step was not accepted.
 pub(super) enum Reject {
@@ -22,7 +22,7 @@ pub(super) enum Reject {
 }
 
 /// An accepted (sub)step, not yet committed.
-pub(super) struct Accepted {
+pub(crate) struct Accepted {
     pub x: Vec<f64>,
     pub hair_links: Vec<usize>,
     pub pairs: Vec<Pair>,
@@ -69,11 +69,12 @@ impl QuasiStatic {
     /// posture by more than its jump threshold ([`super::ContactSettings::jump_threshold_rad`]:
     /// scaled with the links by default, a bound on the change of curvature).
     fn jumps(&self, x: &[f64]) -> bool {
-        let lengths = self.chain.link_lengths_m();
+        let lengths = self.world.chain().link_lengths_m();
+        let settings = self.world.settings();
         x.iter()
-            .zip(&self.theta[1..])
+            .zip(&self.committed.theta()[1..])
             .enumerate()
-            .any(|(i, (x, t))| (x - t).abs() > self.settings.jump_threshold_rad(lengths, i + 1))
+            .any(|(i, (x, t))| (x - t).abs() > settings.jump_threshold_rad(lengths, i + 1))
     }
 
     /// The secant predictor of the joint angles `theta_1..theta_n` with the base at
@@ -81,17 +82,19 @@ impl QuasiStatic {
     /// (up to twice the last one; displacement and turn weighed together, the turn by the
     /// chain's reach), within the joint limits; `None` without a last plain step or where
     /// the changes do not point the same way.
-    pub(super) fn secant_prediction(&self, goal: Pose) -> Option<Vec<f64>> {
+    fn secant_prediction(&self, goal: Pose) -> Option<Vec<f64>> {
         let secant = self.secant.as_ref()?;
         let (delta, dtheta) = (&secant.delta_m, &secant.dtheta_rad);
         // A turn weighs as the displacement of a point at the chain's reach. Without turns
         // both terms are zero and this is the projection on the displacement alone, bit
         // for bit.
-        let w = self.reach_m * self.reach_m;
+        let reach_m = self.world.reach_m();
+        let w = reach_m * reach_m;
+        let theta = self.committed.theta();
         let d2 = delta.norm_squared() + w * secant.turn_rad * secant.turn_rad;
         let scale = if d2 > 0.0 {
-            ((goal.base_m - self.base_m).dot(delta)
-                + w * (goal.angle_rad - self.theta[0]) * secant.turn_rad)
+            ((goal.base_m - self.committed.base_m()).dot(delta)
+                + w * (goal.angle_rad - theta[0]) * secant.turn_rad)
                 / d2
         } else {
             0.0
@@ -99,9 +102,9 @@ impl QuasiStatic {
         if !(scale > 0.0 && scale <= 2.0) {
             return None;
         }
-        let limits = self.chain.joint_limits();
+        let limits = self.world.chain().joint_limits();
         Some(
-            self.theta[1..]
+            theta[1..]
                 .iter()
                 .zip(dtheta)
                 .zip(&limits[1..])
@@ -121,21 +124,28 @@ impl QuasiStatic {
         proximal: Option<(f64, &[f64])>,
         report: &mut StepReport,
     ) -> Result<Accepted, Reject> {
-        let n = self.chain.n();
-        self.start.update(&self.chain, self.base_m, &self.theta);
-        self.probe.update_at(&self.chain, goal, &self.theta);
-        let mut pairs = self.candidates(goal).map_err(|_| Reject::NoConvergence)?;
+        let n = self.world.chain().n();
+        let inputs = Inputs {
+            world: &self.world,
+            committed: &self.committed,
+            friction_off: self.friction_off,
+        };
+        // The secant prediction at `goal` (the broad phase's, and each round's start).
+        let predicted = self.secant_prediction(goal);
+        let mut pairs = self
+            .broad_phase
+            .candidates(inputs, goal, predicted.as_deref())
+            .map_err(|_| Reject::NoConvergence)?;
         // A solve gives up where its joint angles wander farther than twice the largest jump
         // threshold from its start: a plain step's answer there would be refused as a jump.
         // A snap's pseudo-time step (proximal) starts off equilibrium, where Newton's first
         // iterates swing out and come back: it keeps at least twice `jump_rad` (the bound
         // before the threshold was scaled to the link; at 0.05 rad the flow of a held 18-link
         // antenna brought onto a digitized wall failed to come to rest, CI sample 2).
-        let largest_rad = self
-            .settings
-            .max_jump_threshold_rad(self.chain.link_lengths_m());
+        let settings = self.world.settings();
+        let largest_rad = settings.max_jump_threshold_rad(self.world.chain().link_lengths_m());
         let departure_rad = match proximal {
-            Some(_) => 2.0 * largest_rad.max(self.settings.jump_rad),
+            Some(_) => 2.0 * largest_rad.max(settings.jump_rad),
             None => 2.0 * largest_rad,
         };
         let mut anchoring = super::anchoring::AnchorRounds::default();
@@ -153,22 +163,25 @@ impl QuasiStatic {
             // The last round's answer where it hands one on (below), else the committed
             // angles.
             let warmed = warm.is_some();
-            let mut x: Vec<f64> = warm.take().unwrap_or_else(|| self.theta[1..].to_vec());
+            let beta = self.committed.beta();
+            let mut x: Vec<f64> = warm
+                .take()
+                .unwrap_or_else(|| self.committed.theta()[1..].to_vec());
             // A round that starts afresh starts from the secant predictor.
             if proximal.is_none()
                 && !warmed
-                && let Some(predicted) = self.secant_prediction(goal)
+                && let Some(predicted) = &predicted
             {
-                x.copy_from_slice(&predicted);
+                x.copy_from_slice(predicted);
             }
-            x.extend(hair_links.iter().map(|&l| self.beta[l]));
+            x.extend(hair_links.iter().map(|&l| beta[l]));
             let prox_x: Vec<f64>;
             let prox = match proximal {
                 Some((gamma, x_prev)) => {
                     prox_x = x_prev
                         .iter()
                         .copied()
-                        .chain(hair_links.iter().map(|&l| self.beta[l]))
+                        .chain(hair_links.iter().map(|&l| beta[l]))
                         .collect();
                     Some(Proximal {
                         gamma,
@@ -178,25 +191,25 @@ impl QuasiStatic {
                 None => None,
             };
             let problem = StepProblem {
-                chain: &self.chain,
-                pieces: &self.pieces.walls,
-                tip_force_n: self.tip_force_n,
+                chain: self.world.chain(),
+                pieces: &self.world.pieces().walls,
+                tip_force_n: self.world.tip_force_n(),
                 base_m: goal.base_m,
                 base_angle_rad: goal.angle_rad,
                 hair_links: &hair_links,
-                hair_beta_rad: &self.beta,
+                hair_beta_rad: beta,
                 proximal: prox,
-                hand_m: self.hand_target(goal),
-                tolerance_m: self.settings.tolerance_m,
+                hand_m: self.world.hand_target(goal),
+                tolerance_m: settings.tolerance_m,
                 // A pseudo-time step of a snap is held to the same residual as a step: a
                 // looser one lets the flow creep by stalled solves where a contact sits on
                 // the edge of its friction cone, and never come to rest.
-                acceptable_m: self.settings.acceptable_m,
+                acceptable_m: settings.acceptable_m,
                 max_departure_rad: departure_rad,
                 max_iterations: if self.quick_attempt {
-                    QUICK_ITERATIONS.min(self.settings.max_iterations)
+                    QUICK_ITERATIONS.min(settings.max_iterations)
                 } else {
-                    self.settings.max_iterations
+                    settings.max_iterations
                 },
                 // A snap's step (proximal) keeps its whole budget above the acceptable
                 // residual: its flow stops where its solves fail. A quick attempt only
@@ -214,7 +227,7 @@ impl QuasiStatic {
             }
             let x_start = x.clone();
             let pairs_start = pairs.clone();
-            let mut outcome = self.ssn.solve(&problem, &mut x, &mut pairs);
+            let mut outcome = self.step_solver.solve(&problem, &mut x, &mut pairs);
             report.iterations += outcome.iterations;
             if !outcome.converged && self.quick_attempt {
                 return Err(Reject::NoConvergence);
@@ -225,10 +238,9 @@ impl QuasiStatic {
                 // start with it, as after a solve that converged (the 14.2 cycles/m
                 // sinusoid at N = 72: a crest's contact crossing a joint, Newton p99 per
                 // step over 20 s 46 -> 25).
-                // (`Self::probe_at`, written out: `problem` still borrows the chain.)
-                let theta = theta_of(&self.theta, &x);
-                self.probe.update_at(&self.chain, goal, &theta);
-                let missed = self.missed_pairs(&x, &hair_links, &pairs);
+                let missed =
+                    self.broad_phase
+                        .missed_after_failure(inputs, goal, &x, &hair_links, &pairs);
                 if !missed.is_empty() {
                     pairs = pairs_start;
                     pairs.extend(missed);
@@ -255,29 +267,24 @@ impl QuasiStatic {
                 // problems of the fixed point instead ([`super::tresca`]).
                 x.clone_from(&x_start);
                 pairs.clone_from(&pairs_start);
-                outcome = solve_by_fixed_point(&mut self.ssn, &problem, &mut x, &mut pairs, report);
+                outcome = self
+                    .step_solver
+                    .solve_by_fixed_point(&problem, &mut x, &mut pairs, report);
                 if !outcome.converged {
                     return Err(Reject::NoConvergence);
                 }
             }
             // Pairs that are no longer what touches (a feature's foot past its link's end)
             // let go, and any point now inside a wall joins: the step is solved again.
-            self.probe_at(&x, goal);
-            let mut changed = self.drop_stale_pairs(&mut pairs, &mut handed_over);
-            changed |= self.hand_point_pairs_to_stand_ins_at_probe(
+            let revision = self.broad_phase.revise(
+                inputs,
+                goal,
                 &x,
                 &hair_links,
                 &mut pairs,
-                &handed_over,
+                &mut handed_over,
             );
-            let mut missed = self.missed_pairs(&x, &hair_links, &pairs);
-            let none_missed = missed.is_empty();
-            changed |= !none_missed;
-            // A link come down onto a crest beside its joint stuck there takes the joint's
-            // force (the thesis's sinusoid at t = 3.03 s under 30 to 150 links: the solve with
-            // both stalled, 46 to 67 Newton iterations, and the fixed point handed it so).
-            self.hand_stuck_joints_to_missed_links(&mut pairs, &mut missed, &mut handed_over);
-            pairs.extend(missed);
+            let (mut changed, none_missed) = (revision.changed, revision.none_missed);
             // Hair anchoring on rough surfaces (docs/model.md 7).
             changed |= self.update_anchors(&x, &hair_links, &mut pairs, &mut anchoring);
             if changed {
@@ -332,8 +339,8 @@ impl QuasiStatic {
 
 #[cfg(test)]
 mod tests {
-    use super::super::pair::{ChainPoint, PairKey};
     use super::taking_turns;
+    use crate::contact::pair::{ChainPoint, PairKey};
     use crate::walls::ConvexFeature;
 
     /// Rounds that hand a crest's force from link 102's end to joint 102 and back take

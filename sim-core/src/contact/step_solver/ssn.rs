@@ -23,9 +23,9 @@
 //! singular. A solve that does not converge is reported; the caller refines the step.
 
 use super::equations::{Equations, Forced, StepProblem, bound_of};
-use super::feature::Slip;
 use super::newton_system::NewtonSystem;
-use super::pair::Pair;
+use crate::contact::feature::Slip;
+use crate::contact::pair::Pair;
 use nalgebra::{DMatrix, Vector2};
 
 /// How a solve ended.
@@ -44,9 +44,9 @@ pub(crate) struct SsnOutcome {
 
 /// The solver's scratch space, reused from step to step.
 #[derive(Debug, Default)]
-pub(crate) struct Ssn {
-    pub eq: Equations,
-    pub system: NewtonSystem,
+pub(super) struct Ssn {
+    pub(super) eq: Equations,
+    pub(super) system: NewtonSystem,
     dz: Vec<f64>,
     z_prev: Vec<f64>,
     trial: Vec<Pair>,
@@ -68,8 +68,8 @@ pub(crate) struct Ssn {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum RepairedPart {
     Free(usize),
-    LetGo(super::pair::PairKey),
-    Stuck(super::pair::PairKey),
+    LetGo(crate::contact::pair::PairKey),
+    Stuck(crate::contact::pair::PairKey),
 }
 
 impl RepairedPart {
@@ -94,7 +94,7 @@ const NONMONOTONE_MEMORY: usize = 6;
 /// BENCHMARKS.md, "Contact stress soak"). Over the CI sample, 230 of some 26,000 plain
 /// solves converged after such a stall of 12 or more iterations, and 3,835 did not converge
 /// at all.
-pub(super) const STALL_ITERATIONS: usize = 14;
+pub(crate) const STALL_ITERATIONS: usize = 14;
 
 /// A plain solve whose last this many accepted steps were all along a Newton step so large
 /// that the cap on a coordinate's change ([`MAX_CHANGE_RAD`]) cut it to at most
@@ -376,6 +376,11 @@ impl Ssn {
     /// went too far.
     pub fn refused_repairs(&self) -> usize {
         self.refused_repairs
+    }
+
+    /// Linear solves, over the solver's life, that fell back to the dense factorization.
+    pub fn dense_solves(&self) -> usize {
+        self.system.dense_solves
     }
 
     /// The part a repair can force on the row of `Phi` with the largest magnitude: its

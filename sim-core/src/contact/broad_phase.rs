@@ -14,14 +14,17 @@
 use nalgebra::Vector2;
 
 use super::ContactError;
+use super::committed::Committed;
 use super::feature::Slip;
 use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
-use super::pieces::CUT_REACH_M;
-use super::posture::{Pose, Posture};
-use super::quasistatic::{QuasiStatic, theta_of};
+use super::pieces::{CUT_REACH_M, Pieces};
+use super::posture::{Pose, Posture, theta_of};
+use super::settings::ContactSettings;
+use super::world::World;
 use crate::walls::lerp;
 use crate::walls::{ConvexFeature, FeatureContact, WallPoint};
+use crate::{Chain, Wall};
 
 /// How many pieces per chain point, and corners or crests per link, the broad phase keeps
 /// (the nearest).
@@ -37,25 +40,279 @@ const THROUGH_LINE_DEPTH_FRACTION: f64 = 0.02;
 
 /// A loaded corner pair that stood for a joint and ends a solve with its foot this far (as
 /// a fraction of the link) or less past the link's end hands its force back to the joint's
-/// point pair ([`QuasiStatic::drop_stale_pairs`]).
+/// point pair ([`Query::drop_stale_pairs`]).
 const HAND_BACK_FRACTION: f64 = 1e-2;
 
-impl QuasiStatic {
+/// The broad phase's own state: the postures it measures pairs in. Only its own methods
+/// move them; the other stages see none of it.
+#[derive(Debug, Default)]
+pub(super) struct BroadPhase {
+    /// The committed posture at the start of the (sub)step.
+    start: Posture,
+    /// The committed posture carried to the step's goal, then put at each solve's answer.
+    probe: Posture,
+}
+
+/// What the broad phase reads of the other stages in one call.
+#[derive(Clone, Copy)]
+pub(super) struct Inputs<'a> {
+    pub world: &'a World,
+    pub committed: &'a Committed,
+    /// Friction is off for the rest of the step: fresh pairs slide freely.
+    pub friction_off: bool,
+}
+
+/// What a revision of the pairs after a converged solve found ([`BroadPhase::revise`]).
+pub(super) struct Revision {
+    /// Some pair let go, passed on, was handed over or joined: the step is solved again.
+    pub changed: bool,
+    /// No point or feature was found inside a wall.
+    pub none_missed: bool,
+}
+
+impl BroadPhase {
+    /// The pairs of a step to the base at `goal` (see the module docs), with the start
+    /// posture at the committed state and the probe carried to `goal`; `predicted`, the
+    /// driver's secant prediction of the joint angles there, decides which crests a sliding
+    /// joint passes on to a link.
+    ///
+    /// # Errors
+    /// [`ContactError::BaseInsideWall`] where the base link at `goal` is inside a wall.
+    pub fn candidates(
+        &mut self,
+        inputs: Inputs<'_>,
+        goal: Pose,
+        predicted: Option<&[f64]>,
+    ) -> Result<Vec<Pair>, ContactError> {
+        let (chain, committed) = (inputs.world.chain(), inputs.committed);
+        self.start
+            .update(chain, committed.base_m(), committed.theta());
+        self.probe.update_at(chain, goal, committed.theta());
+        self.query(inputs).candidates(goal, predicted)
+    }
+
+    /// The pairs inside a wall at the answer `x` of a solve that failed (hair coordinates
+    /// `hair_links`) that are not among `pairs`, the probe put at `x`.
+    pub fn missed_after_failure(
+        &mut self,
+        inputs: Inputs<'_>,
+        goal: Pose,
+        x: &[f64],
+        hair_links: &[usize],
+        pairs: &[Pair],
+    ) -> Vec<Pair> {
+        self.probe_at(inputs, x, goal);
+        self.query(inputs).missed_pairs(x, hair_links, pairs)
+    }
+
+    /// Revises `pairs` after a solve to `x` converged, the probe put at `x`: pairs that are
+    /// no longer what touches let go (or pass on), point pairs hand over to stand-ins, and
+    /// the points and features found inside a wall join (a joint stuck beside a link come
+    /// down onto its crest handing its force to the link). `handed_over` collects the pairs
+    /// handed over in this (sub)step.
+    pub fn revise(
+        &mut self,
+        inputs: Inputs<'_>,
+        goal: Pose,
+        x: &[f64],
+        hair_links: &[usize],
+        pairs: &mut Vec<Pair>,
+        handed_over: &mut Vec<PairKey>,
+    ) -> Revision {
+        self.probe_at(inputs, x, goal);
+        let q = self.query(inputs);
+        let mut changed = q.drop_stale_pairs(pairs, handed_over);
+        changed |= q.hand_point_pairs_to_stand_ins_at_probe(x, hair_links, pairs, handed_over);
+        let mut missed = q.missed_pairs(x, hair_links, pairs);
+        let none_missed = missed.is_empty();
+        changed |= !none_missed;
+        // A link come down onto a crest beside its joint stuck there takes the joint's
+        // force (the thesis's sinusoid at t = 3.03 s under 30 to 150 links: the solve with
+        // both stalled, 46 to 67 Newton iterations, and the fixed point handed it so).
+        q.hand_stuck_joints_to_missed_links(pairs, &mut missed, handed_over);
+        pairs.extend(missed);
+        Revision {
+            changed,
+            none_missed,
+        }
+    }
+
+    /// Whether, with no pair standing and every hair open, every link and hair tip with the
+    /// base at `goal` is farther than the candidate margin from every wall by the broad
+    /// phase's bound ([`crate::WallShape::segment_gap_lower_bound_m`]).
+    pub fn clear_of_walls(&mut self, world: &World, committed: &Committed, goal: Pose) -> bool {
+        if !committed.pairs().is_empty() {
+            return false;
+        }
+        let chain = world.chain();
+        let beta = committed.beta();
+        let hairs_open = chain
+            .hairs()
+            .iter()
+            .zip(beta)
+            .all(|(h, &b)| h.is_none_or(|h| b == h.rest_angle_rad()));
+        if !hairs_open {
+            return false;
+        }
+        let margin_m = world.settings().margin_m;
+        self.probe.update_at(chain, goal, committed.theta());
+        let probe = &self.probe;
+        world.walls().iter().all(|wall| {
+            (0..=chain.n()).all(|link| {
+                wall.segment_gap_lower_bound_m(&probe.start_of(link), &probe.end_m[link]) > margin_m
+            }) && chain.hairs().iter().enumerate().all(|(link, hair)| {
+                hair.as_ref().is_none_or(|hair| {
+                    wall.gap_lower_bound_m(&probe.hair_tip(hair, link, beta[link])) > margin_m
+                })
+            })
+        })
+    }
+
+    /// The committed posture must be outside every wall (a chain placed, before its first
+    /// step).
+    ///
+    /// # Errors
+    /// [`ContactError::BaseInsideWall`] or [`ContactError::StartInsideWall`] for the first
+    /// link or hair tip inside a wall by more than the penetration tolerance.
+    pub fn check_start(
+        &mut self,
+        world: &World,
+        committed: &Committed,
+    ) -> Result<(), ContactError> {
+        let (chain, settings) = (world.chain(), world.settings());
+        let tol = settings.penetration_tolerance_m;
+        let base_m = committed.base_m();
+        self.probe.update(chain, base_m, committed.theta());
+        let probe = &self.probe;
+        for (w, wall) in world.walls().iter().enumerate() {
+            check_base(settings, w, wall, probe, base_m)?;
+            for link in 1..=chain.n() {
+                let sc = wall.segment_contact(&probe.start_of(link), &probe.end_m[link]);
+                if sc.wall.gap_m < -tol {
+                    return Err(ContactError::StartInsideWall {
+                        wall: w,
+                        link,
+                        hair: "",
+                        depth_m: -sc.wall.gap_m,
+                        at_x_m: sc.point_m.x,
+                        at_y_m: sc.point_m.y,
+                    });
+                }
+                if let Some(Some(hair)) = chain.hairs().get(link) {
+                    let tip = probe.hair_tip(hair, link, committed.beta()[link]);
+                    let gap = wall.signed_distance(&tip).gap_m;
+                    if gap < -tol {
+                        return Err(ContactError::StartInsideWall {
+                            wall: w,
+                            link,
+                            hair: " (its hair tip)",
+                            depth_m: -gap,
+                            at_x_m: tip.x,
+                            at_y_m: tip.y,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The pairs within `within_m` of touching in `posture` (hair angles `beta`): per chain
+    /// point and per link the `keep` nearest ([`Query::touching`]).
+    pub fn touching(
+        &self,
+        inputs: Inputs<'_>,
+        posture: &Posture,
+        beta: &[f64],
+        within_m: f64,
+        keep: usize,
+    ) -> Vec<PairKey> {
+        self.query(inputs).touching(posture, beta, within_m, keep)
+    }
+
+    /// Puts the probe posture at the solution `x` of a step to `goal` (hair angles are not
+    /// part of it; [`Query::missed_pairs`] takes them from `x`).
+    fn probe_at(&mut self, inputs: Inputs<'_>, x: &[f64], goal: Pose) {
+        let theta = theta_of(inputs.committed.theta(), x);
+        self.probe.update_at(inputs.world.chain(), goal, &theta);
+    }
+
+    /// The queries over the postures as they are.
+    fn query<'a>(&'a self, inputs: Inputs<'a>) -> Query<'a> {
+        let (world, committed) = (inputs.world, inputs.committed);
+        Query {
+            world,
+            chain: world.chain(),
+            walls: world.walls(),
+            pieces: world.pieces(),
+            settings: world.settings(),
+            theta: committed.theta(),
+            beta: committed.beta(),
+            pairs: committed.pairs(),
+            start: &self.start,
+            probe: &self.probe,
+            friction_off: inputs.friction_off,
+        }
+    }
+}
+
+/// The base link must stay out of every wall.
+fn check_base(
+    settings: &ContactSettings,
+    w: usize,
+    wall: &Wall,
+    posture: &Posture,
+    base_m: Vector2<f64>,
+) -> Result<(), ContactError> {
+    let tol = settings.penetration_tolerance_m;
+    if wall.segment_gap_lower_bound_m(&posture.base_m, &posture.end_m[0]) >= -tol {
+        return Ok(());
+    }
+    let sc = wall.segment_contact(&posture.base_m, &posture.end_m[0]);
+    if sc.wall.gap_m < -tol {
+        return Err(ContactError::BaseInsideWall {
+            wall: w,
+            depth_m: -sc.wall.gap_m,
+            base_x_m: base_m.x,
+            base_y_m: base_m.y,
+        });
+    }
+    Ok(())
+}
+
+/// The broad phase's queries, over its postures and the other stages' state, all read
+/// only.
+struct Query<'a> {
+    world: &'a World,
+    chain: &'a Chain,
+    walls: &'a [Wall],
+    pieces: &'a Pieces,
+    settings: &'a ContactSettings,
+    /// The committed joint angles, hair angles and contacts.
+    theta: &'a [f64],
+    beta: &'a [f64],
+    pairs: &'a [Pair],
+    start: &'a Posture,
+    probe: &'a Posture,
+    friction_off: bool,
+}
+
+impl Query<'_> {
     /// The pairs of a step to the base at `goal` (see the module docs).
-    pub(super) fn candidates(&self, goal: Pose) -> Result<Vec<Pair>, ContactError> {
+    fn candidates(&self, goal: Pose, predicted: Option<&[f64]>) -> Result<Vec<Pair>, ContactError> {
         for (w, wall) in self.walls.iter().enumerate() {
-            self.check_base(w, wall, &self.probe, goal.base_m)?;
+            check_base(self.settings, w, wall, self.probe, goal.base_m)?;
         }
         let mut out: Vec<Pair> = self
             // Per chain point and per link, the nearest few (a rough or digitized wall puts
             // dozens of pieces and corners within the margin of one link; the nearest are
             // what it can touch next, and anything the solve pushes into a wall joins after
             // it).
-            .touching(&self.probe, &self.beta, self.settings.margin_m, NEAREST)
+            .touching(self.probe, self.beta, self.settings.margin_m, NEAREST)
             .into_iter()
             .map(|key| self.fresh_pair(key))
             .collect();
-        for old in &self.pairs {
+        for old in self.pairs {
             if let Some(c) = out.iter_mut().find(|c| c.key == old.key) {
                 carry(c, old);
                 continue;
@@ -63,7 +320,7 @@ impl QuasiStatic {
             // A contact that is no longer within the margin stays a pair while it can be
             // measured (the solve lets it go if it must).
             let mut c = self.fresh_pair(old.key);
-            let geo = self.geometry_in(&self.probe, &old.key, c.geo);
+            let geo = self.geometry_in(self.probe, &old.key, c.geo);
             if geo.valid && self.pair_on_real_wall(&old.key, &geo.point_m, geo.gap_m) {
                 carry(&mut c, old);
                 out.push(c);
@@ -105,9 +362,9 @@ impl QuasiStatic {
         // decided where the last step left the chain: the probe posture is only a guess,
         // and a guess that puts a link on the corner at a loaded joint that the solution
         // then leaves beside it makes a step whose equations miss what touches.
-        self.hand_point_pairs_to_stand_ins(&self.start, &self.beta, &mut out, &[]);
+        self.hand_point_pairs_to_stand_ins(self.start, self.beta, &mut out, &[]);
         self.drop_links_doubling_loaded_joints(&mut out);
-        self.hand_sliding_joints_onto_links(&mut out, goal);
+        self.hand_sliding_joints_onto_links(&mut out, goal, predicted);
         Ok(out)
     }
 
@@ -117,7 +374,7 @@ impl QuasiStatic {
     /// [`CornerEdgeState`].)
     fn touches_where_left(&self, old: &Pair) -> bool {
         match old.key.kind {
-            PairKind::Link { .. } => self.geometry_in(&self.start, &old.key, old.geo).valid,
+            PairKind::Link { .. } => self.geometry_in(self.start, &old.key, old.geo).valid,
             PairKind::Point(_) => self.pair_on_real_wall(&old.key, &old.geo.point_m, old.geo.gap_m),
             PairKind::CornerEdge { .. } => false,
         }
@@ -127,10 +384,10 @@ impl QuasiStatic {
     /// (what a pair that cannot be measured keeps).
     fn geometry_in(&self, posture: &Posture, key: &PairKey, mut geo: PairGeometry) -> PairGeometry {
         evaluate(
-            &self.chain,
+            self.chain,
             &self.pieces.walls[key.piece],
             posture,
-            &self.beta,
+            self.beta,
             key,
             &mut geo,
         );
@@ -139,7 +396,7 @@ impl QuasiStatic {
 
     /// The pairs of `posture` (hair angles `beta`) with a gap below `within_m`: per chain
     /// point and per link, the `keep` nearest (deepest).
-    pub(super) fn touching(
+    fn touching(
         &self,
         posture: &Posture,
         beta: &[f64],
@@ -172,7 +429,7 @@ impl QuasiStatic {
                 points.push(ChainPoint::HairTip(link));
             }
             for point in points {
-                let (_, _, x) = chain_point(&self.chain, posture, beta, point);
+                let (_, _, x) = chain_point(self.chain, posture, beta, point);
                 real.clear();
                 real.resize(self.walls.len(), None);
                 // A piece cut at both ends can hold the point only within
@@ -301,7 +558,7 @@ impl QuasiStatic {
     /// links' normals. `[None, None]` for a hair tip, a joint away from the corners, or a
     /// corner no link rests on at the joint (a joint bent into a point against it): the
     /// point pair stands.
-    pub(super) fn joint_corner_pairs(
+    fn joint_corner_pairs(
         &self,
         posture: &Posture,
         point: ChainPoint,
@@ -358,7 +615,7 @@ impl QuasiStatic {
     /// links resting on a corner at a joint ([`Self::joint_corner_pairs`]), else the point
     /// on a convex corner against the line of the edge it lies on
     /// ([`Self::corner_point_pairs`]); `[None, None]` where the point pair stands.
-    pub(super) fn stand_ins(
+    fn stand_ins(
         &self,
         posture: &Posture,
         point: ChainPoint,
@@ -431,7 +688,7 @@ impl QuasiStatic {
     /// then be solved again).
     /// A stand-in in `refused` (one that handed its force back in this (sub)step, see
     /// [`Self::drop_stale_pairs`]) is not taken again: the point pair stands.
-    pub(super) fn hand_point_pairs_to_stand_ins(
+    fn hand_point_pairs_to_stand_ins(
         &self,
         posture: &Posture,
         beta: &[f64],
@@ -444,7 +701,7 @@ impl QuasiStatic {
             let key = pairs[i].key;
             let stand_ins = match key.kind {
                 PairKind::Point(point) => {
-                    let (_, _, x) = chain_point(&self.chain, posture, beta, point);
+                    let (_, _, x) = chain_point(self.chain, posture, beta, point);
                     let wall_point = self.pieces.walls[key.piece].signed_distance(&x);
                     self.stand_ins(posture, point, key.piece, &wall_point, &x)
                 }
@@ -527,7 +784,7 @@ impl QuasiStatic {
 
     /// Hands the force of a joint sliding on a crest to the crest's pair of one of the
     /// joint's links whose foot, past the link's end at the joint where the last step left
-    /// the chain, the secant predictor at `goal` ([`Self::secant_prediction`]) puts on the
+    /// the chain, the driver's secant prediction at `goal` (`predicted`) puts on the
     /// link: the crest passes from the joint onto that link in this step. The joint's pair
     /// leaves the step (the two would hold one contact). On the thesis's 14.2 cycles/m
     /// sinusoid under 110 links, joint 87 slid on a crest whose foot on link 88 was 1.3% of
@@ -542,7 +799,12 @@ impl QuasiStatic {
     /// locks the antenna in most steps, step 1019 took 1,118 -> 6 Newton iterations): on a
     /// frictionless sinusoid of 1.2 mm crests under 150 links (replay `soak:4221:181`) the hand-over took
     /// 8,448 -> 11,720 Newton iterations.
-    fn hand_sliding_joints_onto_links(&self, pairs: &mut Vec<Pair>, goal: Pose) {
+    fn hand_sliding_joints_onto_links(
+        &self,
+        pairs: &mut Vec<Pair>,
+        goal: Pose,
+        predicted: Option<&[f64]>,
+    ) {
         // The sliding joints and the crest pairs past them, by index in `pairs`.
         let mut passing: Vec<(usize, usize)> = Vec::new();
         for (j, c) in pairs.iter().enumerate() {
@@ -563,11 +825,11 @@ impl QuasiStatic {
         if passing.is_empty() {
             return;
         }
-        let Some(predicted) = self.secant_prediction(goal) else {
+        let Some(predicted) = predicted else {
             return;
         };
         let mut ahead = self.start.clone();
-        ahead.update_at(&self.chain, goal, &theta_of(&self.theta, &predicted));
+        ahead.update_at(self.chain, goal, &theta_of(self.theta, predicted));
         let mut left: Vec<usize> = Vec::new();
         for (j, l) in passing {
             let on_link = self
@@ -592,7 +854,7 @@ impl QuasiStatic {
         if pair.key.piece != piece || (pair.key.link != joint && pair.key.link != joint + 1) {
             return false;
         }
-        self.crest_foot(&pair.key, &self.start)
+        self.crest_foot(&pair.key, self.start)
             .is_some_and(|(link, s)| if link == joint { s > 1.0 } else { s < 0.0 })
     }
 
@@ -616,7 +878,7 @@ impl QuasiStatic {
     /// Whether the crest of the link pair `other` (the other link at a joint whose crest
     /// pair's foot slid past its link's end there) can take that crest on: `other` is a
     /// flexible link's pair with a crest, and at the solution (the probe posture,
-    /// [`Self::probe_at`]) the link is no steeper than the crest's flanks, so that the crest
+    /// [`BroadPhase::probe_at`]) the link is no steeper than the crest's flanks, so that the crest
     /// has a foot on the link's line ([`Self::crest_foot`]). See
     /// [`Self::drop_stale_pairs`].
     fn crest_passes_on(&self, other: &PairKey) -> bool {
@@ -627,17 +889,17 @@ impl QuasiStatic {
         else {
             return false;
         };
-        (1..=self.chain.n()).contains(&link) && self.crest_foot(other, &self.probe).is_some()
+        (1..=self.chain.n()).contains(&link) && self.crest_foot(other, self.probe).is_some()
     }
 
     /// Hands the force of a joint stuck on a crest to a `missed` crest pair of one of the
-    /// joint's links whose foot, at the solution (the probe posture, [`Self::probe_at`]),
+    /// joint's links whose foot, at the solution (the probe posture, [`BroadPhase::probe_at`]),
     /// lies on the link within [`HAND_BACK_FRACTION`] of the joint: the link has come
     /// down onto the crest beside the joint's contact, and the two pairs would hold the
     /// same contact (Newton's system on both is singular). The joint's pair leaves the
     /// step, and the link's pair is recorded in `handed_over` (it does not hand back in
     /// this (sub)step).
-    pub(super) fn hand_stuck_joints_to_missed_links(
+    fn hand_stuck_joints_to_missed_links(
         &self,
         pairs: &mut Vec<Pair>,
         missed: &mut [Pair],
@@ -651,7 +913,7 @@ impl QuasiStatic {
             else {
                 continue;
             };
-            let s = self.geometry_in(&self.probe, &m.key, m.geo).s;
+            let s = self.geometry_in(self.probe, &m.key, m.geo).s;
             let joint = if (1.0 - HAND_BACK_FRACTION..=1.0).contains(&s) {
                 link
             } else if (0.0..=HAND_BACK_FRACTION).contains(&s) && link >= 2 {
@@ -672,18 +934,11 @@ impl QuasiStatic {
         }
     }
 
-    /// Puts the probe posture at the solution `x` of a step to `goal` (hair angles are not
-    /// part of it; [`Self::missed_pairs`] takes them from `x`).
-    pub(super) fn probe_at(&mut self, x: &[f64], goal: Pose) {
-        let theta = theta_of(&self.theta, x);
-        self.probe.update_at(&self.chain, goal, &theta);
-    }
-
     /// The hair angles of a solution `x` whose hair coordinates are those of `hair_links`
     /// (the others as committed).
     fn beta_of(&self, x: &[f64], hair_links: &[usize]) -> Vec<f64> {
         let n = self.chain.n();
-        let mut beta = self.beta.clone();
+        let mut beta = self.beta.to_vec();
         for (h, &l) in hair_links.iter().enumerate() {
             beta[l] = x[n + h];
         }
@@ -691,8 +946,8 @@ impl QuasiStatic {
     }
 
     /// [`Self::hand_point_pairs_to_stand_ins`] at the solution `x` (hair coordinates
-    /// `hair_links`), with the probe posture there ([`Self::probe_at`]).
-    pub(super) fn hand_point_pairs_to_stand_ins_at_probe(
+    /// `hair_links`), with the probe posture there ([`BroadPhase::probe_at`]).
+    fn hand_point_pairs_to_stand_ins_at_probe(
         &self,
         x: &[f64],
         hair_links: &[usize],
@@ -700,17 +955,17 @@ impl QuasiStatic {
         refused: &[PairKey],
     ) -> bool {
         let beta = self.beta_of(x, hair_links);
-        self.hand_point_pairs_to_stand_ins(&self.probe, &beta, pairs, refused)
+        self.hand_point_pairs_to_stand_ins(self.probe, &beta, pairs, refused)
     }
 
     /// A fresh pair `key`: its material point where it touches (or comes nearest) at the
     /// start of the step, the surface's Coulomb law (none on a frictionless step), no
     /// force.
-    pub(super) fn fresh_pair(&self, key: PairKey) -> Pair {
+    fn fresh_pair(&self, key: PairKey) -> Pair {
         let start = &self.start;
         let (link, s, point) = match key.kind {
             PairKind::Point(point) | PairKind::CornerEdge { point, .. } => {
-                chain_point(&self.chain, start, &self.beta, point)
+                chain_point(self.chain, start, self.beta, point)
             }
             PairKind::Link { link, feature } => {
                 let piece = &self.pieces.walls[key.piece];
@@ -724,13 +979,13 @@ impl QuasiStatic {
                 // Where the feature's foot is at the start of the step; one that had not
                 // reached the link yet enters it by the end nearer to where it is now.
                 let s = at(start)
-                    .or_else(|| at(&self.probe))
+                    .or_else(|| at(self.probe))
                     .map_or(0.5, |fc| fc.s)
                     .clamp(0.0, 1.0);
                 (link, s, start.link_point(link, s))
             }
         };
-        let law = self.coulomb_at(key.piece, &point);
+        let law = self.world.coulomb_at(key.piece, &point);
         let mut pair = Pair::new(key, law, link, s, point);
         // On a step whose friction was let go every pair slides freely, however it joins
         // (a candidate, a point missed, a stand-in a pair is handed over to).
@@ -739,7 +994,7 @@ impl QuasiStatic {
     }
 
     /// The pairs inside a wall after a solve to `x` (hair coordinates `hair_links`), with
-    /// the probe posture at `x` ([`Self::probe_at`]), that are not pairs yet: per chain
+    /// the probe posture at `x` ([`BroadPhase::probe_at`]), that are not pairs yet: per chain
     /// point and per link the [`NEAREST`] deepest. A link pushed into a rough stretch of
     /// wall (a digitized wall's noise) had every asperity under it join at once: up to 181
     /// pairs and 340 rank-one terms in one Newton system (issue #49), whose dense border
@@ -747,15 +1002,10 @@ impl QuasiStatic {
     /// was 70% of `examples/wall_digitized.toml`'s sweep. The deepest hold the link out;
     /// any still inside join in the next round (57.6 s -> 2.8 s for that sweep's first 6 s,
     /// every step certified; the CI sample's trajectories unchanged).
-    pub(super) fn missed_pairs(
-        &self,
-        x: &[f64],
-        hair_links: &[usize],
-        pairs: &[Pair],
-    ) -> Vec<Pair> {
+    fn missed_pairs(&self, x: &[f64], hair_links: &[usize], pairs: &[Pair]) -> Vec<Pair> {
         let tol = self.settings.penetration_tolerance_m;
         let beta = self.beta_of(x, hair_links);
-        self.touching(&self.probe, &beta, -tol, NEAREST)
+        self.touching(self.probe, &beta, -tol, NEAREST)
             .into_iter()
             .filter(|key| {
                 !pairs
@@ -817,11 +1067,7 @@ impl QuasiStatic {
     /// Each pair hands over at most once in a (sub)step (a crest's pair twice: on to the
     /// other link, and then to its joint): `handed_over` records them, and a point pair is
     /// not handed to a stand-in recorded there ([`Self::hand_point_pairs_to_stand_ins`]).
-    pub(super) fn drop_stale_pairs(
-        &self,
-        pairs: &mut Vec<Pair>,
-        handed_over: &mut Vec<PairKey>,
-    ) -> bool {
+    fn drop_stale_pairs(&self, pairs: &mut Vec<Pair>, handed_over: &mut Vec<PairKey>) -> bool {
         let before = pairs.len();
         let mut active = false;
         let mut handed: Vec<Pair> = Vec::new();
@@ -1037,7 +1283,7 @@ fn held_by_corner(c: &Pair, key: &PairKey) -> bool {
         && c.key.chain_point() == key.chain_point()
 }
 
-impl QuasiStatic {
+impl Query<'_> {
     /// Whether chain point `x_m`, `gap_m` from piece `piece`, touches the wall the piece was
     /// cut from there.
     ///
@@ -1051,7 +1297,7 @@ impl QuasiStatic {
     /// reaching back over a bump), where the wall is farther than the piece says: that is
     /// no wall at all. (On a piece's own edges the wall's distance is never more than the
     /// piece's.)
-    pub(super) fn on_real_wall(&self, piece: usize, x_m: &Vector2<f64>, gap_m: f64) -> bool {
+    fn on_real_wall(&self, piece: usize, x_m: &Vector2<f64>, gap_m: f64) -> bool {
         if !self.pieces.cut[piece] {
             return true;
         }
@@ -1108,7 +1354,7 @@ mod tests {
 
     use super::super::pair::PairKind;
     use super::super::settings::ContactSettings;
-    use crate::contact::QuasiStatic;
+    use super::{BroadPhase, Committed, Inputs, World};
     use crate::{Chain, Polyline, SolidSide, Wall};
 
     /// A thin spike of a rough wall, leaning, poked 0.5 mm through a link: the link crosses
@@ -1135,26 +1381,33 @@ mod tests {
         )
         .unwrap();
         let theta = chain.rest_theta();
+        let beta = vec![0.0; chain.hairs().len()];
         // Placed clear of the wall, then probed with link 1 along y = 0.099 m.
-        let mut sim = QuasiStatic::new(
-            chain,
-            vec![Wall::smooth(spike)],
-            Vector2::new(0.0, 0.09),
-            &theta,
-            ContactSettings::default(),
-        )
-        .unwrap();
+        let world = World::new(chain, &[Wall::smooth(spike)], ContactSettings::default());
+        let committed = Committed::new(Vector2::new(0.0, 0.09), theta, beta);
+        let mut broad_phase = BroadPhase::default();
+        broad_phase
+            .check_start(&world, &committed)
+            .expect("placed clear of the wall");
         let across = Vector2::new(0.0, 0.099);
-        sim.probe.update(&sim.chain, across, &sim.theta);
-        let tol = sim.settings.penetration_tolerance_m;
-        let keys = sim.touching(&sim.probe, &sim.beta, -tol, usize::MAX);
+        broad_phase
+            .probe
+            .update(world.chain(), across, committed.theta());
+        let query = broad_phase.query(Inputs {
+            world: &world,
+            committed: &committed,
+            friction_off: false,
+        });
+        let tol = world.settings().penetration_tolerance_m;
+        let keys = query.touching(query.probe, query.beta, -tol, usize::MAX);
         assert!(
             keys.iter()
                 .any(|k| k.link == 1 && matches!(k.kind, PairKind::Link { .. })),
             "the spike's corner is not a pair of link 1: {keys:?}"
         );
         // The link is inside the wall there, as the certification sees it.
-        let deepest = sim.walls[0].segment_contact(&sim.probe.end_m[0], &sim.probe.end_m[1]);
+        let probe = &broad_phase.probe;
+        let deepest = world.walls()[0].segment_contact(&probe.end_m[0], &probe.end_m[1]);
         assert!(deepest.wall.gap_m < -1e-5, "{deepest:?}");
     }
 }
