@@ -125,6 +125,24 @@ const SOAK_REGRESSIONS: &[(u64, &str)] = &[
         "placement (tip-on-wall S, a corner at the tip): as soak 176, a corner standing for a \
          joint dropped without handing its force back",
     ),
+    (
+        939,
+        "uncertified at step 76 (N = 150, a digitized trapezoid, mu = 0.3): the tip, pressed \
+         with 2 uN, crossing a concave corner from one piece to the next; the plain solve \
+         stalled within the acceptable residual with the next piece's pair holding the force \
+         1.2 um off the wall (a loaded contact's gap); such a stall now takes the fixed \
+         point's answer where it converges",
+    ),
+    (
+        680,
+        "placement uncertified (N = 150, a frictionless polyline, tip-on-wall C): the settle's \
+         flow wedged the tip where the line of two collinear edges (before and after a dip, one \
+         piece for both and so run on without end) leaves the wall through another edge, \
+         3.4 mm short of the concave corner the tip slides into; a pair on that run-on pressed with a \
+         normal the wall has not there (friction cone violated by 4.2e-5 N). Past its own \
+         edges' reach a piece's line is now the wall only where the wall's normal cone holds \
+         the line's normal",
+    ),
 ];
 
 /// The soak's default seed.

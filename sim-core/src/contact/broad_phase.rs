@@ -16,7 +16,7 @@ use nalgebra::Vector2;
 use super::ContactError;
 use super::committed::Committed;
 use super::feature::Slip;
-use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate};
+use super::geometry::{FOOT_TOLERANCE, PairGeometry, chain_point, evaluate, into_cone};
 use super::pair::{ChainPoint, Pair, PairKey, PairKind};
 use super::pieces::{CUT_REACH_M, Pieces};
 use super::posture::{Pose, Posture, theta_of};
@@ -1323,7 +1323,21 @@ impl Query<'_> {
             let (first_m, last_m) = self.pieces.own_arclengths_m[piece];
             (first_m..=last_m).contains(&real.arclength_m)
         };
-        (from_m..=to_m).contains(&at_piece.arclength_m) || (gap_m < -tol && owns_nearest())
+        // Farther along its run-on than a cut's reach (past an uncut end, or one line that
+        // stands for several collinear pieces), the piece's line is the wall only where the
+        // wall presses with the line's normal (replay `soak:4221:680`: a trapezoid's top line
+        // run on back to where it leaves the wall through another edge, a tip wedged there).
+        let (first_m, last_m) = self.pieces.own_arclengths_m[piece];
+        let along_wall = || {
+            let wall = &self.walls[self.pieces.piece_of[piece]];
+            let cone = wall.shape.normal_cone(real, CUT_REACH_M);
+            let n = at_piece.normal;
+            (into_cone(n, cone, 1e-9) - n).norm() <= 1e-9
+        };
+        ((from_m..=to_m).contains(&at_piece.arclength_m)
+            && ((first_m - CUT_REACH_M..=last_m + CUT_REACH_M).contains(&at_piece.arclength_m)
+                || along_wall()))
+            || (gap_m < -tol && owns_nearest())
     }
 
     /// [`Self::on_real_wall`] for a point pair (feature and corner-edge pairs are at corners

@@ -12,6 +12,7 @@ use nalgebra::Vector2;
 
 use super::committed::Committed;
 use super::feature::{Contact, Feature, FrictionLaw, Slip};
+use super::geometry::into_cone;
 use super::world::World;
 use crate::kinematics::hair::HairPose;
 use crate::{Chain, Frame, Wall, hair_poses};
@@ -73,22 +74,6 @@ const CORNER_REACH_M: f64 = super::pieces::CUT_REACH_M;
 /// normal it carries (the solver's points agree to about `1e-12` m): on a curve the normal
 /// may turn by the curvature times it.
 const NORMAL_SLACK_M: f64 = 1e-8;
-
-/// `n` turned into the cone of unit normals from `cone[0]` to `cone[1]` (the shorter way
-/// round), widened by `slack_rad` on each side: `n` itself where it lies inside.
-fn into_cone(n: Vector2<f64>, cone: [Vector2<f64>; 2], slack_rad: f64) -> Vector2<f64> {
-    let angle = |u: &Vector2<f64>, v: &Vector2<f64>| (u.x * v.y - u.y * v.x).atan2(u.dot(v));
-    let [a, b] = cone;
-    let width = angle(&a, &b);
-    let (lo, hi) = if width >= 0.0 {
-        (-slack_rad, width + slack_rad)
-    } else {
-        (width - slack_rad, slack_rad)
-    };
-    let turn = angle(&a, &n).clamp(lo, hi);
-    let (sin, cos) = turn.sin_cos();
-    Vector2::new(a.x * cos - a.y * sin, a.x * sin + a.y * cos)
-}
 
 /// `max` that keeps a NaN (`f64::max` drops it).
 fn worst(a: f64, b: f64) -> f64 {

@@ -250,3 +250,19 @@ pub(crate) fn generalized(
     }
     geo.hair_rate.map_or(0.0, |rate| rate.dot(&w))
 }
+
+/// `n` turned into the cone of unit normals from `cone[0]` to `cone[1]` (the shorter way
+/// round), widened by `slack_rad` on each side: `n` itself where it lies inside.
+pub(crate) fn into_cone(n: Vector2<f64>, cone: [Vector2<f64>; 2], slack_rad: f64) -> Vector2<f64> {
+    let angle = |u: &Vector2<f64>, v: &Vector2<f64>| (u.x * v.y - u.y * v.x).atan2(u.dot(v));
+    let [a, b] = cone;
+    let width = angle(&a, &b);
+    let (lo, hi) = if width >= 0.0 {
+        (-slack_rad, width + slack_rad)
+    } else {
+        (width - slack_rad, slack_rad)
+    };
+    let turn = angle(&a, &n).clamp(lo, hi);
+    let (sin, cos) = turn.sin_cos();
+    Vector2::new(a.x * cos - a.y * sin, a.x * sin + a.y * cos)
+}
