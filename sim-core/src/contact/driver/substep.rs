@@ -7,6 +7,7 @@ use nalgebra::Vector2;
 
 use super::QuasiStatic;
 use crate::contact::broad_phase::Inputs;
+use crate::contact::certifier::FORCE_ZERO_N;
 use crate::contact::pair::{Pair, PairKey};
 use crate::contact::posture::Pose;
 use crate::contact::report::StepReport;
@@ -274,7 +275,7 @@ impl QuasiStatic {
                 let length_m = self.certifier().tolerances().length_m;
                 if pairs
                     .iter()
-                    .any(|q| q.normal_force_n != 0.0 && q.geo.gap_m.abs() > length_m)
+                    .any(|q| q.force_n().norm() > FORCE_ZERO_N && q.geo.gap_m.abs() > length_m)
                 {
                     let stalled = (x.clone(), pairs.clone(), outcome);
                     x.clone_from(&x_start);
