@@ -53,7 +53,7 @@
 //! |---|---|---|---|
 //! | `world.rs` | the chain, the walls and their contact pieces, the loads, the settings | | every stage's inputs |
 //! | `committed.rs` | the equilibrium reached: base pose, joint and hair angles, contacts, the hand's force, the state the last (sub)step started from | an accepted answer | the start of the next step |
-//! | `broad_phase.rs` | the start and probe postures | the world, the committed state, the goal pose, the secant prediction | a step's candidate pairs; after a solve, pairs missed, let go, passed on or handed over |
+//! | `broad_phase/` | the start and probe postures | the world, the committed state, the goal pose, the secant prediction | a step's candidate pairs; after a solve, pairs missed, let go, passed on or handed over |
 //! | `step_solver/` | the Newton scratch space, the last repair, its counters | a `StepProblem`, a start and the pairs | the answer and an outcome (converged, iterations, residual) |
 //! | `certifier.rs` | nothing | the world and the committed state | an [`EquilibriumCheck`] |
 //! | `driver/` ([`QuasiStatic`]) | the secant, friction dropped or locked, anchoring blocked | | the public API: steps split in substeps, snaps followed downhill, anchors, jams |
