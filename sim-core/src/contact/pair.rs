@@ -12,7 +12,7 @@
 //!   cannot follow a point sliding over the corner's end of an edge; the line is smooth
 //!   there. A point loaded on the line where it runs on past the corner is on no wall: the
 //!   pair lets go and the point slips off the corner (see
-//!   [`super::candidates`]).
+//!   [`super::broad_phase`]).
 //!
 //! A wall corner at a joint is then up to four pairs (the joint against the piece, the corner
 //! against each of the joint's two links), so the force the wall exerts there can point

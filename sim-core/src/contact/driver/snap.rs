@@ -21,7 +21,7 @@ const EASY_ITERATIONS: usize = 40;
 /// next is longer all the same. A flow whose every solve is hard kept a tiny step for good:
 /// the placement of replay `soak:4221:329` (36 links let go on a polyline, the flow at `gamma` = 5e5) crept 3
 /// micro-radians per step for 2,000 steps, 101,159 Newton iterations; it now comes to rest
-/// after 5,332 (3,230 with the repair's cone test of `super::ssn` since). By measurement on
+/// after 5,332 (3,230 with the repair's cone test of `step_solver/ssn.rs` since). By measurement on
 /// the two settles it changes most: after 3 hard steps, 4,912 and replay `soak:4221:73`'s 61,885 (a
 /// longer step failing there at some 1,000 iterations a time); after 6, 5,332 and 31,134;
 /// after 10, 5,893 and 44,051; never, 101,159 and 42,538.

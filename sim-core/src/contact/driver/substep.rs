@@ -292,7 +292,7 @@ impl QuasiStatic {
             }
             if !outcome.converged {
                 // Coulomb's law makes the step's equations non-monotone: solve the Tresca
-                // problems of the fixed point instead ([`super::tresca`]).
+                // problems of the fixed point instead (`step_solver/tresca.rs`).
                 x.clone_from(&x_start);
                 pairs.clone_from(&pairs_start);
                 outcome = self
