@@ -45,9 +45,11 @@
 //! stick state to carry.
 //!
 //! # The stages
-//! The solver is four stages and a driver, each owning its state (its fields private to its
-//! module: `tests/tests/cross/contact_stages.rs` checks that no module writes a field it does
-//! not own):
+//! The solver is three stages (the broad phase, the step solver, the certifier), the driver
+//! that passes values between them, and the two states they read (the world, the committed
+//! state). Each owns its state, its fields private to its module
+//! (`tests/tests/cross/contact_stages.rs` checks that no module writes a field it does not
+//! own):
 //!
 //! | stage | owns | reads | gives |
 //! |---|---|---|---|
